@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Installs every Debian package rsd needs to build, run and test.
+# Non-interactive and idempotent: safe to run again; it is the only set-up step.
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake pkg-config git
+  libeigen3-dev            # linear algebra (dsp/)
+  libboost-dev             # Boost.Math bracketed root finding (dsp/)
+  libgtest-dev libgmock-dev # unit tests
+  libbenchmark-dev         # benchmarks
+  libcli11-dev             # command-line parsing (tools/)
+  libspdlog-dev            # logging
+  libplplot-dev plplot-driver-cairo  # plots (PNG/SVG) from the tools
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all ${#PACKAGES[@]} packages already installed"
+  exit 0
+fi
+
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+echo "setup: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -q
+$SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
