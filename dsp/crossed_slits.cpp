@@ -1,0 +1,1 @@
+#include "dsp/crossed_slits.hpp"

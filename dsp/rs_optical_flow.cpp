@@ -1,0 +1,1 @@
+#include "dsp/rs_optical_flow.hpp"

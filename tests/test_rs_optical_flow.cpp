@@ -1,0 +1,2 @@
+#include <gtest/gtest.h>
+#include "dsp/rs_optical_flow.hpp"
