@@ -37,9 +37,10 @@ Eigen::Affine3d ScrewMotion::at(double t) const {
   const double th = phi.norm();
   const Eigen::Matrix3d W = hat(phi);
   double a, b;
-  if (th < 1e-5) {  // series: error far below double precision at these angles
-    a = 0.5 - th * th / 24.0;
-    b = 1.0 / 6.0 - th * th / 120.0;
+  if (th < 1e-3) {  // series: the closed forms cancel catastrophically at small angles
+    const double th2 = th * th;
+    a = 0.5 - th2 / 24.0 + th2 * th2 / 720.0;
+    b = 1.0 / 6.0 - th2 / 120.0 + th2 * th2 / 5040.0;
   } else {
     a = (1 - std::cos(th)) / (th * th);
     b = (th - std::sin(th)) / (th * th * th);

@@ -1,0 +1,66 @@
+// What the simulated camera looks at: textured planes and point sets, in world coordinates.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <memory>
+#include <vector>
+
+namespace rsd::dsp {
+
+// Intensity (0..1, per channel) of a plane's surface at plane coordinates (s, t) in metres.
+class Texture {
+ public:
+  virtual ~Texture() = default;
+  virtual Eigen::Vector3f colour(double s, double t) const = 0;
+};
+
+// Black and white squares; (0, 0) is the outer corner of a black square. Outside the
+// board's squares a white margin of one square.
+class CheckerboardTexture final : public Texture {
+ public:
+  CheckerboardTexture(int cols, int rows, double square_m) : cols_(cols), rows_(rows), sq_(square_m) {}
+  Eigen::Vector3f colour(double s, double t) const override;
+  // Inner corners (where four squares meet), in plane coordinates, row-major.
+  std::vector<Eigen::Vector2d> inner_corners() const;
+
+ private:
+  int cols_, rows_;
+  double sq_;
+};
+
+// Smooth random texture (value noise over several octaves, in colour): rich in
+// features for tracking, with no periodicity.
+class NoiseTexture final : public Texture {
+ public:
+  NoiseTexture(unsigned seed, double cell_m);
+  Eigen::Vector3f colour(double s, double t) const override;
+
+ private:
+  float lattice(long i, long j, int channel) const;
+  float octave(double s, double t, int channel) const;
+  unsigned seed_;
+  double cell_;
+};
+
+struct Plane {
+  Eigen::Vector3d origin;  // world position of plane coordinate (0, 0)
+  Eigen::Vector3d axis_s;  // unit vectors of the plane coordinates, world frame
+  Eigen::Vector3d axis_t;
+  double extent_s = 1e9, extent_t = 1e9;  // texture covers s in [-extent_s, extent_s], same for t
+  std::shared_ptr<const Texture> texture;
+  Eigen::Vector3d normal() const { return axis_s.cross(axis_t).normalized(); }
+};
+
+struct Scene {
+  std::vector<Plane> planes;
+  std::vector<Eigen::Vector3d> points;  // rendered as bright dots of radius point_radius_px
+  double point_radius_px = 1.5;
+  Eigen::Vector3f background{0.2f, 0.2f, 0.2f};
+};
+
+// A plane facing the camera at distance z (camera looking down +z from the world origin),
+// holding a checkerboard centred on the optical axis.
+Plane fronto_parallel_checkerboard(double z, int cols, int rows, double square_m);
+
+}  // namespace rsd::dsp
