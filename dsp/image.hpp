@@ -23,3 +23,23 @@ struct ImageView {
 };
 
 }  // namespace rsd::dsp
+
+#include <vector>
+
+namespace rsd::dsp {
+
+// An image that owns its pixels (tightly packed rows). For tools and tests; the daemon's
+// hot path works on views of slots it allocated at start.
+struct Image {
+  int width = 0, height = 0;
+  PixelFormat format = PixelFormat::Mono8;
+  std::vector<std::uint8_t> data;
+
+  Image() = default;
+  Image(int w, int h, PixelFormat f)
+      : width(w), height(h), format(f), data(static_cast<size_t>(w) * h * bytes_per_pixel(f)) {}
+  std::ptrdiff_t stride() const { return static_cast<std::ptrdiff_t>(width) * bytes_per_pixel(format); }
+  ImageView view() { return {data.data(), width, height, stride(), format}; }
+};
+
+}  // namespace rsd::dsp

@@ -12,6 +12,10 @@ PACKAGES=(
   libcli11-dev             # command-line parsing (tools/)
   libspdlog-dev            # logging
   libplplot-dev plplot-driver-cairo  # plots (PNG/SVG) from the tools
+  libceres-dev             # least squares: bundle adjustment, diagnosis fits
+  libyaml-cpp-dev          # scenario, recording and config files
+  libfftw3-dev             # FFT for LED-flicker row-rate calibration
+  libpng-dev               # PNG frames in and out
 )
 
 missing=()
