@@ -1,4 +1,4 @@
-#include "tools/image_io.hpp"
+#include "image_io.hpp"
 
 #include <png.h>
 

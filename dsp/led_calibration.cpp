@@ -1,0 +1,1 @@
+#include "dsp/led_calibration.hpp"

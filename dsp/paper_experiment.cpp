@@ -1,0 +1,1 @@
+#include "dsp/paper_experiment.hpp"

@@ -1,0 +1,1 @@
+#include "dsp/two_view_bundle_adjustment.hpp"
