@@ -1,0 +1,73 @@
+// Simulated observation recordings (../shared/formats/recording-v1.md): the nominal model
+// that the recording's header states, and data generated from a "true" model that differs
+// from it by any of the spec's named effects. Pure computation, deterministic per seed; the
+// rsd-sim tool reads the scenario and writes the files.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dsp/camera_model.hpp"
+#include "dsp/observation_model.hpp"
+#include "dsp/recording.hpp"
+#include "dsp/row_timing.hpp"
+
+namespace rsd::dsp {
+
+// The spec's named effects, each with its true parameters; unset = as nominal.
+struct Effects {
+  std::optional<double> line_delay_s;     // rolling_shutter
+  bool flip_readout = false;              // readout_direction
+  std::optional<double> time_offset_s;    // time_offset
+  std::optional<double> drift_ppm;        // clock_drift
+  std::optional<Eigen::Vector2d> k1k2;    // lens_distortion
+  std::optional<Eigen::Vector2d> fxfy;    // focal_length
+  std::optional<Eigen::Vector3d> gyro_bias;  // gyro_bias (IMU axes)
+  std::optional<Eigen::Vector3d> lever_arm;  // lever_arm (body axes)
+  bool any() const;
+  std::vector<std::string> names() const;  // spec names of the effects switched on
+};
+
+struct GyroSampling {
+  double rate_min_hz = 200, rate_max_hz = 200;  // each interval drawn in between
+  double gap_probability = 0;     // chance that a sample starts a gap of 5-20 missing samples
+  double repeat_probability = 0;  // chance that a sample repeats the previous timestamp
+  double jitter_s = 0;            // timestamp noise (sorted afterwards)
+  double noise_rad_s = 0;
+};
+
+struct SimConfig {
+  ObservationKind kind = ObservationKind::Landmarks;
+  NominalModel nominal;
+  Effects effects;
+  unsigned seed = 1;
+  double duration_s = 2.0;
+  double start_time_s = 100.0;     // camera clock of the first frame
+  double noise_px = 0.5;
+  // Motion: smooth random translation/rotation about a rest pose.
+  double translation_amplitude_m = 0.1;
+  double rotation_amplitude_rad = 0.15;
+  double motion_frequency_hz = 1.0;
+  double trajectory_rate_hz = 500;
+  GyroSampling gyro;
+  // Landmarks: a planar target of rows x cols points, `spacing_m` apart, `distance_m` ahead.
+  int target_rows = 7, target_cols = 9;
+  double target_spacing_m = 0.1;
+  double target_distance_m = 1.2;
+  // Matches: features per consecutive frame pair, outlier share.
+  int matches_per_pair = 150;
+  double outlier_fraction = 0.0;
+};
+
+struct SimulatedRecording {
+  Recording rec;
+  Effects truth;                  // the effects that were switched on
+  std::vector<bool> match_outlier;  // ground truth per match
+};
+
+// Validates the config (throws std::invalid_argument naming the field) and simulates.
+SimulatedRecording simulate_recording(const SimConfig& cfg);
+
+}  // namespace rsd::dsp
