@@ -51,12 +51,7 @@ void validate(const SimConfig& c) {
   require(readout <= (1 + 1e-9) / c.nominal.frame_rate_hz, "line delay x height exceeds the frame period");
 }
 
-// The true model: the nominal one with every switched-on effect applied.
-struct TrueModel {
-  CameraModel cam;
-  TimeModel time;
-  Eigen::Vector3d lever_arm, gyro_bias;
-};
+}  // namespace
 
 TrueModel true_model(const NominalModel& n, const Effects& e) {
   TrueModel t{n.cam, n.time, n.lever_arm, Eigen::Vector3d::Zero()};
@@ -71,6 +66,8 @@ TrueModel true_model(const NominalModel& n, const Effects& e) {
   if (e.gyro_bias) t.gyro_bias = *e.gyro_bias;
   return t;
 }
+
+namespace {
 
 // Motion-clock span the recording must cover: the frames under the true clock model, with
 // a second's margin either side so that offset searches of +-1 s stay inside the data.

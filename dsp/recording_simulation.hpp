@@ -67,6 +67,14 @@ struct SimulatedRecording {
   std::vector<bool> match_outlier;  // ground truth per match
 };
 
+// The camera as it really is: the nominal model with every switched-on effect applied.
+struct TrueModel {
+  CameraModel cam;
+  TimeModel time;
+  Eigen::Vector3d lever_arm = Eigen::Vector3d::Zero(), gyro_bias = Eigen::Vector3d::Zero();
+};
+TrueModel true_model(const NominalModel& nominal, const Effects& effects);
+
 // Validates the config (throws std::invalid_argument naming the field) and simulates.
 SimulatedRecording simulate_recording(const SimConfig& cfg);
 

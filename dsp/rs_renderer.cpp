@@ -31,7 +31,7 @@ Eigen::Vector3f RsRenderer::shade(const Scene& scene, const Eigen::Vector3d& cen
     if (!(lambda > 0) || lambda >= best) continue;
     const Eigen::Vector3d rel = centre + lambda * d - p.origin;
     const double s = rel.dot(p.axis_s), t = rel.dot(p.axis_t);
-    if (std::abs(s) > p.extent_s || std::abs(t) > p.extent_t) continue;
+    if (s < p.s_min || s > p.s_max || t < p.t_min || t > p.t_max) continue;
     best = lambda;
     colour = p.texture->colour(s, t);
   }

@@ -47,7 +47,8 @@ struct Plane {
   Eigen::Vector3d origin;  // world position of plane coordinate (0, 0)
   Eigen::Vector3d axis_s;  // unit vectors of the plane coordinates, world frame
   Eigen::Vector3d axis_t;
-  double extent_s = 1e9, extent_t = 1e9;  // texture covers s in [-extent_s, extent_s], same for t
+  // The plane exists for plane coordinates s in [s_min, s_max], t in [t_min, t_max].
+  double s_min = -1e9, s_max = 1e9, t_min = -1e9, t_max = 1e9;
   std::shared_ptr<const Texture> texture;
   Eigen::Vector3d normal() const { return axis_s.cross(axis_t).normalized(); }
 };

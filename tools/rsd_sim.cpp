@@ -1,0 +1,182 @@
+// rsd-sim: simulates rolling-shutter cameras.
+//
+//   rsd-sim recording SCENARIO.yaml OUTDIR   observation recording (recording-v1)
+//   rsd-sim frames SCENARIO.yaml OUTDIR      rendered PNG frames of the scenario's target
+//   rsd-sim figure1 OUTDIR                   the paper's Figure 1 (rotating checkerboard)
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "cli_util.hpp"
+#include "dsp/recording_simulation.hpp"
+#include "dsp/rs_renderer.hpp"
+#include "image_io.hpp"
+#include "recording_v1.hpp"
+#include "sim_scenario.hpp"
+
+using namespace rsd;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct FrameOptions {
+  int count = 0;  // 0: every frame of the scenario
+  bool rgb = false;
+  double noise = 0;
+  int supersample = 2;
+  int blur_samples = 1;
+  double exposure_s = 0;
+};
+
+int run_recording(const std::string& scenario, const std::string& out) {
+  const tools::Scenario sc = tools::load_scenario(scenario);
+  const auto t0 = std::chrono::steady_clock::now();
+  const dsp::SimulatedRecording sim = dsp::simulate_recording(sc.sim);
+  tools::write_recording(out, sim.rec);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto& r = sim.rec;
+  std::printf("rsd-sim: wrote %s recording to %s in %.2f s\n", dsp::to_string(r.kind), out.c_str(), secs);
+  std::printf("  %zu frames at %.3g fps, %zu %s, %zu %s samples, noise %.3g px\n", r.frames.size(),
+              r.nominal.frame_rate_hz,
+              r.kind == dsp::ObservationKind::Landmarks ? r.observations.size() : r.matches.size(),
+              r.kind == dsp::ObservationKind::Landmarks ? "observations" : "matches",
+              r.motion == dsp::MotionKind::Trajectory ? r.trajectory.size() : r.gyro.size(),
+              dsp::to_string(r.motion), sc.sim.noise_px);
+  const auto names = sim.truth.names();
+  std::string list;
+  for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+  std::printf("  effects the nominal model leaves out: %s\n", names.empty() ? "none" : list.c_str());
+  return 0;
+}
+
+// World-to-camera motion on the camera clock: the recorded body trajectory through the
+// true time model and lever arm.
+class TrueCameraMotion final : public dsp::CameraMotion {
+ public:
+  TrueCameraMotion(const dsp::Recording& r, const dsp::TrueModel& m) : m_(m), body_(samples(r)) {}
+  Eigen::Affine3d at(double t) const override {
+    Eigen::Affine3d g = body_.at(m_.time.motion_time(t));
+    g.translation() -= m_.lever_arm;
+    return g;
+  }
+
+ private:
+  static std::vector<dsp::SampledTrajectory::Sample> samples(const dsp::Recording& r) {
+    std::vector<dsp::SampledTrajectory::Sample> s;
+    for (const auto& p : r.trajectory) s.push_back({p.t, p.q, p.p});
+    return s;
+  }
+  dsp::TrueModel m_;
+  dsp::SampledTrajectory body_;
+};
+
+// The target as a checkerboard whose inner corners are the scenario's points, on a
+// textured wall behind it.
+dsp::Scene target_scene(const dsp::SimConfig& c) {
+  dsp::Scene scene;
+  dsp::Plane board = dsp::fronto_parallel_checkerboard(0.0, c.target_cols + 1, c.target_rows + 1, c.target_spacing_m);
+  // Plane coordinates start at the board's outer corner; keep one square of white margin.
+  const double margin = c.target_spacing_m;
+  board.s_min = board.t_min = -margin;
+  board.s_max = (c.target_cols + 1) * c.target_spacing_m + margin;
+  board.t_max = (c.target_rows + 1) * c.target_spacing_m + margin;
+  scene.planes.push_back(board);
+  dsp::Plane wall;
+  wall.origin = Eigen::Vector3d(0, 0, 0.5);
+  wall.axis_s = Eigen::Vector3d::UnitX();
+  wall.axis_t = Eigen::Vector3d::UnitY();
+  wall.texture = std::make_shared<dsp::NoiseTexture>(c.seed, 0.05);
+  scene.planes.push_back(wall);
+  return scene;
+}
+
+int run_frames(const std::string& scenario, const std::string& out, const FrameOptions& o) {
+  tools::Scenario sc = tools::load_scenario(scenario);
+  if (sc.sim.kind != dsp::ObservationKind::Landmarks)
+    throw tools::UsageError(scenario + ": frames are rendered for landmark (target) scenarios");
+  sc.sim.noise_px = 0;
+  const dsp::SimulatedRecording sim = dsp::simulate_recording(sc.sim);
+  const dsp::TrueModel truth = dsp::true_model(sim.rec.nominal, sc.sim.effects);
+  dsp::RowTiming timing = dsp::row_timing(truth.time, truth.cam.height);
+  timing.frame_rate_hz = sim.rec.nominal.frame_rate_hz;
+  timing.exposure_s = o.exposure_s;
+  dsp::RenderOptions ro;
+  ro.supersample = o.supersample;
+  ro.exposure_samples = o.blur_samples;
+  ro.noise_sigma = o.noise;
+  ro.noise_seed = sc.sim.seed;
+  dsp::RsRenderer renderer(truth.cam, timing, ro);
+  const TrueCameraMotion motion(sim.rec, truth);
+  const dsp::Scene scene = target_scene(sc.sim);
+  fs::create_directories(out);
+  const size_t n = o.count > 0 ? std::min<size_t>(o.count, sim.rec.frames.size()) : sim.rec.frames.size();
+  dsp::Image img(truth.cam.width, truth.cam.height, o.rgb ? dsp::PixelFormat::Rgb8 : dsp::PixelFormat::Mono8);
+  for (size_t k = 0; k < n; ++k) {
+    renderer.render(scene, motion, sim.rec.frames[k].t, img.view());
+    char name[64];
+    std::snprintf(name, sizeof name, "frame_%06d.png", sim.rec.frames[k].frame);
+    tools::write_png((fs::path(out) / name).string(), img.view());
+    std::fprintf(stderr, "\rrsd-sim: frame %zu/%zu", k + 1, n);
+  }
+  std::fprintf(stderr, "\n");
+  std::printf("rsd-sim: wrote %zu frames (%dx%d, line delay %.3g s, %s) to %s\n", n, truth.cam.width,
+              truth.cam.height, truth.time.line_delay_s, dsp::to_string(truth.time.readout).data(), out.c_str());
+  return 0;
+}
+
+// The paper's Figure 1: a fronto-parallel checkerboard 0.5 m away, 40 degree field of
+// view, 30 fps with the readout filling the frame, rotating about the optical axis.
+int run_figure1(const std::string& out) {
+  fs::create_directories(out);
+  const dsp::CameraModel cam = dsp::CameraModel::from_hfov(640, 480, 40.0 * M_PI / 180.0);
+  const dsp::RowTiming timing = dsp::RowTiming::full_frame(480, 30);
+  dsp::Scene scene;
+  scene.planes.push_back(dsp::fronto_parallel_checkerboard(0.5, 10, 8, 0.025));  // 25 x 20 cm, all in view
+  scene.background = Eigen::Vector3f::Ones();
+  dsp::RenderOptions ro;
+  ro.supersample = 4;
+  dsp::RsRenderer renderer(cam, timing, ro);
+  dsp::Image img(cam.width, cam.height, dsp::PixelFormat::Mono8);
+  const char* names[] = {"quarter", "half", "three-quarters", "one"};
+  for (int i = 0; i < 4; ++i) {
+    const double rev_per_s = 0.25 * (i + 1);
+    dsp::Twist tw;
+    tw.w = Eigen::Vector3d(0, 0, 2 * M_PI * rev_per_s);
+    renderer.render(scene, dsp::ScrewMotion(tw), 0.0, img.view());
+    const std::string file = (fs::path(out) / (std::string("figure1-") + names[i] + "-rev-per-s.png")).string();
+    tools::write_png(file, img.view());
+    std::printf("rsd-sim: %s (%.2f rev/s about the optical axis)\n", file.c_str(), rev_per_s);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rsd-sim: simulate rolling-shutter cameras (recordings, frames, the paper's figure 1).\n"
+               "Scenario files are YAML; see docs/simulator.md and config/scenarios/."};
+  app.require_subcommand(1);
+  std::string scenario, out;
+  FrameOptions fo;
+  auto* rec = app.add_subcommand("recording", "write an observation recording (../shared/formats/recording-v1.md)");
+  rec->add_option("scenario", scenario, "scenario YAML")->required()->check(CLI::ExistingFile);
+  rec->add_option("outdir", out, "output directory (created)")->required();
+  auto* frames = app.add_subcommand("frames", "render the scenario's target as PNG frames, each row at its read time");
+  frames->add_option("scenario", scenario, "scenario YAML (landmarks kind)")->required()->check(CLI::ExistingFile);
+  frames->add_option("outdir", out, "output directory (created)")->required();
+  frames->add_option("--count", fo.count, "frames to render (default: all)")->check(CLI::NonNegativeNumber);
+  frames->add_flag("--rgb", fo.rgb, "write RGB instead of mono8");
+  frames->add_option("--noise", fo.noise, "pixel noise sigma in grey levels")->check(CLI::NonNegativeNumber);
+  frames->add_option("--supersample", fo.supersample, "n x n samples per pixel")->check(CLI::Range(1, 8));
+  frames->add_option("--exposure", fo.exposure_s, "row exposure in s (motion blur)")->check(CLI::NonNegativeNumber);
+  frames->add_option("--blur-samples", fo.blur_samples, "time samples over the exposure")->check(CLI::Range(1, 64));
+  auto* fig = app.add_subcommand("figure1", "render the paper's Figure 1 (four PNGs)");
+  fig->add_option("outdir", out, "output directory (created)")->required();
+  if (const auto rc = tools::parse_command_line(app, argc, argv)) return *rc;
+  return tools::run_tool("rsd-sim", [&] {
+    if (*rec) return run_recording(scenario, out);
+    if (*frames) return run_frames(scenario, out, fo);
+    return run_figure1(out);
+  });
+}

@@ -1,0 +1,146 @@
+#include "sim_scenario.hpp"
+
+#include "yaml_reader.hpp"
+
+namespace rsd::tools {
+
+namespace {
+
+void read_camera(YamlMap m, dsp::CameraModel& c) {
+  c.width = m.integer("width", c.width);
+  c.height = m.integer("height", c.height);
+  c.fx = m.number("fx", c.fx);
+  c.fy = m.number("fy", c.fx);
+  c.cx = m.number("cx", 0.5 * (c.width - 1));
+  c.cy = m.number("cy", 0.5 * (c.height - 1));
+  if (m.has("distortion")) {
+    const auto d = m.numbers("distortion", 4);
+    c.dist = {d[0], d[1], d[2], d[3], 0};
+  }
+  if (c.width < 2 || c.height < 2) m.fail("width", "and height must be at least 2");
+  if (!(c.fx > 0 && c.fy > 0)) m.fail("fx", "and fy must be positive");
+  m.finish();
+}
+
+void read_timing(YamlMap m, dsp::NominalModel& n) {
+  n.frame_rate_hz = m.number("frame_rate_hz", n.frame_rate_hz);
+  n.time.line_delay_s = m.number("line_delay_s", n.time.line_delay_s);
+  if (!dsp::parse_readout(m.text("readout", "top_to_bottom"), n.time.readout))
+    m.fail("readout", "must be top_to_bottom or bottom_to_top");
+  n.time.time_offset_s = m.number("time_offset_s", 0.0);
+  n.time.drift_ppm = m.number("drift_ppm", 0.0);
+  m.finish();
+}
+
+void read_gyro(YamlMap m, dsp::GyroSampling& g) {
+  if (m.has("rate_hz")) {
+    const auto r = m.numbers("rate_hz", 2);
+    g.rate_min_hz = r[0], g.rate_max_hz = r[1];
+  }
+  g.gap_probability = m.number("gap_probability", 0.0);
+  g.repeat_probability = m.number("repeat_probability", 0.0);
+  g.jitter_s = m.number("jitter_s", 0.0);
+  g.noise_rad_s = m.number("noise_rad_s", 0.0);
+  m.finish();
+}
+
+void read_motion(YamlMap m, dsp::SimConfig& s) {
+  s.translation_amplitude_m = m.number("translation_amplitude_m", s.translation_amplitude_m);
+  s.rotation_amplitude_rad = m.number("rotation_amplitude_rad", s.rotation_amplitude_rad);
+  s.motion_frequency_hz = m.number("frequency_hz", s.motion_frequency_hz);
+  s.trajectory_rate_hz = m.number("trajectory_rate_hz", s.trajectory_rate_hz);
+  if (m.has("imu_to_camera")) {
+    const auto R = m.numbers("imu_to_camera", 9);
+    s.nominal.imu_to_camera = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(R.data());
+    if ((s.nominal.imu_to_camera * s.nominal.imu_to_camera.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-6)
+      m.fail("imu_to_camera", "must be a rotation matrix (row-major)");
+  }
+  if (m.has("lever_arm_m")) {
+    const auto l = m.numbers("lever_arm_m", 3);
+    s.nominal.lever_arm = Eigen::Vector3d(l[0], l[1], l[2]);
+  }
+  if (m.has("gyro")) read_gyro(m.map("gyro"), s.gyro);
+  m.finish();
+}
+
+void read_target(YamlMap m, dsp::SimConfig& s) {
+  s.target_rows = m.integer("rows", s.target_rows);
+  s.target_cols = m.integer("cols", s.target_cols);
+  s.target_spacing_m = m.number("spacing_m", s.target_spacing_m);
+  s.target_distance_m = m.number("distance_m", s.target_distance_m);
+  if (s.target_rows < 1 || s.target_cols < 1) m.fail("rows", "and cols must be at least 1");
+  m.finish();
+}
+
+void read_observations(YamlMap m, dsp::SimConfig& s) {
+  const std::string kind = m.text("kind", "landmarks");
+  if (kind == "landmarks") s.kind = dsp::ObservationKind::Landmarks;
+  else if (kind == "matches") s.kind = dsp::ObservationKind::Matches;
+  else m.fail("kind", "must be landmarks or matches");
+  s.noise_px = m.number("noise_px", s.noise_px);
+  s.outlier_fraction = m.number("outlier_fraction", s.outlier_fraction);
+  s.matches_per_pair = m.integer("matches_per_pair", s.matches_per_pair);
+  m.finish();
+}
+
+Eigen::Vector3d vec3(YamlMap m, const char* a, const char* b, const char* c) {
+  Eigen::Vector3d v(m.number(a), m.number(b), m.number(c));
+  m.finish();
+  return v;
+}
+
+void read_effect(YamlMap& effects, const std::string& name, const dsp::NominalModel& n, dsp::Effects& e) {
+  YamlMap m = effects.map(name);
+  if (name == "rolling_shutter") {
+    if (m.has("frame_readout_s")) e.line_delay_s = m.number("frame_readout_s") / n.cam.height;
+    else e.line_delay_s = m.number("line_delay_s");
+  } else if (name == "readout_direction") {
+    dsp::Readout r;
+    if (!dsp::parse_readout(m.text("direction", ""), r)) m.fail("direction", "must be top_to_bottom or bottom_to_top");
+    if (r == n.time.readout) m.fail("direction", "equals the nominal readout: no effect");
+    e.flip_readout = true;
+  } else if (name == "time_offset") {
+    e.time_offset_s = m.number("time_offset_s");
+  } else if (name == "clock_drift") {
+    e.drift_ppm = m.number("drift_ppm");
+  } else if (name == "lens_distortion") {
+    e.k1k2 = Eigen::Vector2d(m.number("k1"), m.number("k2", 0.0));
+  } else if (name == "focal_length") {
+    e.fxfy = Eigen::Vector2d(m.number("fx"), m.number("fy"));
+  } else if (name == "gyro_bias") {
+    e.gyro_bias = vec3(m, "bx", "by", "bz");
+    return;
+  } else if (name == "lever_arm") {
+    e.lever_arm = vec3(m, "x", "y", "z");
+    return;
+  } else {
+    effects.fail(name, "is not an effect of recording-v1 (rolling_shutter, readout_direction, time_offset, "
+                       "clock_drift, lens_distortion, focal_length, gyro_bias, lever_arm)");
+  }
+  m.finish();
+}
+
+}  // namespace
+
+Scenario load_scenario(const std::string& file) {
+  YamlMap root = YamlMap::load(file);
+  Scenario s{{}, file};
+  dsp::SimConfig& c = s.sim;
+  c.seed = static_cast<unsigned>(root.integer("seed", 1));
+  c.duration_s = root.number("duration_s", c.duration_s);
+  c.start_time_s = root.number("start_time_s", c.start_time_s);
+  if (root.has("camera")) read_camera(root.map("camera"), c.nominal.cam);
+  if (root.has("timing")) read_timing(root.map("timing"), c.nominal);
+  if (root.has("motion")) read_motion(root.map("motion"), c);
+  if (root.has("target")) read_target(root.map("target"), c);
+  if (root.has("observations")) read_observations(root.map("observations"), c);
+  if (root.has("effects")) {
+    YamlMap effects = root.map("effects");
+    for (const auto& name : effects.keys()) read_effect(effects, name, c.nominal, c.effects);
+    effects.finish();
+  }
+  root.finish();
+  return s;
+}
+
+}  // namespace rsd::tools
