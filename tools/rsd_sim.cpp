@@ -2,17 +2,20 @@
 //
 //   rsd-sim recording SCENARIO.yaml OUTDIR   observation recording (recording-v1)
 //   rsd-sim frames SCENARIO.yaml OUTDIR      rendered PNG frames of the scenario's target
+//   rsd-sim lcm SCENARIO.yaml OUT.lcmlog     raw frames + true velocity as an LCM log
 //   rsd-sim figure1 OUTDIR                   the paper's Figure 1 (rotating checkerboard)
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 
 #include "cli_util.hpp"
 #include "dsp/recording_simulation.hpp"
 #include "dsp/rs_renderer.hpp"
 #include "image_io.hpp"
 #include "recording_v1.hpp"
+#include "sim_lcm_log.hpp"
 #include "sim_scenario.hpp"
 
 using namespace rsd;
@@ -91,37 +94,77 @@ dsp::Scene target_scene(const dsp::SimConfig& c) {
   return scene;
 }
 
-int run_frames(const std::string& scenario, const std::string& out, const FrameOptions& o) {
-  tools::Scenario sc = tools::load_scenario(scenario);
-  if (sc.sim.kind != dsp::ObservationKind::Landmarks)
+// Everything needed to render a scenario's frames as the real (true-model) camera sees them.
+struct FrameRig {
+  tools::Scenario sc;
+  dsp::SimulatedRecording sim;
+  dsp::TrueModel truth;
+  dsp::RowTiming timing;
+  dsp::Scene scene;
+  std::unique_ptr<TrueCameraMotion> motion;
+  std::unique_ptr<dsp::RsRenderer> renderer;
+  size_t frames;
+};
+
+FrameRig make_rig(const std::string& scenario, const FrameOptions& o) {
+  FrameRig rig;
+  rig.sc = tools::load_scenario(scenario);
+  if (rig.sc.sim.kind != dsp::ObservationKind::Landmarks)
     throw tools::UsageError(scenario + ": frames are rendered for landmark (target) scenarios");
-  sc.sim.noise_px = 0;
-  const dsp::SimulatedRecording sim = dsp::simulate_recording(sc.sim);
-  const dsp::TrueModel truth = dsp::true_model(sim.rec.nominal, sc.sim.effects);
-  dsp::RowTiming timing = dsp::row_timing(truth.time, truth.cam.height);
-  timing.frame_rate_hz = sim.rec.nominal.frame_rate_hz;
-  timing.exposure_s = o.exposure_s;
+  rig.sc.sim.noise_px = 0;
+  rig.sim = dsp::simulate_recording(rig.sc.sim);
+  rig.truth = dsp::true_model(rig.sim.rec.nominal, rig.sc.sim.effects);
+  rig.timing = dsp::row_timing(rig.truth.time, rig.truth.cam.height);
+  rig.timing.frame_rate_hz = rig.sim.rec.nominal.frame_rate_hz;
+  rig.timing.exposure_s = o.exposure_s;
   dsp::RenderOptions ro;
   ro.supersample = o.supersample;
   ro.exposure_samples = o.blur_samples;
   ro.noise_sigma = o.noise;
-  ro.noise_seed = sc.sim.seed;
-  dsp::RsRenderer renderer(truth.cam, timing, ro);
-  const TrueCameraMotion motion(sim.rec, truth);
-  const dsp::Scene scene = target_scene(sc.sim);
+  ro.noise_seed = rig.sc.sim.seed;
+  rig.renderer = std::make_unique<dsp::RsRenderer>(rig.truth.cam, rig.timing, ro);
+  rig.motion = std::make_unique<TrueCameraMotion>(rig.sim.rec, rig.truth);
+  rig.scene = target_scene(rig.sc.sim);
+  rig.frames = o.count > 0 ? std::min<size_t>(o.count, rig.sim.rec.frames.size()) : rig.sim.rec.frames.size();
+  return rig;
+}
+
+void progress(size_t k, size_t n) {
+  std::fprintf(stderr, "\rrsd-sim: frame %zu/%zu", k + 1, n);
+  if (k + 1 == n) std::fprintf(stderr, "\n");
+}
+
+int run_frames(const std::string& scenario, const std::string& out, const FrameOptions& o) {
+  FrameRig rig = make_rig(scenario, o);
   fs::create_directories(out);
-  const size_t n = o.count > 0 ? std::min<size_t>(o.count, sim.rec.frames.size()) : sim.rec.frames.size();
-  dsp::Image img(truth.cam.width, truth.cam.height, o.rgb ? dsp::PixelFormat::Rgb8 : dsp::PixelFormat::Mono8);
-  for (size_t k = 0; k < n; ++k) {
-    renderer.render(scene, motion, sim.rec.frames[k].t, img.view());
+  const dsp::CameraModel& cam = rig.truth.cam;
+  dsp::Image img(cam.width, cam.height, o.rgb ? dsp::PixelFormat::Rgb8 : dsp::PixelFormat::Mono8);
+  for (size_t k = 0; k < rig.frames; ++k) {
+    rig.renderer->render(rig.scene, *rig.motion, rig.sim.rec.frames[k].t, img.view());
     char name[64];
-    std::snprintf(name, sizeof name, "frame_%06d.png", sim.rec.frames[k].frame);
+    std::snprintf(name, sizeof name, "frame_%06d.png", rig.sim.rec.frames[k].frame);
     tools::write_png((fs::path(out) / name).string(), img.view());
-    std::fprintf(stderr, "\rrsd-sim: frame %zu/%zu", k + 1, n);
+    progress(k, rig.frames);
   }
-  std::fprintf(stderr, "\n");
-  std::printf("rsd-sim: wrote %zu frames (%dx%d, line delay %.3g s, %s) to %s\n", n, truth.cam.width,
-              truth.cam.height, truth.time.line_delay_s, dsp::to_string(truth.time.readout).data(), out.c_str());
+  std::printf("rsd-sim: wrote %zu frames (%dx%d, line delay %.3g s, %s) to %s\n", rig.frames, cam.width, cam.height,
+              rig.truth.time.line_delay_s, dsp::to_string(rig.truth.time.readout).data(), out.c_str());
+  return 0;
+}
+
+int run_lcm(const std::string& scenario, const std::string& out, const FrameOptions& o) {
+  FrameRig rig = make_rig(scenario, o);
+  std::vector<double> times;
+  for (size_t k = 0; k < rig.frames; ++k) times.push_back(rig.sim.rec.frames[k].t);
+  const tools::SimLogSpec spec{out, rig.timing, 200.0};
+  tools::write_sim_lcm_log(spec, times, rig.truth.cam.width, rig.truth.cam.height,
+                           o.rgb ? dsp::PixelFormat::Rgb8 : dsp::PixelFormat::Mono8,
+                           [&](size_t k, const dsp::ImageView& v) {
+                             rig.renderer->render(rig.scene, *rig.motion, times[k], v);
+                             progress(k, times.size());
+                           },
+                           *rig.motion);
+  std::printf("rsd-sim: wrote %zu raw frames on %s and the true velocity at 200 Hz on %s to %s\n", times.size(),
+              tools::kRawChannel, tools::kVelocityChannel, out.c_str());
   return 0;
 }
 
@@ -171,12 +214,21 @@ int main(int argc, char** argv) {
   frames->add_option("--supersample", fo.supersample, "n x n samples per pixel")->check(CLI::Range(1, 8));
   frames->add_option("--exposure", fo.exposure_s, "row exposure in s (motion blur)")->check(CLI::NonNegativeNumber);
   frames->add_option("--blur-samples", fo.blur_samples, "time samples over the exposure")->check(CLI::Range(1, 64));
+  auto* lcmlog = app.add_subcommand("lcm", "write raw frames and the true velocity as an LCM log (rsd's replay input)");
+  lcmlog->add_option("scenario", scenario, "scenario YAML (landmarks kind)")->required()->check(CLI::ExistingFile);
+  lcmlog->add_option("log", out, "output .lcmlog file")->required();
+  lcmlog->add_option("--count", fo.count, "frames to render (default: all)")->check(CLI::NonNegativeNumber);
+  lcmlog->add_flag("--rgb", fo.rgb, "RGB frames instead of mono8");
+  lcmlog->add_option("--noise", fo.noise, "pixel noise sigma in grey levels")->check(CLI::NonNegativeNumber);
+  lcmlog->add_option("--exposure", fo.exposure_s, "row exposure in s (motion blur)")->check(CLI::NonNegativeNumber);
+  lcmlog->add_option("--blur-samples", fo.blur_samples, "time samples over the exposure")->check(CLI::Range(1, 64));
   auto* fig = app.add_subcommand("figure1", "render the paper's Figure 1 (four PNGs)");
   fig->add_option("outdir", out, "output directory (created)")->required();
   if (const auto rc = tools::parse_command_line(app, argc, argv)) return *rc;
   return tools::run_tool("rsd-sim", [&] {
     if (*rec) return run_recording(scenario, out);
     if (*frames) return run_frames(scenario, out, fo);
+    if (*lcmlog) return run_lcm(scenario, out, fo);
     return run_figure1(out);
   });
 }

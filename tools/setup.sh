@@ -16,6 +16,8 @@ PACKAGES=(
   libyaml-cpp-dev          # scenario, recording and config files
   libfftw3-dev             # FFT for LED-flicker row-rate calibration
   libpng-dev               # PNG frames in and out
+  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev  # LCM messages, lcm-gen, lcm-logger, lcm-spy
+  default-jdk-headless libjchart2d-java  # Java LCM types for lcm-spy
 )
 
 missing=()
