@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <optional>
 
+#include "dsp/rs_closed_form.hpp"
+
 namespace rsd::dsp {
 
 const char* to_string(RsStatus s) {
@@ -28,15 +30,6 @@ CaptureWindow default_capture_window(const RowTiming& timing) {
 }
 
 namespace {
-
-// The constraint in normalised coordinates: with K applied, fy y_n + cy = r t - v0, so
-// y_n = r_n t - v0_n with r_n = r / fy and v0_n = (v0 + cy) / fy.
-struct NormalisedRate {
-  double r_n, v0_n;
-};
-NormalisedRate normalised(const CameraModel& cam, const RowTiming& timing) {
-  return {timing.r() / cam.fy, (timing.v0() + cam.cy) / cam.fy};
-}
 
 RsProjection fail(RsStatus s) {
   RsProjection p;
@@ -80,7 +73,9 @@ std::optional<double> earliest_quadratic_root(double a2, double a1, double a0,
 RsProjection solve_linearised(const CameraModel& cam, const RowTiming& timing, const Twist& tw,
                               const Eigen::Vector3d& X, const CaptureWindow& win) {
   if (!cam.dist.is_zero()) return fail(RsStatus::UnsupportedMotion);
-  const auto [r_n, v0_n] = normalised(cam, timing);
+  // The constraint in normalised coordinates: with K applied, fy y_n + cy = r t - v0, so
+  // y_n = r_n t - v0_n (rs_closed_form.hpp).
+  const auto [r_n, v0_n] = normalised_readout(cam, timing);
   // X_c(t) = X + t m with m = [w]x X + v (paper's linearised P(t)). The constraint
   // (y + t m_y) / (z + t m_z) = r_n t - v0_n becomes a quadratic in t.
   const Eigen::Vector3d m = tw.w.cross(X) + tw.v;
@@ -98,22 +93,20 @@ RsProjection project_fronto_parallel(const CameraModel& cam, const RowTiming& ti
                                      const Eigen::Vector3d& X, const CaptureWindow& win) {
   if (tw.v.z() != 0 || tw.w.x() != 0 || tw.w.y() != 0 || !cam.dist.is_zero())
     return fail(RsStatus::UnsupportedMotion);
-  const auto [r_n, v0_n] = normalised(cam, timing);
-  const double x = X.x(), y = X.y(), z = X.z();
-  const double vx = tw.v.x(), vy = tw.v.y(), wz = tw.w.z();
-  if (!(z > 0)) return fail(RsStatus::BehindCamera);
-  // eq. (rollshutterproj): t_c = (y + v0 z) / (r z - v_y - w_z x); the denominator vanishes
+  const NormalisedReadout ro = normalised_readout(cam, timing);
+  if (!(X.z() > 0)) return fail(RsStatus::BehindCamera);
+  // eq. (rollshutterproj), rs_closed_form.hpp: the denominator r z - v_y - w_z x vanishes
   // when the point's image moves down as fast as the readout: no capture.
-  const double den = r_n * z - vy - wz * x;
-  if (std::abs(den) <= 1e-12 * (std::abs(r_n * z) + std::abs(vy) + std::abs(wz * x)))
+  const double den = fronto_parallel_denominator(X, ro, tw);
+  if (std::abs(den) <= 1e-12 * (std::abs(ro.r_n * X.z()) + std::abs(tw.v.y()) +
+                                std::abs(tw.w.z() * X.x())))
     return fail(RsStatus::NoSolution);
-  const double t_c = (y + v0_n * z) / den;
+  const double t_c = fronto_parallel_capture_time(X, ro, tw);
   if (!std::isfinite(t_c) || !win.contains(t_c)) return fail(RsStatus::NoSolution);
-  const Eigen::Vector2d q(x / z + t_c * (vx - wz * y) / z, y / z + t_c * (vy + wz * x) / z);
   RsProjection p;
   p.status = RsStatus::Ok;
   p.t_c = t_c;
-  p.pixel = cam.to_pixel(q);
+  p.pixel = pinhole_pixel(cam, fronto_parallel_image(X, t_c, tw));
   return p;
 }
 
