@@ -1,6 +1,7 @@
 #include "dsp/recording_simulation.hpp"
 
 #include <cmath>
+#include <optional>
 #include <random>
 #include <stdexcept>
 
@@ -42,6 +43,8 @@ void validate(const SimConfig& c) {
   require(c.duration_s > 0, "duration_s must be positive");
   require(c.noise_px >= 0, "observations.noise_px must not be negative");
   require(c.trajectory_rate_hz > 0, "motion.trajectory_rate_hz must be positive");
+  require(c.motion_source != MotionSource::Samples || c.pose_samples.size() >= 2,
+          "motion.file must hold at least two poses");
   require(c.gyro.rate_min_hz > 0 && c.gyro.rate_max_hz >= c.gyro.rate_min_hz,
           "motion.gyro.rate_hz must be [min, max] with 0 < min <= max");
   require(c.outlier_fraction >= 0 && c.outlier_fraction < 1, "observations.outlier_fraction must be in [0, 1)");
@@ -77,11 +80,49 @@ std::pair<double, double> motion_span(const Recording& r, const TrueModel& m) {
   return {std::min(a, b) - 1.0, std::max(a, b) + 1.0};
 }
 
-SmoothPose rest_pose(const SimConfig& c, Eigen::Vector3d p0) {
-  return SmoothPose{p0, Eigen::Matrix3d::Identity(),
-                    SmoothSignal3(c.seed * 7 + 1, Eigen::Vector3d::Constant(c.translation_amplitude_m), c.motion_frequency_hz),
-                    SmoothSignal3(c.seed * 7 + 2, Eigen::Vector3d::Constant(c.rotation_amplitude_rad), c.motion_frequency_hz)};
-}
+// The body's pose over time (world-from-body), whichever source the scenario chose. The
+// rest pose is where Smooth and Constant motions start from.
+class BodyMotion {
+ public:
+  BodyMotion(const SimConfig& c, const Eigen::Vector3d& rest, double t0)
+      : c_(c), t0_(t0),
+        smooth_{rest, Eigen::Matrix3d::Identity(),
+                SmoothSignal3(c.seed * 7 + 1, Eigen::Vector3d::Constant(c.translation_amplitude_m), c.motion_frequency_hz),
+                SmoothSignal3(c.seed * 7 + 2, Eigen::Vector3d::Constant(c.rotation_amplitude_rad), c.motion_frequency_hz)} {
+    if (c.motion_source == MotionSource::Samples) {
+      std::vector<SampledTrajectory::Sample> s;
+      for (const auto& p : c.pose_samples) s.push_back({p.t, p.q, p.p});
+      samples_.emplace(std::move(s));
+    }
+  }
+  PoseSample at(double t) const {
+    switch (c_.motion_source) {
+      case MotionSource::Smooth: return {t, smooth_.position(t), smooth_.orientation(t)};
+      case MotionSource::Constant: {
+        // world_from_body(t) = rest * exp((t - t0) xi), xi = (v, w) in body axes.
+        const Eigen::Affine3d g = ScrewMotion(Twist{c_.constant_velocity, c_.constant_angular_rate}).at(t - t0_);
+        return {t, smooth_.p0 + g.translation(), Eigen::Quaterniond(g.linear())};
+      }
+      case MotionSource::Samples: {
+        const Eigen::Affine3d cam_from_world = samples_->at(t);
+        const Eigen::Matrix3d R = cam_from_world.linear().transpose();
+        return {t, -R * cam_from_world.translation(), Eigen::Quaterniond(R)};
+      }
+    }
+    return {};
+  }
+  // Angular rate in body axes (dR/dt = R [w]x), by central differences.
+  Eigen::Vector3d body_rate(double t) const {
+    const double h = 1e-5;
+    return log_so3((at(t - h).q.conjugate() * at(t + h).q).toRotationMatrix()) / (2 * h);
+  }
+
+ private:
+  const SimConfig& c_;
+  double t0_;
+  SmoothPose smooth_;
+  std::optional<SampledTrajectory> samples_;
+};
 
 Eigen::Vector2d noisy(const Eigen::Vector2d& p, double sigma, std::mt19937& rng) {
   std::normal_distribution<double> n(0, sigma);
@@ -91,17 +132,19 @@ Eigen::Vector2d noisy(const Eigen::Vector2d& p, double sigma, std::mt19937& rng)
 void simulate_landmarks(const SimConfig& c, const TrueModel& m, SimulatedRecording& out, std::mt19937& rng) {
   Recording& r = out.rec;
   r.motion = MotionKind::Trajectory;
-  for (int i = 0; i < c.target_rows; ++i)
+  r.points = c.points;
+  for (int i = 0; i < c.target_rows && c.points.empty(); ++i)
     for (int j = 0; j < c.target_cols; ++j)
       r.points.push_back({i * c.target_cols + j, Eigen::Vector3d((j - 0.5 * (c.target_cols - 1)) * c.target_spacing_m,
                                                                   (i - 0.5 * (c.target_rows - 1)) * c.target_spacing_m, 0.0)});
   // The body rests target_distance_m in front of the target (z = 0 plane), looking along +z.
-  const SmoothPose pose = rest_pose(c, Eigen::Vector3d(0, 0, -c.target_distance_m));
+  const BodyMotion pose(c, Eigen::Vector3d(0, 0, -c.target_distance_m), r.frames.front().t);
   const auto [t_begin, t_end] = motion_span(r, m);
   std::vector<SampledTrajectory::Sample> samples;
   for (double t = t_begin; t <= t_end; t += 1.0 / c.trajectory_rate_hz) {
-    r.trajectory.push_back({t, pose.position(t), pose.orientation(t)});
-    samples.push_back({t, pose.orientation(t), pose.position(t)});
+    const PoseSample p = pose.at(t);
+    r.trajectory.push_back(p);
+    samples.push_back({t, p.q, p.p});
   }
   // The written samples are the truth: interpolating them is the motion the data follow.
   const SampledTrajectory truth(std::move(samples));
@@ -113,7 +156,7 @@ void simulate_landmarks(const SimConfig& c, const TrueModel& m, SimulatedRecordi
     }
 }
 
-std::vector<GyroSample> sample_gyro(const SimConfig& c, const SmoothPose& imu, const TrueModel& m, double t_begin,
+std::vector<GyroSample> sample_gyro(const SimConfig& c, const BodyMotion& imu, const TrueModel& m, double t_begin,
                                     double t_end, std::mt19937& rng) {
   const GyroSampling& g = c.gyro;
   std::uniform_real_distribution<double> u(0, 1);
@@ -134,14 +177,14 @@ std::vector<GyroSample> sample_gyro(const SimConfig& c, const SmoothPose& imu, c
 void simulate_matches(const SimConfig& c, const TrueModel& m, SimulatedRecording& out, std::mt19937& rng) {
   Recording& r = out.rec;
   r.motion = MotionKind::Gyro;
-  const SmoothPose imu = rest_pose(c, Eigen::Vector3d::Zero());
+  const BodyMotion imu(c, Eigen::Vector3d::Zero(), r.frames.front().t);
   const auto [t_begin, t_end] = motion_span(r, m);
   r.gyro = sample_gyro(c, imu, m, t_begin, t_end, rng);
   // The truth is the continuous orientation, sampled densely enough (2 kHz) that slerp
   // between samples is exact to well below a micro-radian.
   std::vector<OrientationTrack::Sample> cam_samples;
   for (double t = t_begin; t <= t_end; t += 5e-4)
-    cam_samples.push_back({t, camera_orientation(imu.orientation(t), r.nominal.imu_to_camera)});
+    cam_samples.push_back({t, camera_orientation(imu.at(t).q, r.nominal.imu_to_camera)});
   const OrientationTrack truth(std::move(cam_samples));
   const MatchSetup setup{m.cam, m.time};
   std::uniform_real_distribution<double> u(0, m.cam.width - 1), v(0, m.cam.height - 1), flip(0, 1);

@@ -38,6 +38,13 @@ struct GyroSampling {
   double noise_rad_s = 0;
 };
 
+// Where the body's motion comes from.
+enum class MotionSource {
+  Smooth,    // sums of sinusoids about a rest pose (default)
+  Constant,  // constant velocity in body axes: a screw motion from the rest pose
+  Samples,   // given poses (e.g. a trajectory file), interpolated linearly and by slerp
+};
+
 struct SimConfig {
   ObservationKind kind = ObservationKind::Landmarks;
   NominalModel nominal;
@@ -51,8 +58,15 @@ struct SimConfig {
   double rotation_amplitude_rad = 0.15;
   double motion_frequency_hz = 1.0;
   double trajectory_rate_hz = 500;
+  MotionSource motion_source = MotionSource::Smooth;
+  Eigen::Vector3d constant_velocity = Eigen::Vector3d::Zero();      // m/s, body axes
+  Eigen::Vector3d constant_angular_rate = Eigen::Vector3d::Zero();  // rad/s, body axes
+  std::vector<PoseSample> pose_samples;  // MotionSource::Samples: world-from-body poses
   GyroSampling gyro;
-  // Landmarks: a planar target of rows x cols points, `spacing_m` apart, `distance_m` ahead.
+  // Landmarks: the given points (world frame; the body rests at (0, 0, -target_distance_m)
+  // looking along +z), or if none are given a planar grid of rows x cols points at z = 0,
+  // `spacing_m` apart.
+  std::vector<Landmark> points;
   int target_rows = 7, target_cols = 9;
   double target_spacing_m = 0.1;
   double target_distance_m = 1.2;

@@ -59,6 +59,23 @@ Eigen::Vector3f NoiseTexture::colour(double s, double t) const {
   return c;
 }
 
+Eigen::Vector3f BitmapTexture::texel(int x, int y) const {
+  if (x < 0 || y < 0 || x >= img_.width || y >= img_.height) return Eigen::Vector3f::Ones();
+  const std::uint8_t* p = img_.data.data() + static_cast<size_t>(y) * img_.stride() + x * bytes_per_pixel(img_.format);
+  if (img_.format == PixelFormat::Rgb8) return Eigen::Vector3f(p[0], p[1], p[2]) / 255.0f;
+  const float g = img_.format == PixelFormat::Mono16 ? *reinterpret_cast<const std::uint16_t*>(p) / 65535.0f : p[0] / 255.0f;
+  return Eigen::Vector3f::Constant(g);
+}
+
+Eigen::Vector3f BitmapTexture::colour(double s, double t) const {
+  // Pixel centres sit at half-integer multiples of the pixel size.
+  const double x = s * ppm_ - 0.5, y = t * ppm_ - 0.5;
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  const float a = static_cast<float>(x - x0), b = static_cast<float>(y - y0);
+  return (1 - a) * (1 - b) * texel(x0, y0) + a * (1 - b) * texel(x0 + 1, y0) + (1 - a) * b * texel(x0, y0 + 1) +
+         a * b * texel(x0 + 1, y0 + 1);
+}
+
 Plane fronto_parallel_checkerboard(double z, int cols, int rows, double square_m) {
   Plane p;
   p.axis_s = Eigen::Vector3d::UnitX();

@@ -6,6 +6,8 @@
 #include <memory>
 #include <vector>
 
+#include "dsp/image.hpp"
+
 namespace rsd::dsp {
 
 // Intensity (0..1, per channel) of a plane's surface at plane coordinates (s, t) in metres.
@@ -41,6 +43,21 @@ class NoiseTexture final : public Texture {
   float octave(double s, double t, int channel) const;
   unsigned seed_;
   double cell_;
+};
+
+// A printed picture: plane coordinates (s, t) in metres map to bitmap pixels with
+// `pixels_per_m`, (0, 0) at the bitmap's top-left corner; bilinear, white outside.
+class BitmapTexture final : public Texture {
+ public:
+  BitmapTexture(Image bitmap, double pixels_per_m) : img_(std::move(bitmap)), ppm_(pixels_per_m) {}
+  Eigen::Vector3f colour(double s, double t) const override;
+  double width_m() const { return img_.width / ppm_; }
+  double height_m() const { return img_.height / ppm_; }
+
+ private:
+  Eigen::Vector3f texel(int x, int y) const;
+  Image img_;
+  double ppm_;
 };
 
 struct Plane {
