@@ -291,17 +291,23 @@ void read_frames(const fs::path& path, Recording& r, std::map<int, double>& by_i
   r.nominal.time.t0 = r.frames.front().t;
 }
 
+std::vector<dsp::PoseSample> read_poses(const fs::path& path) {
+  std::vector<dsp::PoseSample> out;
+  CsvReader csv(path, {"t", "x", "y", "z", "qw", "qx", "qy", "qz"});
+  while (csv.next()) {
+    Eigen::Quaterniond q(csv.number(4), csv.number(5), csv.number(6), csv.number(7));
+    if (std::abs(q.norm() - 1) > 1e-3) csv.fail(4, "quaternion is not unit length (norm " + num(q.norm()) + ")");
+    const double t = csv.number(0);
+    if (!out.empty() && t < out.back().t) csv.fail(0, "time goes backwards");
+    out.push_back({t, {csv.number(1), csv.number(2), csv.number(3)}, q.normalized()});
+  }
+  if (out.size() < 2) throw RecordingError(path.string() + ": needs at least two poses");
+  return out;
+}
+
 void read_motion(const fs::path& path, Recording& r) {
   if (r.motion == dsp::MotionKind::Trajectory) {
-    CsvReader csv(path, {"t", "x", "y", "z", "qw", "qx", "qy", "qz"});
-    while (csv.next()) {
-      Eigen::Quaterniond q(csv.number(4), csv.number(5), csv.number(6), csv.number(7));
-      if (std::abs(q.norm() - 1) > 1e-3) csv.fail(4, "quaternion is not unit length (norm " + num(q.norm()) + ")");
-      const double t = csv.number(0);
-      if (!r.trajectory.empty() && t < r.trajectory.back().t) csv.fail(0, "time goes backwards");
-      r.trajectory.push_back({t, {csv.number(1), csv.number(2), csv.number(3)}, q.normalized()});
-    }
-    if (r.trajectory.size() < 2) throw RecordingError(path.string() + ": needs at least two poses");
+    r.trajectory = read_poses(path);
   } else {
     CsvReader csv(path, {"t", "wx", "wy", "wz"});
     while (csv.next()) r.gyro.push_back({csv.number(0), {csv.number(1), csv.number(2), csv.number(3)}});
@@ -339,6 +345,8 @@ void read_matches(const fs::path& path, Recording& r, const std::map<int, double
 }
 
 }  // namespace
+
+std::vector<dsp::PoseSample> read_trajectory_csv(const std::string& path) { return read_poses(path); }
 
 void write_recording(const std::string& dir_name, const Recording& r) {
   const fs::path dir(dir_name);

@@ -7,6 +7,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "dsp/recording.hpp"
 
@@ -18,5 +19,7 @@ struct RecordingError : std::runtime_error {
 
 void write_recording(const std::string& dir, const dsp::Recording& rec);
 dsp::Recording read_recording(const std::string& dir);
+// A pose file in trajectory.csv's format (t,x,y,z,qw,qx,qy,qz), checked the same way.
+std::vector<dsp::PoseSample> read_trajectory_csv(const std::string& path);
 
 }  // namespace rsd::tools

@@ -74,26 +74,6 @@ class TrueCameraMotion final : public dsp::CameraMotion {
   dsp::SampledTrajectory body_;
 };
 
-// The target as a checkerboard whose inner corners are the scenario's points, on a
-// textured wall behind it.
-dsp::Scene target_scene(const dsp::SimConfig& c) {
-  dsp::Scene scene;
-  dsp::Plane board = dsp::fronto_parallel_checkerboard(0.0, c.target_cols + 1, c.target_rows + 1, c.target_spacing_m);
-  // Plane coordinates start at the board's outer corner; keep one square of white margin.
-  const double margin = c.target_spacing_m;
-  board.s_min = board.t_min = -margin;
-  board.s_max = (c.target_cols + 1) * c.target_spacing_m + margin;
-  board.t_max = (c.target_rows + 1) * c.target_spacing_m + margin;
-  scene.planes.push_back(board);
-  dsp::Plane wall;
-  wall.origin = Eigen::Vector3d(0, 0, 0.5);
-  wall.axis_s = Eigen::Vector3d::UnitX();
-  wall.axis_t = Eigen::Vector3d::UnitY();
-  wall.texture = std::make_shared<dsp::NoiseTexture>(c.seed, 0.05);
-  scene.planes.push_back(wall);
-  return scene;
-}
-
 // Everything needed to render a scenario's frames as the real (true-model) camera sees them.
 struct FrameRig {
   tools::Scenario sc;
@@ -110,7 +90,7 @@ FrameRig make_rig(const std::string& scenario, const FrameOptions& o) {
   FrameRig rig;
   rig.sc = tools::load_scenario(scenario);
   if (rig.sc.sim.kind != dsp::ObservationKind::Landmarks)
-    throw tools::UsageError(scenario + ": frames are rendered for landmark (target) scenarios");
+    throw tools::UsageError(scenario + ": frames are rendered for landmarks scenarios (a target or point set)");
   rig.sc.sim.noise_px = 0;
   rig.sim = dsp::simulate_recording(rig.sc.sim);
   rig.truth = dsp::true_model(rig.sim.rec.nominal, rig.sc.sim.effects);
@@ -124,7 +104,7 @@ FrameRig make_rig(const std::string& scenario, const FrameOptions& o) {
   ro.noise_seed = rig.sc.sim.seed;
   rig.renderer = std::make_unique<dsp::RsRenderer>(rig.truth.cam, rig.timing, ro);
   rig.motion = std::make_unique<TrueCameraMotion>(rig.sim.rec, rig.truth);
-  rig.scene = target_scene(rig.sc.sim);
+  rig.scene = rig.sc.target.scene;
   rig.frames = o.count > 0 ? std::min<size_t>(o.count, rig.sim.rec.frames.size()) : rig.sim.rec.frames.size();
   return rig;
 }

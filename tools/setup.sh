@@ -18,6 +18,7 @@ PACKAGES=(
   libpng-dev               # PNG frames in and out
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev  # LCM messages, lcm-gen, lcm-logger, lcm-spy
   default-jdk-headless libjchart2d-java  # Java LCM types for lcm-spy
+  libopencv-dev libopencv-contrib-dev    # AprilTag codes (aruco), feature tracking, reference remap
 )
 
 missing=()

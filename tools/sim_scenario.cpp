@@ -1,5 +1,8 @@
 #include "sim_scenario.hpp"
 
+#include <filesystem>
+
+#include "recording_v1.hpp"
 #include "yaml_reader.hpp"
 
 namespace rsd::tools {
@@ -44,7 +47,28 @@ void read_gyro(YamlMap m, dsp::GyroSampling& g) {
   m.finish();
 }
 
-void read_motion(YamlMap m, dsp::SimConfig& s) {
+void read_motion_source(YamlMap& m, dsp::SimConfig& s, const std::string& scenario_file) {
+  const std::string kind = m.text("kind", "smooth");
+  if (kind == "smooth") {
+    s.motion_source = dsp::MotionSource::Smooth;
+  } else if (kind == "constant") {
+    s.motion_source = dsp::MotionSource::Constant;
+    const auto v = m.numbers("velocity_m_s", 3), w = m.numbers("angular_rate_rad_s", 3);
+    s.constant_velocity = Eigen::Vector3d(v[0], v[1], v[2]);
+    s.constant_angular_rate = Eigen::Vector3d(w[0], w[1], w[2]);
+  } else if (kind == "file") {
+    s.motion_source = dsp::MotionSource::Samples;
+    const std::string file = m.text("file", "");
+    if (file.empty()) m.fail("file", "is missing (a t,x,y,z,qw,qx,qy,qz pose file)");
+    const std::filesystem::path p = std::filesystem::path(scenario_file).parent_path() / file;
+    s.pose_samples = read_trajectory_csv(p.string());
+  } else {
+    m.fail("kind", "must be smooth, constant or file");
+  }
+}
+
+void read_motion(YamlMap m, dsp::SimConfig& s, const std::string& scenario_file) {
+  read_motion_source(m, s, scenario_file);
   s.translation_amplitude_m = m.number("translation_amplitude_m", s.translation_amplitude_m);
   s.rotation_amplitude_rad = m.number("rotation_amplitude_rad", s.rotation_amplitude_rad);
   s.motion_frequency_hz = m.number("frequency_hz", s.motion_frequency_hz);
@@ -63,12 +87,27 @@ void read_motion(YamlMap m, dsp::SimConfig& s) {
   m.finish();
 }
 
-void read_target(YamlMap m, dsp::SimConfig& s) {
-  s.target_rows = m.integer("rows", s.target_rows);
-  s.target_cols = m.integer("cols", s.target_cols);
-  s.target_spacing_m = m.number("spacing_m", s.target_spacing_m);
+void read_target(YamlMap m, dsp::SimConfig& s, TargetSpec& t) {
+  const std::string kind = m.text("kind", "checkerboard");
+  if (kind == "checkerboard") t.kind = TargetKind::Checkerboard;
+  else if (kind == "aprilgrid") t.kind = TargetKind::AprilGrid;
+  else if (kind == "points") t.kind = TargetKind::Points;
+  else m.fail("kind", "must be checkerboard, aprilgrid or points");
+  t.rows = m.integer("rows", t.rows);
+  t.cols = m.integer("cols", t.cols);
+  t.spacing_m = m.number("spacing_m", t.spacing_m);
+  t.tag_spacing = m.number("tag_spacing", t.tag_spacing);
+  t.count = m.integer("count", t.count);
+  t.extent_m = m.number("extent_m", t.extent_m);
+  if (m.has("depth_m")) {
+    const auto d = m.numbers("depth_m", 2);
+    t.depth_min_m = d[0], t.depth_max_m = d[1];
+  }
   s.target_distance_m = m.number("distance_m", s.target_distance_m);
-  if (s.target_rows < 1 || s.target_cols < 1) m.fail("rows", "and cols must be at least 1");
+  if (t.rows < 1 || t.cols < 1) m.fail("rows", "and cols must be at least 1");
+  if (!(t.spacing_m > 0)) m.fail("spacing_m", "must be positive");
+  if (t.count < 1) m.fail("count", "must be at least 1");
+  if (!(s.target_distance_m > 0)) m.fail("distance_m", "must be positive");
   m.finish();
 }
 
@@ -124,15 +163,17 @@ void read_effect(YamlMap& effects, const std::string& name, const dsp::NominalMo
 
 Scenario load_scenario(const std::string& file) {
   YamlMap root = YamlMap::load(file);
-  Scenario s{{}, file};
+  Scenario s;
+  s.file = file;
   dsp::SimConfig& c = s.sim;
   c.seed = static_cast<unsigned>(root.integer("seed", 1));
   c.duration_s = root.number("duration_s", c.duration_s);
   c.start_time_s = root.number("start_time_s", c.start_time_s);
   if (root.has("camera")) read_camera(root.map("camera"), c.nominal.cam);
   if (root.has("timing")) read_timing(root.map("timing"), c.nominal);
-  if (root.has("motion")) read_motion(root.map("motion"), c);
-  if (root.has("target")) read_target(root.map("target"), c);
+  if (root.has("motion")) read_motion(root.map("motion"), c, file);
+  s.target_spec.seed = c.seed;
+  if (root.has("target")) read_target(root.map("target"), c, s.target_spec);
   if (root.has("observations")) read_observations(root.map("observations"), c);
   if (root.has("effects")) {
     YamlMap effects = root.map("effects");
@@ -140,6 +181,14 @@ Scenario load_scenario(const std::string& file) {
     effects.finish();
   }
   root.finish();
+  if (c.kind == dsp::ObservationKind::Landmarks) {
+    try {
+      s.target = make_target(s.target_spec);
+    } catch (const std::exception& e) {
+      throw ConfigError(file + ": target: " + e.what());
+    }
+    c.points = s.target.landmarks;
+  }
   return s;
 }
 

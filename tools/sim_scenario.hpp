@@ -6,11 +6,14 @@
 #include <string>
 
 #include "dsp/recording_simulation.hpp"
+#include "sim_target.hpp"
 
 namespace rsd::tools {
 
 struct Scenario {
-  dsp::SimConfig sim;
+  dsp::SimConfig sim;  // sim.points holds the target's landmarks
+  TargetSpec target_spec;
+  Target target;
   std::string file;
 };
 
