@@ -7,7 +7,7 @@
 
 #include "recording_v1.hpp"
 #include "sim_scenario.hpp"
-#include "yaml_reader.hpp"
+#include "drivers/yaml_map.hpp"
 #include "dsp/recording_simulation.hpp"
 
 using namespace rsd;
@@ -117,7 +117,7 @@ TEST(Scenario, UnknownKeysAndBadValuesNameTheLine) {
     std::ofstream(f) << text;
     try {
       tools::load_scenario(f.string());
-    } catch (const tools::ConfigError& e) {
+    } catch (const drivers::ConfigError& e) {
       return std::string(e.what());
     }
     return std::string();

@@ -19,6 +19,9 @@ PACKAGES=(
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev  # LCM messages, lcm-gen, lcm-logger, lcm-spy
   default-jdk-headless libjchart2d-java  # Java LCM types for lcm-spy
   libopencv-dev libopencv-contrib-dev    # AprilTag codes (aruco), feature tracking, reference remap
+  libsystemd-dev systemd python3         # sd_notify; unit verification and notify tests
+  libcamera-dev                          # the libcamera driver
+  libaravis-dev aravis-tools libusb-1.0-0-dev iproute2 util-linux  # Aravis driver; fake GigE camera tests in a private netns
 )
 
 missing=()

@@ -3,9 +3,12 @@
 #include <filesystem>
 
 #include "recording_v1.hpp"
-#include "yaml_reader.hpp"
+#include "drivers/yaml_map.hpp"
 
 namespace rsd::tools {
+
+using drivers::ConfigError;
+using drivers::YamlMap;
 
 namespace {
 

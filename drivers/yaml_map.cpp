@@ -1,8 +1,8 @@
-#include "yaml_reader.hpp"
+#include "drivers/yaml_map.hpp"
 
 #include <cmath>
 
-namespace rsd::tools {
+namespace rsd::drivers {
 
 YamlMap::YamlMap(std::string file, YAML::Node node, std::string path)
     : file_(std::move(file)), node_(std::move(node)), path_(std::move(path)) {
@@ -59,6 +59,16 @@ int YamlMap::integer(const std::string& key, int fallback) {
   }
 }
 
+bool YamlMap::boolean(const std::string& key, bool fallback) {
+  const YAML::Node n = child(key);
+  if (!n) return fallback;
+  try {
+    return n.as<bool>();
+  } catch (const YAML::Exception&) {
+    fail(key, "must be true or false, not '" + YAML::Dump(n) + "'");
+  }
+}
+
 std::string YamlMap::text(const std::string& key, const std::string& fallback) {
   const YAML::Node n = child(key);
   if (!n) return fallback;
@@ -98,4 +108,4 @@ void YamlMap::finish() const {
   }
 }
 
-}  // namespace rsd::tools
+}  // namespace rsd::drivers

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace rsd::tools {
+namespace rsd::drivers {
 
 struct ConfigError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -25,6 +25,7 @@ class YamlMap {
   double number(const std::string& key, double fallback);
   double number(const std::string& key);  // required
   int integer(const std::string& key, int fallback);
+  bool boolean(const std::string& key, bool fallback);
   std::string text(const std::string& key, const std::string& fallback);
   std::vector<double> numbers(const std::string& key, size_t n);  // required length n
   YamlMap map(const std::string& key);  // nested mapping (required)
@@ -44,4 +45,4 @@ class YamlMap {
   std::set<std::string> used_;
 };
 
-}  // namespace rsd::tools
+}  // namespace rsd::drivers

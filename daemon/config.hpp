@@ -1,0 +1,32 @@
+// rsd's configuration: one YAML file, validated strictly (unknown keys and bad values are
+// errors naming the file, line and key). Every key has a default; `rsd
+// --print-default-config` prints them all, and an empty file runs the built-in simulated
+// camera.
+#pragma once
+
+#include <string>
+
+#include "daemon/frame_rectifier.hpp"
+#include "daemon/lcm_publisher.hpp"
+#include "daemon/pipeline.hpp"
+#include "daemon/velocity_buffer.hpp"
+#include "drivers/sim_source.hpp"
+
+namespace rsd::daemon {
+
+struct Config {
+  std::string driver = "sim";
+  drivers::SimSourceConfig sim;
+  PipelineConfig pipeline;
+  RectifyConfig rectify;
+  VelocityLimits velocity_limits;
+  std::string velocity_channel = "RSD_VELOCITY";
+  std::string lcm_url = "memq://";
+  Channels channels;
+};
+
+// Throws drivers::ConfigError.
+Config load_config(const std::string& file);
+std::string default_config_yaml();
+
+}  // namespace rsd::daemon

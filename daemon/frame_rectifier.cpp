@@ -1,0 +1,67 @@
+#include "daemon/frame_rectifier.hpp"
+
+#include "dsp/applicability.hpp"
+
+namespace rsd::daemon {
+
+FrameRectifier::FrameRectifier(const RectifyConfig& cfg, const dsp::CameraModel& cam, const dsp::RowTiming& timing,
+                               const drivers::FrameFormat& fmt)
+    : cfg_(cfg), cam_(cam), timing_(timing) {
+  dsp::RectifierConfig rc;
+  rc.initial_spacing = cfg.grid_px;
+  rect_ = std::make_unique<dsp::Rectifier>(cam, timing, fmt.format, rc);
+}
+
+FrameRectifier::~FrameRectifier() = default;
+
+dsp::DepthModel FrameRectifier::depth_model() const {
+  switch (cfg_.depth) {
+    case DepthKind::Infinite: return dsp::DepthModel::at_infinity();
+    case DepthKind::Plane: return dsp::DepthModel::fronto_parallel(cfg_.depth_m);
+    case DepthKind::Ground: return dsp::ground_plane(cfg_.camera_height_m);
+  }
+  return dsp::DepthModel::at_infinity();
+}
+
+RectifyResult FrameRectifier::process(const dsp::ImageView& src, const dsp::ImageView& dst, const drivers::FrameMeta& meta,
+                                      const VelocityBuffer& velocity) {
+  RectifyResult r;
+  r.reference_time_s = dsp::reference_time(timing_, cfg_.reference);
+  if (!cfg_.enabled) {
+    rect_->pass_through(src, dst);
+    r.reason = "rectification disabled";
+    return r;
+  }
+  // The velocity valid for this frame: at the middle of its readout.
+  const int64_t t_mid = meta.first_row_ns + static_cast<int64_t>((0.5 * timing_.frame_readout_s() + 0.5 * meta.exposure_s) * 1e9);
+  VelocityEstimate est;
+  const VelocityStatus st = velocity.at(t_mid, est);
+  if (st != VelocityStatus::Ok) {
+    rect_->pass_through(src, dst);
+    r.reason = st == VelocityStatus::NoData ? "no velocity received" : "velocity stale";
+    return r;
+  }
+  // The camera's own motion (w, v) is the negated twist of the scene in its axes.
+  const bool translate = est.sample.has_linear && !cfg_.gyro_only && cfg_.depth != DepthKind::Infinite;
+  dsp::Twist tw;
+  for (int i = 0; i < 3; ++i) {
+    r.w[i] = est.sample.w[i];
+    r.v[i] = translate ? est.sample.v[i] : 0.0;
+    tw.w[i] = -r.w[i];
+    tw.v[i] = -r.v[i];
+  }
+  r.velocity_age_s = est.age_s;
+  const dsp::DepthModel depth = translate ? depth_model() : dsp::DepthModel::at_infinity();
+  const dsp::RectifyReport rep = rect_->rectify(src, dst, tw, depth, r.reference_time_s);
+  r.rectified = rep.rectified;
+  r.reason = rep.rectified ? "" : "no rolling-shutter solution for this motion";
+  dsp::ApplicabilityOptions opt;
+  opt.threshold_px = cfg_.threshold_px;
+  opt.grid_cols = 5, opt.grid_rows = 4;  // corners, edges and centre: enough for a verdict per frame
+  const auto bound = dsp::correction_bound(cam_, timing_, tw, translate ? cfg_.depth_m : 1e6, opt);
+  r.max_correction_px = bound.max_correction_px;
+  r.pinhole_sufficient = bound.pinhole_sufficient;
+  return r;
+}
+
+}  // namespace rsd::daemon

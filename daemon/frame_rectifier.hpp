@@ -1,0 +1,59 @@
+// The rectify stage: looks up the camera's velocity for the frame, turns it into the
+// paper's twist, rectifies the rolling-shutter image to a global-shutter one at the
+// reference time, and says what it did. Without a valid velocity the frame passes through
+// unrectified, with the reason.
+#pragma once
+
+#include <memory>
+
+#include "daemon/velocity_buffer.hpp"
+#include "drivers/camera_source.hpp"
+#include "dsp/camera_model.hpp"
+#include "dsp/rs_backprojection.hpp"
+#include "dsp/row_timing.hpp"
+#include "dsp/rs_rectifier.hpp"
+
+namespace rsd::daemon {
+
+enum class DepthKind { Infinite, Plane, Ground };
+
+struct RectifyConfig {
+  bool enabled = true;
+  dsp::ReferenceRow reference = dsp::ReferenceRow::Middle;
+  DepthKind depth = DepthKind::Infinite;
+  double depth_m = 5.0;          // Plane: distance of the fronto-parallel plane
+  double camera_height_m = 1.5;  // Ground: height of the camera above the ground (y down)
+  int grid_px = 16;
+  bool gyro_only = false;        // ignore linear velocity even when it is known
+  double threshold_px = 1.0;     // the applicability verdict's threshold
+};
+
+struct RectifyResult {
+  bool rectified = false;
+  const char* reason = "";
+  double w[3] = {0, 0, 0}, v[3] = {0, 0, 0};  // camera's own rates used, camera axes
+  double velocity_age_s = 0;
+  double max_correction_px = 0;
+  bool pinhole_sufficient = true;
+  double reference_time_s = 0;
+};
+
+class FrameRectifier {
+ public:
+  FrameRectifier(const RectifyConfig& cfg, const dsp::CameraModel& cam, const dsp::RowTiming& timing,
+                 const drivers::FrameFormat& fmt);
+  ~FrameRectifier();
+  // Never allocates: everything is sized in the constructor.
+  RectifyResult process(const dsp::ImageView& src, const dsp::ImageView& dst, const drivers::FrameMeta& meta,
+                        const VelocityBuffer& velocity);
+  const dsp::RowTiming& timing() const { return timing_; }
+
+ private:
+  dsp::DepthModel depth_model() const;
+  RectifyConfig cfg_;
+  dsp::CameraModel cam_;
+  dsp::RowTiming timing_;
+  std::unique_ptr<dsp::Rectifier> rect_;
+};
+
+}  // namespace rsd::daemon

@@ -1,0 +1,84 @@
+#include "daemon/lcm_publisher.hpp"
+
+#include <cinttypes>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+namespace rsd::daemon {
+
+namespace {
+
+const char* const kMetaKeys[] = {"frame_utime", "line_delay_ns", "readout", "exposure_ns", "sequence", "rectified"};
+constexpr size_t kMetaValueCapacity = 32;
+
+int32_t fourcc(dsp::PixelFormat f) {
+  switch (f) {
+    case dsp::PixelFormat::Mono8: return bot_core::image_t::PIXEL_FORMAT_GRAY;
+    case dsp::PixelFormat::Mono16: return bot_core::image_t::PIXEL_FORMAT_LE_GRAY16;
+    case dsp::PixelFormat::Rgb8: return bot_core::image_t::PIXEL_FORMAT_RGB;
+  }
+  return bot_core::image_t::PIXEL_FORMAT_INVALID;
+}
+
+}  // namespace
+
+LcmPublisher::LcmPublisher(const std::string& url, Channels channels, const drivers::FrameFormat& fmt)
+    : lcm_(lcm_create(url.c_str())), ch_(std::move(channels)) {
+  if (!lcm_) throw std::runtime_error("lcm: cannot open '" + url + "' (use memq:// or file:///path.lcmlog?mode=w)");
+  // Everything sized once, for the largest message we will send.
+  image_.width = fmt.width;
+  image_.height = fmt.height;
+  image_.row_stride = fmt.width * dsp::bytes_per_pixel(fmt.format);
+  image_.pixelformat = fourcc(fmt.format);
+  image_.size = static_cast<int32_t>(fmt.bytes());
+  image_.data.resize(fmt.bytes());
+  image_.nmetadata = static_cast<int32_t>(std::size(kMetaKeys));
+  image_.metadata.resize(std::size(kMetaKeys));
+  for (size_t i = 0; i < std::size(kMetaKeys); ++i) {
+    image_.metadata[i].key = kMetaKeys[i];
+    image_.metadata[i].value.reserve(kMetaValueCapacity);
+  }
+  info_.unrectified_reason.reserve(128);
+  health_.source.reserve(64);
+  health_.source_state.reserve(64);
+  buf_.resize(static_cast<size_t>(image_.getEncodedSize()) + 4096);
+}
+
+LcmPublisher::~LcmPublisher() { lcm_destroy(lcm_); }
+
+void LcmPublisher::set_meta(size_t index, const char* text) {
+  auto& v = image_.metadata[index].value;
+  const size_t n = std::min(std::strlen(text), kMetaValueCapacity);
+  v.assign(text, text + n);  // within the reserved capacity: no allocation
+  image_.metadata[index].n = static_cast<int32_t>(n);
+}
+
+template <class Msg>
+void LcmPublisher::publish(const std::string& channel, const Msg& msg) {
+  const int len = msg.encode(buf_.data(), 0, static_cast<int>(buf_.size()));
+  if (len > 0) lcm_publish(lcm_, channel.c_str(), buf_.data(), static_cast<unsigned>(len));
+}
+
+void LcmPublisher::publish_image(bool raw, const dsp::ImageView& img, const ImageStamp& s) {
+  image_.utime = s.utime;
+  const size_t row_bytes = static_cast<size_t>(img.width) * dsp::bytes_per_pixel(img.format);
+  for (int y = 0; y < img.height; ++y) std::memcpy(image_.data.data() + y * row_bytes, img.row(y), row_bytes);
+  char text[kMetaValueCapacity];
+  std::snprintf(text, sizeof text, "%" PRId64, s.utime);
+  set_meta(0, text);
+  std::snprintf(text, sizeof text, "%.17g", s.line_delay_s * 1e9);
+  set_meta(1, text);
+  set_meta(2, dsp::to_string(s.readout).data());
+  std::snprintf(text, sizeof text, "%.17g", s.exposure_s * 1e9);
+  set_meta(3, text);
+  std::snprintf(text, sizeof text, "%" PRId64, s.sequence);
+  set_meta(4, text);
+  set_meta(5, s.rectified ? "1" : "0");
+  publish(raw ? ch_.raw : ch_.image, image_);
+}
+
+void LcmPublisher::publish_info() { publish(ch_.info, info_); }
+void LcmPublisher::publish_health() { publish(ch_.health, health_); }
+
+}  // namespace rsd::daemon

@@ -1,0 +1,61 @@
+// Publishes rsd's messages over LCM from preallocated message objects and an encode buffer,
+// so that steady-state publishing makes no C++ heap allocation (LCM's C transport may copy
+// the encoded bytes internally; that is outside our hot path's control).
+#pragma once
+
+#include <bot_core/image_t.hpp>
+#include <lcm/lcm.h>
+#include <rsd/frame_info_t.hpp>
+#include <rsd/health_t.hpp>
+
+#include <string>
+#include <vector>
+
+#include "drivers/camera_source.hpp"
+
+namespace rsd::daemon {
+
+struct Channels {
+  std::string image = "RSD_RECT";
+  std::string raw = "RSD_RAW";
+  std::string info = "RSD_FRAME_INFO";
+  std::string health = "RSD_HEALTH";
+};
+
+struct ImageStamp {
+  int64_t utime = 0;  // first row's capture time, us
+  int64_t sequence = 0;
+  double line_delay_s = 0;
+  dsp::Readout readout = dsp::Readout::TopToBottom;
+  double exposure_s = 0;
+  bool rectified = false;
+};
+
+class LcmPublisher {
+ public:
+  // Throws std::runtime_error naming the URL if LCM cannot be set up.
+  LcmPublisher(const std::string& url, Channels channels, const drivers::FrameFormat& fmt);
+  ~LcmPublisher();
+  LcmPublisher(const LcmPublisher&) = delete;
+  LcmPublisher& operator=(const LcmPublisher&) = delete;
+
+  void publish_image(bool raw, const dsp::ImageView& img, const ImageStamp& stamp);
+  rsd::frame_info_t& info() { return info_; }  // fill, then publish_info()
+  void publish_info();
+  rsd::health_t& health() { return health_; }
+  void publish_health();
+  lcm_t* handle() const { return lcm_; }
+
+ private:
+  template <class Msg>
+  void publish(const std::string& channel, const Msg& msg);
+  void set_meta(size_t index, const char* text);
+  lcm_t* lcm_;
+  Channels ch_;
+  bot_core::image_t image_;
+  rsd::frame_info_t info_;
+  rsd::health_t health_;
+  std::vector<uint8_t> buf_;
+};
+
+}  // namespace rsd::daemon

@@ -1,0 +1,187 @@
+#include "daemon/pipeline.hpp"
+
+#include "drivers/sim_source.hpp"
+
+namespace rsd::daemon {
+
+using drivers::monotonic_ns;
+
+namespace {
+std::optional<uint32_t> push_dropping_oldest(DropOldestQueue& q, uint32_t slot, std::atomic<uint64_t>& drops);
+}
+
+Pipeline::Pipeline(PipelineConfig cfg, drivers::CameraSource& source, FrameRectifier& rectifier,
+                   LcmPublisher& publisher, const VelocityBuffer& velocity)
+    : cfg_(cfg), source_(source), rectifier_(rectifier), pub_(publisher), velocity_(velocity),
+      to_rectify_(cfg.queue_depth), to_publish_(cfg.queue_depth), raw_free_(cfg.raw_slots), raw_free_late_(cfg.raw_slots), out_free_(cfg.out_slots) {
+  // Each stage holds one slot while working on it; the queues hold the rest.
+  if (cfg_.raw_slots < cfg_.queue_depth + 2 || cfg_.out_slots < cfg_.queue_depth + 2)
+    throw std::invalid_argument("pipeline: slots must be at least queue_depth + 2");
+}
+
+Pipeline::~Pipeline() { stop(); }
+
+std::string Pipeline::camera_error() const { return camera_lost_.load() ? camera_error_ : std::string(); }
+
+void Pipeline::start() {
+  const drivers::FrameFormat f = source_.format();
+  raw_.clear();
+  out_.clear();
+  for (size_t i = 0; i < cfg_.raw_slots; ++i) raw_.push_back({dsp::Image(f.width, f.height, f.format), {}, 0});
+  for (size_t i = 0; i < cfg_.out_slots; ++i) out_.push_back({dsp::Image(f.width, f.height, f.format), {}, 0, {}, -1});
+  while (raw_free_.get()) {}
+  while (raw_free_late_.get()) {}
+  while (out_free_.get()) {}
+  for (uint32_t i = 0; i < cfg_.raw_slots; ++i) raw_free_.put(i);
+  for (uint32_t i = 0; i < cfg_.out_slots; ++i) out_free_.put(i);
+  camera_lost_ = false;
+  capture_done_ = rectify_done_ = false;
+  running_ = true;
+  capture_ = std::thread([this] { capture_loop(); });
+  rectify_ = std::thread([this] { rectify_loop(); });
+  publish_ = std::thread([this] { publish_loop(); });
+}
+
+void Pipeline::stop() {
+  if (!running_.exchange(false)) return;
+  // Downstream stages drain what is queued once upstream has finished: nothing in flight is lost.
+  if (capture_.joinable()) capture_.join();
+  if (rectify_.joinable()) rectify_.join();
+  if (publish_.joinable()) publish_.join();
+}
+
+// A free raw slot, or, if the rectifier holds everything up, the oldest queued frame's slot
+// (that frame is dropped): the camera never waits.
+uint32_t Pipeline::raw_slot_for_capture() {
+  for (;;) {
+    if (auto s = raw_free_.get()) return *s;
+    if (auto s = raw_free_late_.get()) return *s;
+    if (auto s = to_rectify_.reclaim_oldest()) {
+      stats_.drops.fetch_add(1, std::memory_order_relaxed);
+      return *s;
+    }
+    std::this_thread::yield();  // the rectifier is between popping and returning a slot
+  }
+}
+
+namespace {
+
+// Queues `slot`; if the queue is full, its oldest frame is dropped and that slot returned
+// for reuse (free lists are single-producer: a stage never puts into its own input's list).
+std::optional<uint32_t> push_dropping_oldest(DropOldestQueue& q, uint32_t slot, std::atomic<uint64_t>& drops) {
+  std::optional<uint32_t> reclaimed;
+  while (!q.push(slot)) {
+    if (auto old = q.reclaim_oldest()) {
+      drops.fetch_add(1, std::memory_order_relaxed);
+      reclaimed = old;
+    }
+  }
+  return reclaimed;
+}
+
+}  // namespace
+
+void Pipeline::capture_loop() {
+  uint32_t slot = raw_slot_for_capture();
+  while (running_.load(std::memory_order_relaxed)) {
+    Raw& r = raw_[slot];
+    drivers::CaptureStatus st;
+    try {
+      st = source_.capture(r.image.view(), r.meta, cfg_.capture_timeout);
+    } catch (const drivers::CameraError& e) {
+      camera_error_ = e.what();
+      camera_lost_ = true;
+      break;
+    }
+    if (st == drivers::CaptureStatus::EndOfStream) break;
+    if (st != drivers::CaptureStatus::Frame) continue;
+    r.ready_ns = monotonic_ns();
+    stats_.frames_in.fetch_add(1, std::memory_order_relaxed);
+    const auto reclaimed = push_dropping_oldest(to_rectify_, slot, stats_.drops);
+    slot = reclaimed ? *reclaimed : raw_slot_for_capture();
+  }
+  capture_done_ = true;
+}
+
+void Pipeline::rectify_loop() {
+  std::optional<uint32_t> spare;  // an output slot reclaimed from a dropped frame
+  for (;;) {
+    const auto in = to_rectify_.pop();
+    if (!in) {
+      if (capture_done_.load()) break;
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+      continue;
+    }
+    std::optional<uint32_t> out_slot = spare ? spare : out_free_.get();
+    spare.reset();
+    while (!out_slot) {  // the publisher holds every output slot: drop its oldest
+      if ((out_slot = to_publish_.reclaim_oldest())) stats_.drops.fetch_add(1, std::memory_order_relaxed);
+      else if (!(out_slot = out_free_.get())) std::this_thread::yield();
+    }
+    Raw& r = raw_[*in];
+    Out& o = out_[*out_slot];
+    o.meta = r.meta;
+    o.ready_ns = r.ready_ns;
+    o.result = rectifier_.process(r.image.view(), o.image.view(), r.meta, velocity_);
+    (o.result.rectified ? stats_.rectified : stats_.unrectified).fetch_add(1, std::memory_order_relaxed);
+    o.raw_slot = cfg_.publish_raw ? static_cast<int>(*in) : -1;
+    if (!cfg_.publish_raw) raw_free_.put(*in);  // else the publisher returns it
+    spare = push_dropping_oldest(to_publish_, *out_slot, stats_.drops);
+    if (spare && out_[*spare].raw_slot >= 0) {  // its raw frame goes back too
+      raw_free_.put(static_cast<uint32_t>(out_[*spare].raw_slot));
+      out_[*spare].raw_slot = -1;
+    }
+  }
+  rectify_done_ = true;
+}
+
+void Pipeline::publish_frame(Out& o, uint64_t seq) {
+  const dsp::RowTiming t = rectifier_.timing();
+  ImageStamp s{o.meta.first_row_ns / 1000, static_cast<int64_t>(seq), t.line_delay_s, t.readout, o.meta.exposure_s,
+               o.result.rectified};
+  pub_.publish_image(false, o.image.view(), s);
+  rsd::frame_info_t& info = pub_.info();
+  info.utime = s.utime;
+  info.sequence = static_cast<int64_t>(seq);
+  info.source_sequence = static_cast<int64_t>(o.meta.sequence);
+  info.line_delay_s = t.line_delay_s;
+  info.readout = t.readout == dsp::Readout::TopToBottom ? rsd::frame_info_t::READOUT_TOP_TO_BOTTOM
+                                                        : rsd::frame_info_t::READOUT_BOTTOM_TO_TOP;
+  info.exposure_s = o.meta.exposure_s;
+  info.reference_time_s = o.result.reference_time_s;
+  info.rectified = o.result.rectified;
+  info.unrectified_reason = o.result.reason;
+  for (int i = 0; i < 3; ++i) info.angular_velocity[i] = o.result.w[i], info.linear_velocity[i] = o.result.v[i];
+  info.velocity_age_s = o.result.velocity_age_s;
+  info.max_correction_px = o.result.max_correction_px;
+  info.pinhole_sufficient = o.result.pinhole_sufficient;
+  info.drops_total = static_cast<int64_t>(stats_.drops.load(std::memory_order_relaxed));
+  pub_.publish_info();
+}
+
+void Pipeline::publish_loop() {
+  uint64_t seq = 0;
+  for (;;) {
+    const auto slot = to_publish_.pop();
+    if (!slot) {
+      if (rectify_done_.load()) break;
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+      continue;
+    }
+    Out& o = out_[*slot];
+    if (o.raw_slot >= 0) {
+      Raw& r = raw_[static_cast<size_t>(o.raw_slot)];
+      pub_.publish_image(true, r.image.view(), {o.meta.first_row_ns / 1000, static_cast<int64_t>(seq),
+                                                rectifier_.timing().line_delay_s, rectifier_.timing().readout,
+                                                o.meta.exposure_s, false});
+      raw_free_late_.put(static_cast<uint32_t>(o.raw_slot));
+      o.raw_slot = -1;
+    }
+    publish_frame(o, seq++);
+    latency_.add(static_cast<double>(monotonic_ns() - o.ready_ns) * 1e-6);
+    stats_.frames_out.fetch_add(1, std::memory_order_relaxed);
+    out_free_.put(*slot);
+  }
+}
+
+}  // namespace rsd::daemon

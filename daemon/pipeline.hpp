@@ -1,0 +1,87 @@
+// The hot path: capture -> stamp -> rectify -> publish, on three threads.
+//
+// Frame slots are allocated once at start (raw slots for the camera, output slots for the
+// rectified images) and travel between the threads as indices through lock-free queues that
+// drop the oldest frame when a consumer falls behind (counted), so the camera never waits.
+// Nothing is allocated per frame.
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "daemon/drop_oldest_queue.hpp"
+#include "daemon/frame_rectifier.hpp"
+#include "daemon/lcm_publisher.hpp"
+#include "daemon/latency_stats.hpp"
+#include "daemon/velocity_buffer.hpp"
+#include "drivers/camera_source.hpp"
+
+namespace rsd::daemon {
+
+struct PipelineConfig {
+  size_t raw_slots = 6;
+  size_t out_slots = 4;
+  size_t queue_depth = 2;
+  bool publish_raw = false;
+  std::chrono::milliseconds capture_timeout{200};
+};
+
+struct PipelineStats {
+  std::atomic<uint64_t> frames_in{0}, frames_out{0}, drops{0}, rectified{0}, unrectified{0};
+};
+
+class Pipeline {
+ public:
+  Pipeline(PipelineConfig cfg, drivers::CameraSource& source, FrameRectifier& rectifier, LcmPublisher& publisher,
+           const VelocityBuffer& velocity);
+  ~Pipeline();
+  void start();  // allocates the slots, starts the threads
+  void stop();   // flushes what is in flight, joins
+  const PipelineStats& stats() const { return stats_; }
+  LatencyStats& latency() { return latency_; }
+  size_t queue_depth() const { return to_rectify_.size() + to_publish_.size(); }
+  // Camera loss seen by the capture thread (the service reconnects); cleared by start().
+  bool camera_lost() const { return camera_lost_.load(); }
+  std::string camera_error() const;
+
+ private:
+  struct Raw {
+    dsp::Image image;
+    drivers::FrameMeta meta;
+    int64_t ready_ns = 0;  // when the last row had been read (latency reference)
+  };
+  struct Out {
+    dsp::Image image;
+    drivers::FrameMeta meta;
+    int64_t ready_ns = 0;
+    RectifyResult result;
+    int raw_slot = -1;  // with publish_raw: the raw frame travelling with this one
+  };
+  void capture_loop();
+  void rectify_loop();
+  void publish_loop();
+  uint32_t raw_slot_for_capture();
+  void publish_frame(Out& o, uint64_t seq);
+
+  PipelineConfig cfg_;
+  drivers::CameraSource& source_;
+  FrameRectifier& rectifier_;
+  LcmPublisher& pub_;
+  const VelocityBuffer& velocity_;
+  std::vector<Raw> raw_;
+  std::vector<Out> out_;
+  DropOldestQueue to_rectify_, to_publish_;
+  // Free raw slots come back from the rectifier, or (with publish_raw) from the publisher:
+  // one single-producer list each.
+  FreeList raw_free_, raw_free_late_, out_free_;
+  PipelineStats stats_;
+  LatencyStats latency_;
+  std::atomic<bool> running_{false}, capture_done_{false}, rectify_done_{false};
+  std::atomic<bool> camera_lost_{false};
+  std::string camera_error_;  // written by the capture thread before camera_lost_ is set
+  std::thread capture_, rectify_, publish_;
+};
+
+}  // namespace rsd::daemon

@@ -1,0 +1,26 @@
+#include "daemon/systemd_notify.hpp"
+
+#include <systemd/sd-daemon.h>
+
+namespace rsd::daemon {
+
+SystemdNotify::SystemdNotify() {
+  uint64_t usec = 0;
+  if (sd_watchdog_enabled(0, &usec) > 0) watchdog_us_ = usec;
+}
+
+void SystemdNotify::ready() { sd_notify(0, "READY=1"); }
+
+void SystemdNotify::status(const std::string& text) { sd_notify(0, ("STATUS=" + text).c_str()); }
+
+void SystemdNotify::stopping() { sd_notify(0, "STOPPING=1"); }
+
+void SystemdNotify::watchdog() {
+  if (watchdog_us_ == 0) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (now - last_pet_ < std::chrono::microseconds(watchdog_us_ / 2)) return;
+  last_pet_ = now;
+  sd_notify(0, "WATCHDOG=1");
+}
+
+}  // namespace rsd::daemon

@@ -1,0 +1,69 @@
+// One interface for every camera source (sim, aravis, v4l2, libcamera, replay, lcm),
+// in the spirit of libcamera's pipeline handlers: the core pipeline knows only this.
+//
+// A source fills frame slots that the pipeline allocated at start; it never allocates per
+// frame. It stamps each frame with the start of exposure of the first row read, on
+// CLOCK_MONOTONIC — the driver knows what its hardware timestamp means (V4L2's SOE/EOF flags,
+// Aravis' camera vs system stamps, libcamera's sensor timestamp) and converts it once here.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "dsp/image.hpp"
+#include "dsp/row_timing.hpp"
+
+namespace rsd::drivers {
+
+// No camera (device missing, unplugged, not answering): the daemon retries with backoff.
+struct CameraError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct FrameFormat {
+  int width = 0, height = 0;
+  dsp::PixelFormat format = dsp::PixelFormat::Mono8;
+  size_t bytes() const { return static_cast<size_t>(width) * height * dsp::bytes_per_pixel(format); }
+};
+
+struct FrameMeta {
+  int64_t first_row_ns = 0;  // CLOCK_MONOTONIC: start of exposure of the first row read
+  uint64_t sequence = 0;     // the source's own counter; gaps mean the source dropped frames
+  double exposure_s = 0;     // row exposure, if the source knows it
+};
+
+enum class CaptureStatus { Frame, Timeout, EndOfStream };
+
+// The camera's own motion, as some sources know it (the simulator's truth, a replayed log).
+struct VelocitySample {
+  int64_t t_ns = 0;  // CLOCK_MONOTONIC (or the replayed clock)
+  double w[3] = {0, 0, 0};  // rad/s, camera axes
+  double v[3] = {0, 0, 0};  // m/s, camera axes
+  bool has_linear = false;
+};
+using VelocitySink = std::function<void(const VelocitySample&)>;
+
+class CameraSource {
+ public:
+  virtual ~CameraSource() = default;
+  virtual std::string name() const = 0;
+  // Finds and configures the camera; throws CameraError with a clear reason if there is
+  // none. After open(), format() and timing() are valid.
+  virtual void open() = 0;
+  virtual FrameFormat format() const = 0;
+  // The sensor's row timing as configured or calibrated (line delay, readout, exposure).
+  virtual dsp::RowTiming timing() const = 0;
+  virtual void start() = 0;
+  // Waits up to `timeout` for the next frame and copies it into `dst` (format() sized).
+  // Throws CameraError when the camera is lost.
+  virtual CaptureStatus capture(const dsp::ImageView& dst, FrameMeta& meta, std::chrono::milliseconds timeout) = 0;
+  virtual void stop() = 0;
+  // Sources that know the camera's motion report it here (called from capture()).
+  virtual void set_velocity_sink(VelocitySink) {}
+};
+
+}  // namespace rsd::drivers

@@ -1,0 +1,79 @@
+// The built-in simulated camera: the simulator's renderer as a live rolling-shutter camera.
+// Frames come at the configured rate on CLOCK_MONOTONIC, each row imaged at the instant it
+// is read; the camera's true velocity goes to the velocity sink (optionally with noise, a
+// bias and a latency, as a real IMU would deliver it), so the whole pipeline runs without
+// hardware.
+#pragma once
+
+#include <memory>
+#include <random>
+
+#include "drivers/camera_source.hpp"
+#include "dsp/camera_model.hpp"
+#include "dsp/camera_motion.hpp"
+#include "dsp/rs_renderer.hpp"
+
+namespace rsd::drivers {
+
+struct SimSourceConfig {
+  dsp::CameraModel camera = dsp::CameraModel::from_hfov(640, 480, 60.0 * 3.14159265358979 / 180.0);
+  double fps = 30;
+  double line_delay_s = 0;   // 0: the readout fills the frame period
+  dsp::Readout readout = dsp::Readout::TopToBottom;
+  double exposure_s = 0.002;
+  dsp::PixelFormat format = dsp::PixelFormat::Mono8;
+  int supersample = 1;
+  double noise_grey = 1.0;
+  // Motion: the camera's own angular rate and velocity in its axes, constant, plus a
+  // sinusoidal wobble of the rate so that rectification has something to follow.
+  Eigen::Vector3d angular_rate{0.0, 0.3, 0.8};  // rad/s
+  Eigen::Vector3d velocity{0.5, 0.0, 0.0};      // m/s
+  double wobble_rad_s = 0.5, wobble_hz = 0.7;
+  double scene_depth_m = 3.0;                   // a textured wall this far ahead
+  // The velocity feed.
+  double velocity_rate_hz = 200;
+  double velocity_noise = 0, velocity_latency_s = 0;
+  Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
+  bool publish_velocity = true;
+  bool realtime = true;  // false: frames as fast as they render (tests, replays of sims)
+  unsigned seed = 1;
+};
+
+class SimSource final : public CameraSource {
+ public:
+  explicit SimSource(SimSourceConfig cfg);
+  ~SimSource() override;
+  std::string name() const override { return "sim"; }
+  void open() override;
+  FrameFormat format() const override;
+  dsp::RowTiming timing() const override { return timing_; }
+  void start() override;
+  CaptureStatus capture(const dsp::ImageView& dst, FrameMeta& meta, std::chrono::milliseconds timeout) override;
+  void stop() override {}
+  void set_velocity_sink(VelocitySink sink) override { sink_ = std::move(sink); }
+
+  // The true camera motion: world -> camera at a time in seconds since start(), and the
+  // scene (valid after open()): what a test needs to render the ground truth.
+  const dsp::CameraMotion& truth() const;
+  const dsp::Scene& scene() const { return scene_; }
+  const SimSourceConfig& config() const { return cfg_; }
+
+ private:
+  void emit_velocity_until(double t_s);
+  class Motion;
+  SimSourceConfig cfg_;
+  dsp::RowTiming timing_;
+  std::unique_ptr<Motion> motion_;
+  std::unique_ptr<dsp::RsRenderer> renderer_;
+  dsp::Scene scene_;
+  VelocitySink sink_;
+  int64_t t0_ns_ = 0;
+  uint64_t frame_ = 0;
+  double next_velocity_s_ = 0;
+  std::mt19937 rng_;
+};
+
+// CLOCK_MONOTONIC in nanoseconds.
+int64_t monotonic_ns();
+
+}  // namespace rsd::drivers
