@@ -25,7 +25,8 @@ constexpr double kFix = 65536.0;
 
 enum CellMode : std::uint8_t { kZero, kPlane, kInfinite, kKink };
 
-std::int32_t to_fixed(double v) { return static_cast<std::int32_t>(std::lrint(v * kFix)); }
+// Round to nearest (half away from zero) by truncation: inline, unlike lrint without -fno-math-errno.
+std::int32_t to_fixed(double v) { return static_cast<std::int32_t>(v * kFix + std::copysign(0.5, v)); }
 
 bool is_power_of_two(int s) { return s > 0 && (s & (s - 1)) == 0; }
 
@@ -589,10 +590,9 @@ Rectifier::Rectifier(const CameraModel& cam, const RowTiming& timing, const Came
     throw std::invalid_argument("Rectifier: tolerance must be positive and the table step at least one row");
   allocate_levels();
   // Pose table over the capture window of rs_projection.hpp: rows -H/2 .. 1.5 H - 1.
+  // Room for a step of one row: fast motions refine the table as well as the grid.
   table_v0_ = -0.5 * timing_.height;
-  const double span = 2.0 * timing_.height - 1;
-  table_.resize(static_cast<std::size_t>(std::ceil(span / cfg_.table_step_rows)) + 1);
-  table_inv_step_ = 1.0 / cfg_.table_step_rows;
+  table_.resize(2 * static_cast<std::size_t>(timing_.height));
   simd_ = cfg_.use_simd && cpu_has_avx2();
   const Samplers k = pick_samplers(format_, simd_);
   sample_row_ = k.row;
@@ -637,9 +637,11 @@ void Rectifier::allocate_levels() {
 
 // Poses at rows v_k = v_lo + k m, and their increments: between two entries the pose is
 // interpolated linearly in the row, an error bounded from the table's second differences.
-void Rectifier::build_pose_table(const CameraMotion& motion) {
-  const double m = cfg_.table_step_rows;
-  for (std::size_t k = 0; k < table_.size(); ++k) {
+void Rectifier::build_pose_table(const CameraMotion& motion, int step_rows) {
+  const double m = step_rows;
+  table_inv_step_ = 1.0 / m;
+  table_n_ = static_cast<std::size_t>(std::ceil((2.0 * timing_.height - 1) / m)) + 1;
+  for (std::size_t k = 0; k < table_n_; ++k) {
     const Eigen::Affine3d g = motion.at(timing_.row_time(table_v0_ + k * m));
     Pose& P = table_[k];
     for (int r = 0; r < 3; ++r) {
@@ -648,20 +650,20 @@ void Rectifier::build_pose_table(const CameraMotion& motion) {
     }
   }
   table_d2R_ = table_d2T_ = 0;
-  for (std::size_t k = 0; k + 1 < table_.size(); ++k) {
+  for (std::size_t k = 0; k + 1 < table_n_; ++k) {
     Pose& P = table_[k];
     const Pose& Q = table_[k + 1];
     for (int e = 0; e < 9; ++e) P.dR[e] = Q.R[e] - P.R[e];
     for (int e = 0; e < 3; ++e) P.dT[e] = Q.T[e] - P.T[e];
   }
-  for (std::size_t k = 1; k + 1 < table_.size(); ++k) {
+  for (std::size_t k = 1; k + 1 < table_n_; ++k) {
     double r2 = 0, t2 = 0;
     for (int e = 0; e < 9; ++e) r2 += std::pow(table_[k].dR[e] - table_[k - 1].dR[e], 2);
     for (int e = 0; e < 3; ++e) t2 += std::pow(table_[k].dT[e] - table_[k - 1].dT[e], 2);
     table_d2R_ = std::max(table_d2R_, std::sqrt(r2)), table_d2T_ = std::max(table_d2T_, std::sqrt(t2));
   }
-  std::memset(table_.back().dR, 0, sizeof table_.back().dR);
-  std::memset(table_.back().dT, 0, sizeof table_.back().dT);
+  std::memset(table_[table_n_ - 1].dR, 0, sizeof table_[0].dR);
+  std::memset(table_[table_n_ - 1].dT, 0, sizeof table_[0].dT);
 }
 
 // Newton's method on the rolling-shutter constraint eq. (progscaneqn), in rows:
@@ -671,7 +673,7 @@ void Rectifier::build_pose_table(const CameraMotion& motion) {
 // can move the result (docs/rectification.md). The root is the one Newton reaches from the
 // start (the node's neighbour): unique while the image moves slower than the readout.
 bool Rectifier::solve_node(const double* Y, double rho, double& v, double* px, double* gain) const {
-  const double last = static_cast<double>(table_.size() - 1);
+  const double last = static_cast<double>(table_n_ - 1);
   const bool distorted = !cam_.dist.is_zero();
   for (int it = 0; it < 20; ++it) {
     const double u = (v - table_v0_) * table_inv_step_;
@@ -828,15 +830,14 @@ RectifyReport Rectifier::assess_level() {
   for (std::size_t n = 0; n < static_cast<std::size_t>(L.nx) * L.ny; ++n)  // the branch the model means
     rep.invalid_nodes += !(plane_ && rho_[n] > 0 ? plane_b_.ok[n] : inf_b_.ok[n]);
   // Table: linear interpolation errs by 1/8 of a second difference (times the node's gain).
-  const double table = std::max(cam_.fx, cam_.fy) / 8.0 * gain_max_;
+  table_error_px_ = std::max(cam_.fx, cam_.fy) / 8.0 * gain_max_;
   // Fixed point: rounding to 1/256 px, plus the 16.16 step's rounding accumulated over a cell.
   const double fixed = std::sqrt(2.0) * (1.0 / 512 + (L.spacing + 1) / 131072.0);
-  rep.error_bound_px = worst + table + fixed;
+  rep.error_bound_px = worst + table_error_px_ + fixed;
   return rep;
 }
 
 RectifyReport Rectifier::build_map(const CameraMotion& motion, const DepthModel& depth, double t_ref) {
-  build_pose_table(motion);
   // The camera at t_ref: X_c = A X + b, so its rays are A^-1 r from the centre o = -A^-1 b.
   const Eigen::Affine3d g = motion.at(t_ref);
   const Eigen::Matrix3d Ainv = g.linear().inverse();
@@ -850,10 +851,16 @@ RectifyReport Rectifier::build_map(const CameraMotion& motion, const DepthModel&
   plane_ = !depth.infinite && std::abs(depth.distance - depth.normal.dot(o)) > 1e-12;
   plane_den_ = plane_ ? depth.distance - depth.normal.dot(o) : 1.0;
   for (int e = 0; e < 3; ++e) plane_n_[e] = depth.normal(e);
+  // The grid is refined until the bound holds; the pose table too, where its share is large
+  // (only for very fast motion: its error grows with the square of the rotation per step).
   RectifyReport rep;
-  for (level_ = 0;; ++level_) {
-    rep = solve_level();
-    if (rep.error_bound_px <= cfg_.tolerance_px || level_ + 1 == levels_.size()) break;
+  for (int step = std::min(cfg_.table_step_rows, timing_.height);; step = std::max(1, step / 2)) {
+    build_pose_table(motion, step);
+    for (level_ = 0;; ++level_) {
+      rep = solve_level();
+      if (rep.error_bound_px <= cfg_.tolerance_px || level_ + 1 == levels_.size()) break;
+    }
+    if (table_error_px_ <= 0.25 * cfg_.tolerance_px || step == 1) break;
   }
   map_ready_ = true;
   rep.rectified = true;

@@ -37,7 +37,7 @@ struct RectifierConfig {
   int initial_spacing = 32;     // node spacing tried first (output px, a power of two >= 2)
   int min_spacing = 4;          // the refinement halves the spacing down to this
   double tolerance_px = 0.05;   // wanted bound on |interpolated - exact source position|
-  int table_step_rows = 4;      // pose table step: poses are interpolated linearly in between
+  int table_step_rows = 8;      // pose table step (rows); halved while its error share is large
   bool use_simd = true;         // AVX2 kernels where the CPU has them (same output bit for bit)
 };
 
@@ -102,7 +102,7 @@ class Rectifier {
 
  private:
   void allocate_levels();
-  void build_pose_table(const CameraMotion& motion);
+  void build_pose_table(const CameraMotion& motion, int step_rows);
   bool solve_node(const double* Y, double rho, double& v, double* px, double* gain) const;
   void solve_branch(Branch& b, bool plane_branch);
   void second_differences(Branch& b) const;
@@ -125,9 +125,11 @@ class Rectifier {
 
   std::vector<Level> levels_;
   std::size_t level_ = 0;
-  std::vector<Pose> table_;
+  std::vector<Pose> table_;                // allocated for a step of one row
+  std::size_t table_n_ = 0;                // entries in use
   double table_v0_ = 0, table_inv_step_ = 0;
   double table_d2R_ = 0, table_d2T_ = 0;   // largest second differences of the table
+  double table_error_px_ = 0;              // its share of the bound
   // Per frame: reference geometry and the node solutions of the current level.
   double Rt_ref_[9] = {}, o_ref_[3] = {};  // R_ref^T and the camera centre at t_ref
   bool plane_ = false, need_infinite_ = false;

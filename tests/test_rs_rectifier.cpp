@@ -172,6 +172,23 @@ TEST(RsRectifier, RefinesTheGridOnlyWhenTheBoundNeedsIt) {
   EXPECT_LE(m.worst, fast.error_bound_px);
 }
 
+TEST(RsRectifier, MotionBeyondTheFinestGridIsReportedNotHidden) {
+  // 20 rad/s: even 4 px cells cannot keep the bound under 0.05 px. The frame is rectified
+  // anyway, the report says so, and the bound still holds (every 2nd pixel).
+  const CameraModel cam = camera(480, 360, 60);
+  const RowTiming timing = RowTiming::full_frame(360, 30);
+  const Case c{"extreme", cam, timing, twist({0, 0, 0}, {2, 20, 5}), DepthModel::at_infinity(),
+               reference_time(timing, ReferenceRow::Middle)};
+  Rectifier rect(cam, timing, PixelFormat::Mono8);
+  const RectifyReport rep = rect.build_map(ScrewMotion(c.tw), c.depth, c.t_ref);
+  EXPECT_TRUE(rep.rectified);
+  EXPECT_FALSE(rep.within_tolerance());
+  EXPECT_EQ(rep.spacing, 4);
+  const MapCheck m = check_map(c, rect, 2);
+  EXPECT_LE(m.worst, rep.error_bound_px);
+  EXPECT_EQ(m.black_but_inside, 0);
+}
+
 TEST(RsRectifier, FirstRowReferenceLeavesTheFirstRowInPlace) {
   // At infinite depth a point on row 0 at t_ref = 0 is captured at t = 0 by row 0.
   const CameraModel cam = camera(480, 360, 60);

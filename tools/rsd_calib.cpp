@@ -24,6 +24,7 @@
 #include "cli_util.hpp"
 #include "dsp/led_calibration.hpp"
 #include "dsp/led_capture_synthesis.hpp"
+#include "frame_sources.hpp"
 #include "image_io.hpp"
 
 using namespace rsd::dsp;
@@ -51,6 +52,8 @@ struct LedOptions {
   double accuracy_ppm = 0;
   int max_frames = 240;
   std::vector<std::string> inputs;
+  std::string channel = "RSD_RAW";
+  int live_frames = 60;
 };
 
 struct SynthOptions {
@@ -69,7 +72,9 @@ CLI::App* add_led_command(CLI::App& app, LedOptions& o) {
       "Line delay from frames of a lens-less sensor facing an LED blinking at --freq.\n"
       "INPUT: image files (PNG, PGM; RGB is reduced to luminance, a Bayer mosaic may be\n"
       "given as a grey image) or directories of them (read in natural name order:\n"
-      "frame2 before frame10). With --fps, frame k is taken to start at k / fps: the\n"
+      "frame2 before frame10); or an LCM log of bot_core.image_t frames (--channel);\n"
+      "or a live camera: live:aravis:ADDRESS, live:v4l2:/dev/videoN, live:libcamera[:ID]\n"
+      "(--frames of them). With --fps, frame k is taken to start at k / fps: the\n"
       "joint model, and the verdict on d. Without it, frames are fitted one by one and\n"
       "each must show at least 1.5 bars.");
   led->add_option("--freq", o.freq, "LED (pulse generator) frequency (Hz)")
@@ -84,7 +89,9 @@ CLI::App* add_led_command(CLI::App& app, LedOptions& o) {
                 "Print JSON: frame_readout_s, line_delay_s, row_rate_hz, blanking_s\n"
                 "(null without --fps), uncertainty_s (1-sigma, of line_delay_s);\n"
                 "warnings go to stderr");
-  led->add_option("INPUT", o.inputs, "Image files or directories")->required();
+  led->add_option("--channel", o.channel, "LCM log input: the image channel")->capture_default_str();
+  led->add_option("--frames", o.live_frames, "Live input: frames to capture")->check(int_range(1, 100000))->capture_default_str();
+  led->add_option("INPUT", o.inputs, "Image files or directories, an LCM log, or live:DRIVER:DEVICE")->required();
   return led;
 }
 
@@ -133,104 +140,6 @@ CLI::App* add_synth_command(CLI::App& app, SynthOptions& o) {
   s->add_option("--blur", o.blur, "Gaussian blur sigma (pixels)")->check(CLI::NonNegativeNumber)->capture_default_str();
   s->add_option("--seed", o.seed, "Noise seed")->check(int_range(0, 1000000000))->capture_default_str();
   return s;
-}
-
-// ---------------------------------------------------------------- frame sources
-
-// One frame and where it came from, for error messages.
-struct SourceFrame {
-  Image image;
-  std::string name;
-  std::optional<double> timestamp_s;
-};
-
-// What the calibration reads frames from: image files now; an LCM log or a live camera
-// can implement the same interface.
-class FrameSource {
- public:
-  virtual ~FrameSource() = default;
-  virtual std::optional<SourceFrame> next() = 0;  // nullopt at the end
-  virtual std::string description() const = 0;
-};
-
-class ImageFileSource final : public FrameSource {
- public:
-  ImageFileSource(std::vector<std::string> files, std::string description)
-      : files_(std::move(files)), description_(std::move(description)) {}
-  std::optional<SourceFrame> next() override {
-    if (index_ >= files_.size()) return std::nullopt;
-    const std::string& f = files_[index_++];
-    return SourceFrame{read_image(f), f, std::nullopt};  // read_image names the file on error
-  }
-  std::string description() const override { return description_; }
-
- private:
-  std::vector<std::string> files_;
-  std::string description_;
-  size_t index_ = 0;
-};
-
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-bool is_image_name(const fs::path& p) {
-  const std::string ext = lower(p.extension().string());
-  return ext == ".png" || ext == ".pgm";
-}
-
-// "frame2" before "frame10": digit runs compare as numbers.
-bool natural_less(const std::string& a, const std::string& b) {
-  size_t i = 0, j = 0;
-  while (i < a.size() && j < b.size()) {
-    if (std::isdigit(static_cast<unsigned char>(a[i])) && std::isdigit(static_cast<unsigned char>(b[j]))) {
-      size_t ie = i, je = j;
-      while (ie < a.size() && std::isdigit(static_cast<unsigned char>(a[ie]))) ++ie;
-      while (je < b.size() && std::isdigit(static_cast<unsigned char>(b[je]))) ++je;
-      const std::string na = a.substr(i, ie - i), nb = b.substr(j, je - j);
-      const std::string ta = na.substr(std::min(na.find_first_not_of('0'), na.size()));
-      const std::string tb = nb.substr(std::min(nb.find_first_not_of('0'), nb.size()));
-      if (ta.size() != tb.size()) return ta.size() < tb.size();
-      if (ta != tb) return ta < tb;
-      i = ie, j = je;
-    } else {
-      if (a[i] != b[j]) return a[i] < b[j];
-      ++i, ++j;
-    }
-  }
-  return a.size() - i < b.size() - j;
-}
-
-std::vector<std::string> images_in(const std::string& dir) {
-  std::vector<std::string> files;
-  for (const fs::directory_entry& e : fs::directory_iterator(dir))
-    if (e.is_regular_file() && is_image_name(e.path())) files.push_back(e.path().string());
-  std::sort(files.begin(), files.end(), natural_less);
-  if (files.empty()) throw UsageError("INPUT: directory '" + dir + "' holds no .png or .pgm images");
-  return files;
-}
-
-// The image files named by INPUT: files as given, directories expanded.
-std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
-  std::vector<std::string> files;
-  for (const std::string& in : inputs) {
-    std::error_code ec;
-    if (fs::is_directory(in, ec)) {
-      const std::vector<std::string> d = images_in(in);
-      files.insert(files.end(), d.begin(), d.end());
-    } else if (fs::exists(in, ec)) {
-      files.push_back(in);
-    } else {
-      throw UsageError("INPUT: '" + in + "' does not exist");
-    }
-  }
-  return files;
-}
-
-std::string describe_inputs(const std::vector<std::string>& inputs) {
-  if (inputs.size() == 1) return inputs.front();
-  return inputs.front() + " and " + std::to_string(inputs.size() - 1) + " more";
 }
 
 // ---------------------------------------------------------------- led
@@ -320,8 +229,8 @@ void print_json(const LedCalibrationResult& r) {
 }
 
 int run_led(const LedOptions& o) {
-  ImageFileSource src(expand_inputs(o.inputs), describe_inputs(o.inputs));
-  const LedCalibrationResult r = calibrate(src, calibration_options(o));
+  const auto src = open_frame_source(o.inputs, {o.channel, o.live_frames});
+  const LedCalibrationResult r = calibrate(*src, calibration_options(o));
   if (o.json)
     print_json(r);
   else
