@@ -10,52 +10,20 @@ using drivers::YamlMap;
 
 namespace {
 
-Eigen::Vector3d vec3(YamlMap& m, const std::string& key, const Eigen::Vector3d& fallback) {
-  if (!m.has(key)) return fallback;
-  const auto v = m.numbers(key, 3);
-  return {v[0], v[1], v[2]};
-}
-
 double positive(YamlMap& m, const std::string& key, double fallback) {
   const double v = m.number(key, fallback);
   if (!(v > 0)) m.fail(key, "must be positive");
   return v;
 }
 
-void read_sim(YamlMap m, drivers::SimSourceConfig& s) {
-  const int w = m.integer("width", s.camera.width), h = m.integer("height", s.camera.height);
-  if (w < 16 || h < 16 || w > 8192 || h > 8192) m.fail("width", "and height must be 16..8192 pixels");
-  const double hfov = m.number("hfov_deg", 60.0);
-  if (!(hfov > 1 && hfov < 179)) m.fail("hfov_deg", "must be between 1 and 179 degrees");
-  s.camera = dsp::CameraModel::from_hfov(w, h, hfov * M_PI / 180.0);
-  s.fps = positive(m, "fps", s.fps);
-  s.line_delay_s = m.number("line_delay_s", s.line_delay_s);
-  if (s.line_delay_s < 0 || s.line_delay_s * h > 1.0 / s.fps) m.fail("line_delay_s", "must be >= 0 and line_delay_s x height <= 1/fps");
-  if (!dsp::parse_readout(m.text("readout", "top_to_bottom"), s.readout)) m.fail("readout", "must be top_to_bottom or bottom_to_top");
-  s.exposure_s = m.number("exposure_s", s.exposure_s);
-  const std::string fmt = m.text("format", "mono8");
-  if (fmt == "mono8") s.format = dsp::PixelFormat::Mono8;
-  else if (fmt == "rgb8") s.format = dsp::PixelFormat::Rgb8;
-  else m.fail("format", "must be mono8 or rgb8");
-  s.angular_rate = vec3(m, "angular_rate_rad_s", s.angular_rate);
-  s.velocity = vec3(m, "velocity_m_s", s.velocity);
-  s.wobble_rad_s = m.number("wobble_rad_s", s.wobble_rad_s);
-  s.scene_depth_m = positive(m, "scene_depth_m", s.scene_depth_m);
-  s.velocity_rate_hz = positive(m, "velocity_rate_hz", s.velocity_rate_hz);
-  s.velocity_noise = m.number("velocity_noise", s.velocity_noise);
-  s.velocity_latency_s = m.number("velocity_latency_s", s.velocity_latency_s);
-  s.gyro_bias = vec3(m, "gyro_bias_rad_s", s.gyro_bias);
-  s.publish_velocity = m.boolean("publish_velocity", true);
-  s.realtime = m.boolean("realtime", true);
-  s.noise_grey = m.number("noise_grey", s.noise_grey);
-  m.finish();
-}
-
-void read_source(YamlMap m, Config& c) {
-  c.driver = m.text("driver", c.driver);
-  if (c.driver != "sim") m.fail("driver", "'" + c.driver + "' is not available yet (sim)");
-  if (m.has("sim")) read_sim(m.map("sim"), c.sim);
-  m.finish();
+// A row-major 3x3 rotation (nine numbers), checked orthonormal with determinant +1.
+Eigen::Matrix3d rotation(YamlMap& m, const std::string& key, const Eigen::Matrix3d& fallback) {
+  if (!m.has(key)) return fallback;
+  const auto v = m.numbers(key, 9);
+  Eigen::Matrix3d r;
+  for (int i = 0; i < 9; ++i) r(i / 3, i % 3) = v[static_cast<size_t>(i)];
+  if (!is_rotation(r, 1e-6)) m.fail(key, "must be a rotation matrix (row-major, orthonormal, determinant +1)");
+  return r;
 }
 
 void read_pipeline(YamlMap m, PipelineConfig& p) {
@@ -83,7 +51,7 @@ void read_rectification(YamlMap m, RectifyConfig& r) {
   r.depth_m = positive(m, "depth_m", r.depth_m);
   r.camera_height_m = positive(m, "camera_height_m", r.camera_height_m);
   r.grid_px = m.integer("grid_px", r.grid_px);
-  if (r.grid_px < 2 || r.grid_px > 256) m.fail("grid_px", "must be 2..256");
+  if (r.grid_px < 4 || r.grid_px > 256) m.fail("grid_px", "must be 4..256");
   r.gyro_only = m.boolean("gyro_only", false);
   r.threshold_px = positive(m, "threshold_px", r.threshold_px);
   m.finish();
@@ -94,6 +62,12 @@ void read_velocity(YamlMap m, Config& c) {
   c.velocity_limits.max_age_s = positive(m, "max_age_s", c.velocity_limits.max_age_s);
   c.velocity_limits.max_angular_rad_s = positive(m, "max_angular_rad_s", c.velocity_limits.max_angular_rad_s);
   c.velocity_limits.max_linear_m_s = positive(m, "max_linear_m_s", c.velocity_limits.max_linear_m_s);
+  VelocityInputConfig& in = c.velocity_input;
+  in.pose_channel = m.text("pose_channel", in.pose_channel);
+  if (!in.pose_channel.empty() && in.pose_channel == c.velocity_channel) m.fail("pose_channel", "must differ from velocity.channel");
+  in.imu_to_camera = rotation(m, "imu_to_camera", in.imu_to_camera);
+  in.body_to_camera = rotation(m, "body_to_camera", in.body_to_camera);
+  in.gyro_only = m.boolean("gyro_only", in.gyro_only);
   m.finish();
 }
 
@@ -113,7 +87,7 @@ void read_lcm(YamlMap m, Config& c) {
 Config load_config(const std::string& file) {
   Config c;
   YamlMap root = YamlMap::load(file);
-  if (root.has("source")) read_source(root.map("source"), c);
+  if (root.has("source")) read_source(root.map("source"), c.source);
   if (root.has("pipeline")) read_pipeline(root.map("pipeline"), c.pipeline);
   if (root.has("rectification")) read_rectification(root.map("rectification"), c.rectify);
   if (root.has("velocity")) read_velocity(root.map("velocity"), c);
@@ -125,7 +99,10 @@ Config load_config(const std::string& file) {
 std::string default_config_yaml() {
   return R"(# rsd configuration (every key shown with its default).
 source:
-  driver: sim                  # sim (aravis, v4l2, libcamera, replay: coming)
+  driver: sim                  # sim, aravis, v4l2 or libcamera
+  # camera: {width: 1280, height: 720, fx: 900, fy: 900, cx: 639.5, cy: 359.5, distortion: [0, 0, 0, 0]}
+  # intrinsics_file: camchain.yaml   # or a Kalibr camchain / ROS camera_info file (intrinsics_camera: cam0)
+  # The intrinsics of a real camera are required (camera or intrinsics_file).
   sim:                         # the built-in simulated rolling-shutter camera
     width: 640
     height: 480
@@ -146,6 +123,39 @@ source:
     publish_velocity: true
     realtime: true
     noise_grey: 1
+  aravis:                      # GigE Vision, opened by address (never by discovery), or Fake_1
+    camera: 127.0.0.1
+    pixel_format: Mono8        # Mono8, Mono16, RGB8
+    width: 0                   # 0: keep the camera's
+    height: 0
+    frame_rate_hz: 0
+    exposure_s: 0
+    buffers: 8
+    line_delay_s: 0            # 0: the readout fills the frame period
+    readout: top_to_bottom
+    stamp: exposure_start      # what the camera's timestamp marks: exposure_start or exposure_end
+    leader_delay_s: 0
+    use_camera_clock: true
+  v4l2:
+    device: /dev/video0
+    width: 640
+    height: 480
+    pixel_format: GREY         # GREY, Y16, YUYV, RGB24
+    fps: 30
+    buffers: 4
+    line_delay_s: 0
+    readout: top_to_bottom
+    exposure_s: 0              # 0: ask the driver
+  libcamera:
+    camera_id: ""              # "": the first camera
+    width: 640
+    height: 480
+    format: mono8
+    role: auto
+    fps: 30
+    line_delay_s: 0
+    readout: top_to_bottom
+    exposure_s: 0
 pipeline:
   raw_slots: 6                 # frame buffers allocated at start
   out_slots: 4
@@ -157,7 +167,7 @@ rectification:
   depth: infinite              # infinite (rotation only), plane (depth_m), ground (camera_height_m)
   depth_m: 5
   camera_height_m: 1.5
-  grid_px: 16                  # the exact map is evaluated every grid_px pixels, then interpolated
+  grid_px: 32                  # first node spacing of the map; it refines itself until within 0.05 px
   gyro_only: false
   threshold_px: 1              # pinhole model deemed sufficient below this correction
 velocity:
@@ -165,6 +175,10 @@ velocity:
   max_age_s: 0.1               # no sample this close to the frame: publish unrectified
   max_angular_rad_s: 20        # samples beyond these limits are rejected as faults
   max_linear_m_s: 100
+  pose_channel: ""             # also read bot_core.pose_t here (rotation_rate, vel: body frame); "": off
+  imu_to_camera: [1, 0, 0, 0, 1, 0, 0, 0, 1]   # rsd.velocity_t FRAME_IMU: w_camera = R w_imu (row-major)
+  body_to_camera: [1, 0, 0, 0, 1, 0, 0, 0, 1]  # bot_core.pose_t: w_camera = R w_body (row-major)
+  gyro_only: false             # drop linear velocity at input (every sample has_linear: false)
 lcm:
   url: memq://                 # or file:///abs/path.lcmlog?mode=w ; multicast needs allow_multicast: true
   image_channel: RSD_RECT

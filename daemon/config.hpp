@@ -10,17 +10,18 @@
 #include "daemon/lcm_publisher.hpp"
 #include "daemon/pipeline.hpp"
 #include "daemon/velocity_buffer.hpp"
-#include "drivers/sim_source.hpp"
+#include "daemon/velocity_input.hpp"
+#include "daemon/source_config.hpp"
 
 namespace rsd::daemon {
 
 struct Config {
-  std::string driver = "sim";
-  drivers::SimSourceConfig sim;
+  SourceConfig source;
   PipelineConfig pipeline;
   RectifyConfig rectify;
   VelocityLimits velocity_limits;
   std::string velocity_channel = "RSD_VELOCITY";
+  VelocityInputConfig velocity_input;  // pose channel, sensor-to-camera rotations, gyro-only
   std::string lcm_url = "memq://";
   Channels channels;
 };

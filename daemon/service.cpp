@@ -13,52 +13,54 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::unique_ptr<drivers::CameraSource> make_source(const Config& cfg) {
-  return std::make_unique<drivers::SimSource>(cfg.sim);  // config accepts only "sim" so far
-}
-
 // Opens the camera, retrying with exponential backoff (0.5 s .. 8 s) until it answers or
 // the service is asked to stop.
-bool open_with_backoff(drivers::CameraSource& src, StopFlags& flags, rsd::health_t& health, SystemdNotify& sd) {
+bool open_with_backoff(drivers::CameraSource& src, StopFlags& flags, SystemdNotify& sd, Clock::time_point deadline) {
   double backoff = 0.5;
   for (;;) {
     try {
       src.open();
       return true;
     } catch (const drivers::CameraError& e) {
-      health.source_state = "no camera";
       std::fprintf(stderr, "rsd: %s: %s; retrying in %.1f s\n", src.name().c_str(), e.what(), backoff);
       sd.status(std::string("no camera: ") + e.what());
       const auto until = Clock::now() + std::chrono::duration<double>(backoff);
       while (Clock::now() < until)
-        if (flags.stop.load()) return false;
+        if (flags.stop.load() || Clock::now() >= deadline) return false;
         else std::this_thread::sleep_for(std::chrono::milliseconds(50));
       backoff = std::min(backoff * 2, 8.0);
     }
   }
 }
 
+// Everything one run needs. The camera is opened first (it fixes the frame format), then
+// the publisher and the rectifier are sized for it once.
 struct Session {
   const Config& cfg;
-  LcmPublisher pub;
-  VelocityBuffer velocity;
-  VelocityInput velocity_in;
   std::unique_ptr<drivers::CameraSource> source;
+  std::unique_ptr<LcmPublisher> pub;
+  VelocityBuffer velocity;
+  std::unique_ptr<VelocityInput> velocity_in;
   std::unique_ptr<FrameRectifier> rectifier;
   std::unique_ptr<Pipeline> pipeline;
   int reconnects = 0;
 
-  explicit Session(const Config& c)
-      : cfg(c), pub(c.lcm_url, c.channels, {c.sim.camera.width, c.sim.camera.height, c.sim.format}),
-        velocity(c.velocity_limits), velocity_in(pub.handle(), c.velocity_channel, velocity), source(make_source(c)) {
-    lcm_t* lcm = pub.handle();
-    const std::string channel = c.velocity_channel;
+  explicit Session(const Config& c) : cfg(c), source(make_source(c.source)), velocity(c.velocity_limits) {}
+
+  // After the camera has opened: LCM, the velocity input and the rectifier.
+  void wire() {
+    pub = std::make_unique<LcmPublisher>(cfg.lcm_url, cfg.channels, source->format());
+    velocity_in = std::make_unique<VelocityInput>(pub->handle(), cfg.velocity_channel, velocity, cfg.velocity_input);
+    lcm_t* lcm = pub->handle();
+    const std::string channel = cfg.velocity_channel;
     source->set_velocity_sink([lcm, channel](const drivers::VelocitySample& s) { VelocityInput::publish(lcm, channel, s); });
+    velocity_in->start();
   }
 
   void start_pipeline() {
-    rectifier = std::make_unique<FrameRectifier>(cfg.rectify, cfg.sim.camera, source->timing(), source->format());
-    pipeline = std::make_unique<Pipeline>(cfg.pipeline, *source, *rectifier, pub, velocity);
+    rectifier = std::make_unique<FrameRectifier>(cfg.rectify, camera_model(cfg.source, source->format()), source->timing(),
+                                                 source->format());
+    pipeline = std::make_unique<Pipeline>(cfg.pipeline, *source, *rectifier, *pub, velocity);
     source->start();
     pipeline->start();
   }
@@ -67,7 +69,7 @@ struct Session {
 void report_health(Session& s, const char* state, double dt, uint64_t& last_in, uint64_t& last_out, bool line,
                    SystemdNotify& sd) {
   const PipelineStats& st = s.pipeline->stats();
-  rsd::health_t& h = s.pub.health();
+  rsd::health_t& h = s.pub->health();
   h.utime = drivers::monotonic_ns() / 1000;
   h.source = s.source->name();
   h.source_state = state;
@@ -80,7 +82,7 @@ void report_health(Session& s, const char* state, double dt, uint64_t& last_in, 
   h.fps_in = static_cast<double>(h.frames_in - static_cast<int64_t>(last_in)) / dt;
   h.fps_out = static_cast<double>(h.frames_out - static_cast<int64_t>(last_out)) / dt;
   h.reconnects = s.reconnects;
-  s.pub.publish_health();
+  s.pub->publish_health();
   s.pipeline->latency().reset();
   last_in = static_cast<uint64_t>(h.frames_in), last_out = static_cast<uint64_t>(h.frames_out);
   char text[256];
@@ -97,8 +99,11 @@ void report_health(Session& s, const char* state, double dt, uint64_t& last_in, 
 int run_service(const Config& cfg, const std::string&, StopFlags& flags, const RunLimits& limits) {
   SystemdNotify sd;
   Session s(cfg);
-  s.velocity_in.start();
-  if (!open_with_backoff(*s.source, flags, s.pub.health(), sd)) return 0;
+  const auto deadline = limits.max_seconds > 0
+                            ? Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limits.max_seconds))
+                            : Clock::time_point::max();
+  if (!open_with_backoff(*s.source, flags, sd, deadline)) return 0;
+  s.wire();
   s.start_pipeline();
   sd.ready();
   const auto t_start = Clock::now();
@@ -115,7 +120,9 @@ int run_service(const Config& cfg, const std::string&, StopFlags& flags, const R
       s.pipeline->stop();
       s.source->stop();
       ++s.reconnects;
-      if (!open_with_backoff(*s.source, flags, s.pub.health(), sd)) break;
+      s.pub->health().source_state = "reconnecting";
+      s.pub->publish_health();
+      if (!open_with_backoff(*s.source, flags, sd, deadline)) break;
       s.start_pipeline();
     }
     if (now - t_health >= std::chrono::seconds(1)) {
@@ -127,7 +134,7 @@ int run_service(const Config& cfg, const std::string&, StopFlags& flags, const R
   sd.stopping();
   s.pipeline->stop();  // flushes what is in flight
   s.source->stop();
-  s.velocity_in.stop();
+  s.velocity_in->stop();
   report_health(s, "stopped", std::max(1e-3, std::chrono::duration<double>(Clock::now() - t_health).count()), last_in,
                 last_out, limits.status_line, sd);
   if (limits.status_line) std::fprintf(stderr, "\n");

@@ -1,10 +1,17 @@
-// Velocity over LCM: rsd.velocity_t on the velocity channel (the simulated camera publishes
-// its truth there too, so every source's velocity takes the same path), decoded on the LCM
-// thread into the VelocityBuffer. Malformed messages are counted and skipped.
+// Velocity over LCM, decoded on the LCM thread into the VelocityBuffer (camera axes):
+//  - rsd.velocity_t on the velocity channel (the simulated camera publishes its truth there
+//    too, so every source's velocity takes the same path). FRAME_CAMERA is used as is;
+//    FRAME_IMU is rotated into camera axes with imu_to_camera.
+//  - bot_core.pose_t on the optional pose channel: rotation_rate and vel (both in the body
+//    frame, as libbot2 documents them) rotated into camera axes with body_to_camera.
+// Malformed messages (undecodable, unknown frame) are counted and skipped; the buffer
+// rejects and counts insane or out-of-order samples. Both channels are handled on one thread,
+// so the buffer keeps its single writer.
 #pragma once
 
 #include <lcm/lcm.h>
 
+#include <Eigen/Core>
 #include <atomic>
 #include <string>
 #include <thread>
@@ -13,10 +20,23 @@
 
 namespace rsd::daemon {
 
+struct VelocityInputConfig {
+  std::string pose_channel;  // bot_core.pose_t; empty: not subscribed
+  // Rotations (row-major in the config), v_camera = R v_sensor.
+  Eigen::Matrix3d imu_to_camera = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d body_to_camera = Eigen::Matrix3d::Identity();
+  bool gyro_only = false;  // every sample has_linear = false (linear velocity zeroed)
+};
+
+// Whether m is a proper rotation (orthonormal, determinant +1) to within tol.
+bool is_rotation(const Eigen::Matrix3d& m, double tol = 1e-6);
+
 class VelocityInput {
  public:
-  VelocityInput(lcm_t* lcm, const std::string& channel, VelocityBuffer& buffer);
+  VelocityInput(lcm_t* lcm, const std::string& channel, VelocityBuffer& buffer, VelocityInputConfig cfg = {});
   ~VelocityInput();
+  VelocityInput(const VelocityInput&) = delete;
+  VelocityInput& operator=(const VelocityInput&) = delete;
   void start();  // the LCM handling thread
   void stop();
   uint64_t malformed() const { return malformed_.load(); }
@@ -24,11 +44,15 @@ class VelocityInput {
   static void publish(lcm_t* lcm, const std::string& channel, const drivers::VelocitySample& s);
 
  private:
-  static void on_message(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
+  static void on_velocity(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
+  static void on_pose(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
+  void push(int64_t utime, const Eigen::Matrix3d& r, const double* w, const double* v, bool has_linear);
   lcm_t* lcm_;
   std::string channel_;
   VelocityBuffer& buffer_;
+  VelocityInputConfig cfg_;
   lcm_subscription_t* sub_ = nullptr;
+  lcm_subscription_t* pose_sub_ = nullptr;
   std::atomic<bool> running_{false};
   std::atomic<uint64_t> malformed_{0};
   std::thread thread_;

@@ -29,3 +29,13 @@ add_test(NAME aravis_gige_in_netns
 # A skipped GigE test (run outside a private network namespace) is a failure here.
 set_tests_properties(aravis_gige_in_netns PROPERTIES TIMEOUT 180
                      FAIL_REGULAR_EXPRESSION "\\[  SKIPPED \\]")
+
+# The daemon's pipeline behind Aravis: in-process fake camera, and the GigE fake in a netns.
+add_executable(test_aravis_pipeline ${PROJECT_SOURCE_DIR}/tests/test_aravis_pipeline.cpp)
+target_link_libraries(test_aravis_pipeline PRIVATE rsd_daemon rsd_drivers_aravis GTest::gtest GTest::gtest_main)
+gtest_discover_tests(test_aravis_pipeline DISCOVERY_TIMEOUT 60 TEST_FILTER "AravisPipeline.*")
+add_test(NAME aravis_gige_pipeline_in_netns
+         COMMAND sh ${PROJECT_SOURCE_DIR}/tests/run_in_netns.sh
+                 $<TARGET_FILE:test_aravis_pipeline> --gtest_filter=AravisPipelineGigE.*)
+set_tests_properties(aravis_gige_pipeline_in_netns PROPERTIES TIMEOUT 180
+                     FAIL_REGULAR_EXPRESSION "\\[  SKIPPED \\]")

@@ -30,6 +30,7 @@ class YamlMap {
   std::vector<double> numbers(const std::string& key, size_t n);  // required length n
   YamlMap map(const std::string& key);  // nested mapping (required)
   std::vector<std::string> keys() const;
+  const std::string& file() const { return file_; }
 
   // Throws for any key not read; call after reading everything.
   void finish() const;

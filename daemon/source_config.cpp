@@ -1,0 +1,178 @@
+#include "daemon/source_config.hpp"
+
+#include <cmath>
+#include <filesystem>
+
+#include "drivers/intrinsics_file.hpp"
+
+namespace rsd::daemon {
+
+using drivers::YamlMap;
+
+namespace {
+
+Eigen::Vector3d vec3(YamlMap& m, const std::string& key, const Eigen::Vector3d& fallback) {
+  if (!m.has(key)) return fallback;
+  const auto v = m.numbers(key, 3);
+  return {v[0], v[1], v[2]};
+}
+
+double positive(YamlMap& m, const std::string& key, double fallback) {
+  const double v = m.number(key, fallback);
+  if (!(v > 0)) m.fail(key, "must be positive");
+  return v;
+}
+
+dsp::Readout readout(YamlMap& m, dsp::Readout fallback) {
+  dsp::Readout r = fallback;
+  if (m.has("readout") && !dsp::parse_readout(m.text("readout", ""), r))
+    m.fail("readout", "must be top_to_bottom or bottom_to_top");
+  return r;
+}
+
+void read_sim(YamlMap m, drivers::SimSourceConfig& s) {
+  const int w = m.integer("width", s.camera.width), h = m.integer("height", s.camera.height);
+  if (w < 16 || h < 16 || w > 8192 || h > 8192) m.fail("width", "and height must be 16..8192 pixels");
+  const double hfov = m.number("hfov_deg", 60.0);
+  if (!(hfov > 1 && hfov < 179)) m.fail("hfov_deg", "must be between 1 and 179 degrees");
+  s.camera = dsp::CameraModel::from_hfov(w, h, hfov * M_PI / 180.0);
+  s.fps = positive(m, "fps", s.fps);
+  s.line_delay_s = m.number("line_delay_s", s.line_delay_s);
+  if (s.line_delay_s < 0 || s.line_delay_s * h > 1.0 / s.fps) m.fail("line_delay_s", "must be >= 0 and line_delay_s x height <= 1/fps");
+  s.readout = readout(m, s.readout);
+  s.exposure_s = m.number("exposure_s", s.exposure_s);
+  const std::string fmt = m.text("format", "mono8");
+  if (fmt == "mono8") s.format = dsp::PixelFormat::Mono8;
+  else if (fmt == "rgb8") s.format = dsp::PixelFormat::Rgb8;
+  else m.fail("format", "must be mono8 or rgb8");
+  s.angular_rate = vec3(m, "angular_rate_rad_s", s.angular_rate);
+  s.velocity = vec3(m, "velocity_m_s", s.velocity);
+  s.wobble_rad_s = m.number("wobble_rad_s", s.wobble_rad_s);
+  s.scene_depth_m = positive(m, "scene_depth_m", s.scene_depth_m);
+  s.velocity_rate_hz = positive(m, "velocity_rate_hz", s.velocity_rate_hz);
+  s.velocity_noise = m.number("velocity_noise", s.velocity_noise);
+  s.velocity_latency_s = m.number("velocity_latency_s", s.velocity_latency_s);
+  s.gyro_bias = vec3(m, "gyro_bias_rad_s", s.gyro_bias);
+  s.publish_velocity = m.boolean("publish_velocity", true);
+  s.realtime = m.boolean("realtime", true);
+  s.noise_grey = m.number("noise_grey", s.noise_grey);
+  m.finish();
+}
+
+void read_aravis(YamlMap m, drivers::AravisConfig& a) {
+  a.camera = m.text("camera", a.camera);
+  a.pixel_format = m.text("pixel_format", a.pixel_format);
+  a.width = m.integer("width", a.width);
+  a.height = m.integer("height", a.height);
+  a.frame_rate_hz = m.number("frame_rate_hz", a.frame_rate_hz);
+  a.exposure_s = m.number("exposure_s", a.exposure_s);
+  a.buffers = m.integer("buffers", a.buffers);
+  a.line_delay_s = m.number("line_delay_s", a.line_delay_s);
+  a.readout = readout(m, a.readout);
+  const std::string stamp = m.text("stamp", "exposure_start");
+  if (stamp == "exposure_start") a.stamp = drivers::CameraStamp::ExposureStart;
+  else if (stamp == "exposure_end") a.stamp = drivers::CameraStamp::ExposureEnd;
+  else m.fail("stamp", "must be exposure_start or exposure_end");
+  a.leader_delay_s = m.number("leader_delay_s", a.leader_delay_s);
+  a.use_camera_clock = m.boolean("use_camera_clock", a.use_camera_clock);
+  m.finish();
+}
+
+void read_v4l2(YamlMap m, drivers::V4l2Config& v) {
+  v.device = m.text("device", v.device);
+  v.width = m.integer("width", v.width);
+  v.height = m.integer("height", v.height);
+  v.pixel_format = m.text("pixel_format", v.pixel_format);
+  v.fps = positive(m, "fps", v.fps);
+  v.buffers = static_cast<unsigned>(m.integer("buffers", static_cast<int>(v.buffers)));
+  v.line_delay_s = m.number("line_delay_s", v.line_delay_s);
+  v.readout = readout(m, v.readout);
+  v.exposure_s = m.number("exposure_s", v.exposure_s);
+  m.finish();
+}
+
+void read_libcamera(YamlMap m, drivers::LibcameraConfig& l) {
+  l.camera_id = m.text("camera_id", l.camera_id);
+  l.width = m.integer("width", l.width);
+  l.height = m.integer("height", l.height);
+  const std::string fmt = m.text("format", "mono8");
+  if (fmt == "mono8") l.format = dsp::PixelFormat::Mono8;
+  else if (fmt == "rgb8") l.format = dsp::PixelFormat::Rgb8;
+  else m.fail("format", "must be mono8 or rgb8");
+  l.role = m.text("role", l.role);
+  l.fps = positive(m, "fps", l.fps);
+  l.line_delay_s = m.number("line_delay_s", l.line_delay_s);
+  l.readout = readout(m, l.readout);
+  l.exposure_s = m.number("exposure_s", l.exposure_s);
+  m.finish();
+}
+
+dsp::CameraModel read_camera(YamlMap m) {
+  dsp::CameraModel c;
+  c.width = m.integer("width", 0);
+  c.height = m.integer("height", 0);
+  c.fx = m.number("fx");
+  c.fy = m.number("fy", c.fx);
+  c.cx = m.number("cx", 0.5 * (c.width - 1));
+  c.cy = m.number("cy", 0.5 * (c.height - 1));
+  if (m.has("distortion")) {
+    const auto d = m.numbers("distortion", 4);
+    c.dist = {d[0], d[1], d[2], d[3], 0};
+  }
+  if (c.width < 2 || c.height < 2) m.fail("width", "and height are required (pixels)");
+  if (!(c.fx > 0 && c.fy > 0)) m.fail("fx", "and fy must be positive");
+  m.finish();
+  return c;
+}
+
+// Intrinsics (and a rolling-shutter line delay, if Kalibr estimated one) from a Kalibr
+// camchain or ROS camera_info file, relative paths taken from the configuration's directory.
+void read_intrinsics_file(YamlMap& m, SourceConfig& s) {
+  std::filesystem::path file = m.text("intrinsics_file", "");
+  if (file.is_relative()) file = std::filesystem::path(m.file()).parent_path() / file;
+  const drivers::Intrinsics in = drivers::load_intrinsics(file.string(), m.text("intrinsics_camera", ""));
+  s.camera = in.cam;
+  if (in.line_delay_s) {  // a calibrated line delay beats "the readout fills the frame"
+    if (s.aravis.line_delay_s == 0) s.aravis.line_delay_s = *in.line_delay_s;
+    if (s.v4l2.line_delay_s == 0) s.v4l2.line_delay_s = *in.line_delay_s;
+    if (s.libcamera.line_delay_s == 0) s.libcamera.line_delay_s = *in.line_delay_s;
+  }
+}
+
+}  // namespace
+
+void read_source(YamlMap m, SourceConfig& s) {
+  s.driver = m.text("driver", s.driver);
+  if (s.driver != "sim" && s.driver != "aravis" && s.driver != "v4l2" && s.driver != "libcamera")
+    m.fail("driver", "must be sim, aravis, v4l2 or libcamera, not '" + s.driver + "'");
+  if (m.has("sim")) read_sim(m.map("sim"), s.sim);
+  if (m.has("aravis")) read_aravis(m.map("aravis"), s.aravis);
+  if (m.has("v4l2")) read_v4l2(m.map("v4l2"), s.v4l2);
+  if (m.has("libcamera")) read_libcamera(m.map("libcamera"), s.libcamera);
+  if (m.has("camera")) s.camera = read_camera(m.map("camera"));
+  if (m.has("intrinsics_file")) {
+    if (s.camera) m.fail("intrinsics_file", "and source.camera both give intrinsics: keep one");
+    read_intrinsics_file(m, s);
+  }
+  if (s.driver != "sim" && !s.camera)
+    m.fail("driver", "'" + s.driver + "' needs the camera's intrinsics: add source.camera {width, height, fx, fy, cx, cy, distortion} or source.intrinsics_file (Kalibr camchain or ROS camera_info)");
+  m.finish();
+}
+
+std::unique_ptr<drivers::CameraSource> make_source(const SourceConfig& s) {
+  if (s.driver == "aravis") return std::make_unique<drivers::AravisSource>(s.aravis);
+  if (s.driver == "v4l2") return std::make_unique<drivers::V4l2Source>(s.v4l2);
+  if (s.driver == "libcamera") return std::make_unique<drivers::LibcameraSource>(s.libcamera);
+  return std::make_unique<drivers::SimSource>(s.sim);
+}
+
+dsp::CameraModel camera_model(const SourceConfig& s, const drivers::FrameFormat& f) {
+  if (s.driver == "sim") return s.sim.camera;
+  const dsp::CameraModel& c = *s.camera;
+  if (c.width != f.width || c.height != f.height)
+    throw std::runtime_error("source.camera is " + std::to_string(c.width) + "x" + std::to_string(c.height) +
+                             " but the camera delivers " + std::to_string(f.width) + "x" + std::to_string(f.height));
+  return c;
+}
+
+}  // namespace rsd::daemon
