@@ -44,8 +44,12 @@ struct Session {
   std::unique_ptr<FrameRectifier> rectifier;
   std::unique_ptr<Pipeline> pipeline;
   int reconnects = 0;
+  // Counters of the pipelines before a reconnect: health and limits count since start.
+  uint64_t in_before = 0, out_before = 0, drops_before = 0;
+  uint64_t frames_out() const { return out_before + pipeline->stats().frames_out.load(); }
 
-  explicit Session(const Config& c) : cfg(c), source(make_source(c.source)), velocity(c.velocity_limits) {}
+  Session(const Config& c, const SourceFactory& factory)
+      : cfg(c), source(factory ? factory(c) : make_source(c.source)), velocity(c.velocity_limits) {}
 
   // After the camera has opened: LCM, the velocity input and the rectifier.
   void wire() {
@@ -73,9 +77,9 @@ void report_health(Session& s, const char* state, double dt, uint64_t& last_in, 
   h.utime = drivers::monotonic_ns() / 1000;
   h.source = s.source->name();
   h.source_state = state;
-  h.frames_in = static_cast<int64_t>(st.frames_in.load());
-  h.frames_out = static_cast<int64_t>(st.frames_out.load());
-  h.drops = static_cast<int64_t>(st.drops.load());
+  h.frames_in = static_cast<int64_t>(s.in_before + st.frames_in.load());
+  h.frames_out = static_cast<int64_t>(s.out_before + st.frames_out.load());
+  h.drops = static_cast<int64_t>(s.drops_before + st.drops.load());
   h.queue_depth = static_cast<int32_t>(s.pipeline->queue_depth());
   h.latency_p50_ms = s.pipeline->latency().quantile(0.5);
   h.latency_p99_ms = s.pipeline->latency().quantile(0.99);
@@ -96,9 +100,10 @@ void report_health(Session& s, const char* state, double dt, uint64_t& last_in, 
 
 }  // namespace
 
-int run_service(const Config& cfg, const std::string&, StopFlags& flags, const RunLimits& limits) {
+int run_service(const Config& cfg, const std::string&, StopFlags& flags, const RunLimits& limits,
+                const SourceFactory& factory, RunSummary* summary) {
   SystemdNotify sd;
-  Session s(cfg);
+  Session s(cfg, factory);
   const auto deadline = limits.max_seconds > 0
                             ? Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limits.max_seconds))
                             : Clock::time_point::max();
@@ -113,13 +118,16 @@ int run_service(const Config& cfg, const std::string&, StopFlags& flags, const R
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     sd.watchdog();
     const auto now = Clock::now();
-    if (limits.max_frames && s.pipeline->stats().frames_out.load() >= limits.max_frames) break;
+    if (limits.max_frames && s.frames_out() >= limits.max_frames) break;
     if (limits.max_seconds > 0 && now - t_start >= std::chrono::duration<double>(limits.max_seconds)) break;
     if (s.pipeline->camera_lost()) {  // reconnect: stop, reopen with backoff, restart
       std::fprintf(stderr, "\nrsd: camera lost: %s\n", s.pipeline->camera_error().c_str());
       s.pipeline->stop();
       s.source->stop();
       ++s.reconnects;
+      s.in_before += s.pipeline->stats().frames_in.load();
+      s.out_before += s.pipeline->stats().frames_out.load();
+      s.drops_before += s.pipeline->stats().drops.load();
       s.pub->health().source_state = "reconnecting";
       s.pub->publish_health();
       if (!open_with_backoff(*s.source, flags, sd, deadline)) break;
@@ -138,6 +146,7 @@ int run_service(const Config& cfg, const std::string&, StopFlags& flags, const R
   report_health(s, "stopped", std::max(1e-3, std::chrono::duration<double>(Clock::now() - t_health).count()), last_in,
                 last_out, limits.status_line, sd);
   if (limits.status_line) std::fprintf(stderr, "\n");
+  if (summary) *summary = {s.frames_out(), s.reconnects};
   return 0;
 }
 

@@ -5,6 +5,8 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
+#include <memory>
 
 #include "daemon/config.hpp"
 
@@ -16,6 +18,15 @@ struct RunLimits {
   bool status_line = true;
 };
 
+// What a run did, for tests and the exit message.
+struct RunSummary {
+  uint64_t frames_out = 0;
+  int reconnects = 0;
+};
+
+// Makes the camera source; the default builds the configured driver. Tests substitute one.
+using SourceFactory = std::function<std::unique_ptr<drivers::CameraSource>(const Config&)>;
+
 // Flags the signal handlers set; the service polls them (every 50 ms: SIGTERM stops it
 // well within 500 ms).
 struct StopFlags {
@@ -25,6 +36,7 @@ struct StopFlags {
 
 // Runs until asked to stop or to reload (flags.reload stays set for the caller to see).
 // Returns the process exit status. Throws on configuration errors found while wiring.
-int run_service(const Config& cfg, const std::string& config_file, StopFlags& flags, const RunLimits& limits);
+int run_service(const Config& cfg, const std::string& config_file, StopFlags& flags, const RunLimits& limits,
+                const SourceFactory& factory = {}, RunSummary* summary = nullptr);
 
 }  // namespace rsd::daemon
