@@ -1,5 +1,7 @@
 #include "daemon/lcm_publisher.hpp"
 
+#include "drivers/lcm_image.hpp"
+
 #include <cinttypes>
 #include <cstdio>
 #include <cstring>
@@ -12,15 +14,6 @@ namespace {
 const char* const kMetaKeys[] = {"frame_utime", "line_delay_ns", "readout", "exposure_ns", "sequence", "rectified"};
 constexpr size_t kMetaValueCapacity = 32;
 
-int32_t fourcc(dsp::PixelFormat f) {
-  switch (f) {
-    case dsp::PixelFormat::Mono8: return bot_core::image_t::PIXEL_FORMAT_GRAY;
-    case dsp::PixelFormat::Mono16: return bot_core::image_t::PIXEL_FORMAT_LE_GRAY16;
-    case dsp::PixelFormat::Rgb8: return bot_core::image_t::PIXEL_FORMAT_RGB;
-  }
-  return bot_core::image_t::PIXEL_FORMAT_INVALID;
-}
-
 }  // namespace
 
 LcmPublisher::LcmPublisher(const std::string& url, Channels channels, const drivers::FrameFormat& fmt)
@@ -30,7 +23,7 @@ LcmPublisher::LcmPublisher(const std::string& url, Channels channels, const driv
   image_.width = fmt.width;
   image_.height = fmt.height;
   image_.row_stride = fmt.width * dsp::bytes_per_pixel(fmt.format);
-  image_.pixelformat = fourcc(fmt.format);
+  image_.pixelformat = drivers::fourcc(fmt.format);
   image_.size = static_cast<int32_t>(fmt.bytes());
   image_.data.resize(fmt.bytes());
   image_.nmetadata = static_cast<int32_t>(std::size(kMetaKeys));

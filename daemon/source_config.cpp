@@ -107,24 +107,6 @@ void read_libcamera(YamlMap m, drivers::LibcameraConfig& l) {
   m.finish();
 }
 
-dsp::CameraModel read_camera(YamlMap m) {
-  dsp::CameraModel c;
-  c.width = m.integer("width", 0);
-  c.height = m.integer("height", 0);
-  c.fx = m.number("fx");
-  c.fy = m.number("fy", c.fx);
-  c.cx = m.number("cx", 0.5 * (c.width - 1));
-  c.cy = m.number("cy", 0.5 * (c.height - 1));
-  if (m.has("distortion")) {
-    const auto d = m.numbers("distortion", 4);
-    c.dist = {d[0], d[1], d[2], d[3], 0};
-  }
-  if (c.width < 2 || c.height < 2) m.fail("width", "and height are required (pixels)");
-  if (!(c.fx > 0 && c.fy > 0)) m.fail("fx", "and fy must be positive");
-  m.finish();
-  return c;
-}
-
 // Intrinsics (and a rolling-shutter line delay, if Kalibr estimated one) from a Kalibr
 // camchain or ROS camera_info file, relative paths taken from the configuration's directory.
 void read_intrinsics_file(YamlMap& m, SourceConfig& s) {
@@ -149,7 +131,12 @@ void read_source(YamlMap m, SourceConfig& s) {
   if (m.has("aravis")) read_aravis(m.map("aravis"), s.aravis);
   if (m.has("v4l2")) read_v4l2(m.map("v4l2"), s.v4l2);
   if (m.has("libcamera")) read_libcamera(m.map("libcamera"), s.libcamera);
-  if (m.has("camera")) s.camera = read_camera(m.map("camera"));
+  if (m.has("camera")) {
+    dsp::CameraModel none;  // no defaults for a real camera: size and focal length are required
+    none.width = none.height = 0;
+    none.fx = none.fy = 0;
+    s.camera = drivers::read_camera_section(m.map("camera"), none);
+  }
   if (m.has("intrinsics_file")) {
     if (s.camera) m.fail("intrinsics_file", "and source.camera both give intrinsics: keep one");
     read_intrinsics_file(m, s);

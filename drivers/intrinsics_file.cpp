@@ -207,4 +207,22 @@ Intrinsics load_intrinsics(const std::string& file, const std::string& camera) {
                            "(image_width, camera_matrix, ...)");
 }
 
+dsp::CameraModel read_camera_section(YamlMap m, const dsp::CameraModel& defaults) {
+  dsp::CameraModel c = defaults;
+  c.width = m.integer("width", c.width);
+  c.height = m.integer("height", c.height);
+  c.fx = m.number("fx", c.fx);
+  c.fy = m.number("fy", c.fx);
+  c.cx = m.number("cx", 0.5 * (c.width - 1));
+  c.cy = m.number("cy", 0.5 * (c.height - 1));
+  if (m.has("distortion")) {
+    const auto d = m.numbers("distortion", 4);
+    c.dist = {d[0], d[1], d[2], d[3], 0};
+  }
+  if (c.width < 2 || c.height < 2) m.fail("width", "and height must be at least 2 pixels");
+  if (!(c.fx > 0 && c.fy > 0)) m.fail("fx", "and fy must be positive");
+  m.finish();
+  return c;
+}
+
 }  // namespace rsd::drivers

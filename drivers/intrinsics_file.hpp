@@ -13,6 +13,7 @@
 #include <string>
 
 #include "dsp/camera_model.hpp"
+#include "drivers/yaml_map.hpp"
 
 namespace rsd::drivers {
 
@@ -32,5 +33,9 @@ struct Intrinsics {
 // ROS: distortion_model plumb_bob ([k1, k2, p1, p2, k3]), or rational_polynomial when k4..k6
 // are all zero; camera_matrix without skew. Unknown top-level keys are refused.
 Intrinsics load_intrinsics(const std::string& file, const std::string& camera = "");
+
+// A `camera:` mapping {width, height, fx, fy, cx, cy, distortion: [k1, k2, p1, p2]} read
+// strictly over `defaults` (fy defaults to fx, cx and cy to the image centre).
+dsp::CameraModel read_camera_section(YamlMap m, const dsp::CameraModel& defaults);
 
 }  // namespace rsd::drivers

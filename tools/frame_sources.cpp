@@ -12,6 +12,7 @@
 
 #include "cli_util.hpp"
 #include "drivers/aravis_source.hpp"
+#include "drivers/lcm_image.hpp"
 #include "drivers/libcamera_source.hpp"
 #include "drivers/v4l2_source.hpp"
 #include "image_io.hpp"
@@ -138,11 +139,9 @@ class LcmLogSource final : public FrameSource {
 
  private:
   Image to_image(const bot_core::image_t& m, const std::string& where) {
-    dsp::PixelFormat f;
-    if (m.pixelformat == bot_core::image_t::PIXEL_FORMAT_GRAY) f = dsp::PixelFormat::Mono8;
-    else if (m.pixelformat == bot_core::image_t::PIXEL_FORMAT_RGB) f = dsp::PixelFormat::Rgb8;
-    else if (m.pixelformat == bot_core::image_t::PIXEL_FORMAT_LE_GRAY16) f = dsp::PixelFormat::Mono16;
-    else throw std::runtime_error(where + ": pixel format " + std::to_string(m.pixelformat) + " is not GRAY, RGB or LE_GRAY16");
+    const auto pf = drivers::pixel_format(m.pixelformat);
+    if (!pf) throw std::runtime_error(where + ": pixel format " + std::to_string(m.pixelformat) + " is not GRAY, RGB or LE_GRAY16");
+    const dsp::PixelFormat f = *pf;
     Image img(m.width, m.height, f);
     const size_t row = static_cast<size_t>(img.stride());
     if (m.width <= 0 || m.height <= 0 || m.row_stride < static_cast<int>(row) ||

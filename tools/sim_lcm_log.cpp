@@ -1,5 +1,7 @@
 #include "sim_lcm_log.hpp"
 
+#include "drivers/lcm_image.hpp"
+
 #include <bot_core/image_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 #include <rsd/velocity_t.hpp>
@@ -26,15 +28,6 @@ void add_meta(bot_core::image_t& img, const std::string& key, const std::string&
   m.n = static_cast<int32_t>(m.value.size());
   img.metadata.push_back(std::move(m));
   img.nmetadata = static_cast<int32_t>(img.metadata.size());
-}
-
-int32_t fourcc(dsp::PixelFormat f) {
-  switch (f) {
-    case dsp::PixelFormat::Mono8: return bot_core::image_t::PIXEL_FORMAT_GRAY;
-    case dsp::PixelFormat::Mono16: return bot_core::image_t::PIXEL_FORMAT_LE_GRAY16;
-    case dsp::PixelFormat::Rgb8: return bot_core::image_t::PIXEL_FORMAT_RGB;
-  }
-  return bot_core::image_t::PIXEL_FORMAT_INVALID;
 }
 
 template <class Msg>
@@ -95,7 +88,7 @@ void write_sim_lcm_log(const SimLogSpec& spec, const std::vector<double>& frame_
     img.width = width;
     img.height = height;
     img.row_stride = static_cast<int32_t>(frame.stride());
-    img.pixelformat = fourcc(format);
+    img.pixelformat = drivers::fourcc(format);
     img.data = frame.data;
     img.size = static_cast<int32_t>(img.data.size());
     add_meta(img, "frame_utime", std::to_string(img.utime));

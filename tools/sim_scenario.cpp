@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "drivers/intrinsics_file.hpp"
 #include "recording_v1.hpp"
 #include "drivers/yaml_map.hpp"
 
@@ -11,22 +12,6 @@ using drivers::ConfigError;
 using drivers::YamlMap;
 
 namespace {
-
-void read_camera(YamlMap m, dsp::CameraModel& c) {
-  c.width = m.integer("width", c.width);
-  c.height = m.integer("height", c.height);
-  c.fx = m.number("fx", c.fx);
-  c.fy = m.number("fy", c.fx);
-  c.cx = m.number("cx", 0.5 * (c.width - 1));
-  c.cy = m.number("cy", 0.5 * (c.height - 1));
-  if (m.has("distortion")) {
-    const auto d = m.numbers("distortion", 4);
-    c.dist = {d[0], d[1], d[2], d[3], 0};
-  }
-  if (c.width < 2 || c.height < 2) m.fail("width", "and height must be at least 2");
-  if (!(c.fx > 0 && c.fy > 0)) m.fail("fx", "and fy must be positive");
-  m.finish();
-}
 
 void read_timing(YamlMap m, dsp::NominalModel& n) {
   n.frame_rate_hz = m.number("frame_rate_hz", n.frame_rate_hz);
@@ -172,7 +157,7 @@ Scenario load_scenario(const std::string& file) {
   c.seed = static_cast<unsigned>(root.integer("seed", 1));
   c.duration_s = root.number("duration_s", c.duration_s);
   c.start_time_s = root.number("start_time_s", c.start_time_s);
-  if (root.has("camera")) read_camera(root.map("camera"), c.nominal.cam);
+  if (root.has("camera")) c.nominal.cam = drivers::read_camera_section(root.map("camera"), c.nominal.cam);
   if (root.has("timing")) read_timing(root.map("timing"), c.nominal);
   if (root.has("motion")) read_motion(root.map("motion"), c, file);
   s.target_spec.seed = c.seed;
