@@ -25,7 +25,19 @@ class DropOldestQueue {
     if (t - head_.load(std::memory_order_acquire) >= cap_) return false;
     ring_[t % cap_].store(slot, std::memory_order_relaxed);
     tail_.store(t + 1, std::memory_order_release);
+    wake();
     return true;
+  }
+
+  // Consumer: sleeps until something is pushed or wake() is called after `seen`, the value
+  // of epoch() read before the queue was found empty. A futex under the hood (C++20 atomic
+  // wait): no lock, and a push with nobody waiting costs one atomic increment.
+  uint32_t epoch() const { return epoch_.load(std::memory_order_acquire); }
+  void wait(uint32_t seen) const { epoch_.wait(seen, std::memory_order_acquire); }
+  // Wakes a waiting consumer (after a push, or to let it see that the producer is done).
+  void wake() {
+    epoch_.fetch_add(1, std::memory_order_release);
+    epoch_.notify_all();
   }
 
   // Consumer: the oldest entry, if any.
@@ -55,6 +67,7 @@ class DropOldestQueue {
   const size_t cap_;
   alignas(64) std::atomic<uint64_t> head_{0};
   alignas(64) std::atomic<uint64_t> tail_{0};
+  alignas(64) std::atomic<uint32_t> epoch_{0};
 };
 
 // Slots not in use by anyone, handed back by consumers to the producer of a stage: a plain

@@ -101,15 +101,17 @@ void Pipeline::capture_loop() {
     slot = reclaimed ? *reclaimed : raw_slot_for_capture();
   }
   capture_done_ = true;
+  to_rectify_.wake();  // the rectifier may be waiting for a frame that will not come
 }
 
 void Pipeline::rectify_loop() {
   std::optional<uint32_t> spare;  // an output slot reclaimed from a dropped frame
   for (;;) {
+    const uint32_t seen = to_rectify_.epoch();
     const auto in = to_rectify_.pop();
     if (!in) {
       if (capture_done_.load()) break;
-      std::this_thread::sleep_for(std::chrono::microseconds(100));
+      to_rectify_.wait(seen);  // until the camera delivers (or stops)
       continue;
     }
     std::optional<uint32_t> out_slot = spare ? spare : out_free_.get();
@@ -133,6 +135,7 @@ void Pipeline::rectify_loop() {
     }
   }
   rectify_done_ = true;
+  to_publish_.wake();
 }
 
 void Pipeline::publish_frame(Out& o, uint64_t seq) {
@@ -162,10 +165,11 @@ void Pipeline::publish_frame(Out& o, uint64_t seq) {
 void Pipeline::publish_loop() {
   uint64_t seq = 0;
   for (;;) {
+    const uint32_t seen = to_publish_.epoch();
     const auto slot = to_publish_.pop();
     if (!slot) {
       if (rectify_done_.load()) break;
-      std::this_thread::sleep_for(std::chrono::microseconds(100));
+      to_publish_.wait(seen);
       continue;
     }
     Out& o = out_[*slot];
