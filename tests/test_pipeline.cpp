@@ -17,16 +17,7 @@
 #include "daemon/pipeline.hpp"
 #include "drivers/sim_source.hpp"
 
-// Every C++ allocation in this process is counted (the pipeline is all C++; LCM's C
-// transport copies messages with malloc, which the daemon cannot avoid and is not counted).
-static std::atomic<uint64_t> g_allocations{0};
-void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#include "tests/allocation_counter.hpp"  // every C++ allocation of this process, counted
 
 using namespace rsd;
 

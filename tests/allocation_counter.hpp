@@ -1,0 +1,34 @@
+// Counts every C++ heap allocation of the process (plain, array and aligned operator new).
+// Include from exactly one translation unit of a test or benchmark executable: it replaces the
+// global allocation functions. LCM's C transport copies messages with malloc, outside the
+// daemon's control, and is not counted.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <cstdlib>
+#include <new>
+
+inline std::atomic<uint64_t> g_allocations{0};
+
+namespace rsd::test {
+inline void* counted(std::size_t n, std::size_t align = 0) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  void* p = align ? std::aligned_alloc(align, (n + align - 1) / align * align) : std::malloc(n ? n : 1);
+  if (!p) throw std::bad_alloc();
+  return p;
+}
+}  // namespace rsd::test
+
+void* operator new(std::size_t n) { return rsd::test::counted(n); }
+void* operator new[](std::size_t n) { return rsd::test::counted(n); }
+void* operator new(std::size_t n, std::align_val_t a) { return rsd::test::counted(n, static_cast<std::size_t>(a)); }
+void* operator new[](std::size_t n, std::align_val_t a) { return rsd::test::counted(n, static_cast<std::size_t>(a)); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
