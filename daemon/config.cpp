@@ -99,7 +99,7 @@ Config load_config(const std::string& file) {
 std::string default_config_yaml() {
   return R"(# rsd configuration (every key shown with its default).
 source:
-  driver: sim                  # sim, aravis, v4l2 or libcamera
+  driver: sim                  # sim, aravis, v4l2, libcamera, replay (a recorded log) or lcm (frames over LCM)
   # camera: {width: 1280, height: 720, fx: 900, fy: 900, cx: 639.5, cy: 359.5, distortion: [0, 0, 0, 0]}
   # intrinsics_file: camchain.yaml   # or a Kalibr camchain / ROS camera_info file (intrinsics_camera: cam0)
   # The intrinsics of a real camera are required (camera or intrinsics_file).
@@ -156,6 +156,19 @@ source:
     line_delay_s: 0
     readout: top_to_bottom
     exposure_s: 0
+  replay:                      # a log from rsd --record, rsd-sim or lcm-logger (docs/replay.md)
+    file: ""                   # relative to this file; or rsd --replay LOG
+    speed: 1                   # 1: real time, N: N times faster, fast: no waiting and no drops
+    loop: false
+    channel: RSD_RAW           # bot_core.image_t raw frames with their row timing
+    velocity_channel: RSD_VELOCITY
+  lcm:                         # frames published by rsd-replay, lcm-logplayer or a camera node
+    url: tcpq://127.0.0.1:7700 # LCM's TCP queue (server: java -cp lcm.jar lcm.lcm.TCPService 7700)
+    allow_multicast: false
+    channel: RSD_RAW
+    velocity_channel: RSD_VELOCITY
+    open_timeout_s: 2          # wait this long for the first frame, then retry with backoff
+    fps: 30                    # frame rate when the frames do not carry their timing
 pipeline:
   raw_slots: 6                 # frame buffers allocated at start
   out_slots: 4

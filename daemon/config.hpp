@@ -24,6 +24,9 @@ struct Config {
   VelocityInputConfig velocity_input;  // pose channel, sensor-to-camera rotations, gyro-only
   std::string lcm_url = "memq://";
   Channels channels;
+  // rsd --record FILE: raw frames with their timing, velocity and outputs into one LCM log.
+  std::string record_file;
+  bool record_append = false;  // after a SIGHUP reload: continue the recording
 };
 
 // Throws drivers::ConfigError.

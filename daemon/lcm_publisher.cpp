@@ -36,6 +36,7 @@ LcmPublisher::LcmPublisher(const std::string& url, Channels channels, const driv
   health_.source.reserve(64);
   health_.source_state.reserve(64);
   buf_.resize(static_cast<size_t>(image_.getEncodedSize()) + 4096);
+  health_buf_.resize(4096);
 }
 
 LcmPublisher::~LcmPublisher() { lcm_destroy(lcm_); }
@@ -48,9 +49,16 @@ void LcmPublisher::set_meta(size_t index, const char* text) {
 }
 
 template <class Msg>
-void LcmPublisher::publish(const std::string& channel, const Msg& msg) {
-  const int len = msg.encode(buf_.data(), 0, static_cast<int>(buf_.size()));
-  if (len > 0) lcm_publish(lcm_, channel.c_str(), buf_.data(), static_cast<unsigned>(len));
+void LcmPublisher::publish(const std::string& channel, const Msg& msg, std::vector<uint8_t>& buf, bool record) {
+  const int len = msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  if (len <= 0) return;
+  lcm_publish(lcm_, channel.c_str(), buf.data(), static_cast<unsigned>(len));
+  if (record && record_) record_->write(channel.c_str(), drivers::wall_clock_us(), buf.data(), static_cast<size_t>(len));
+}
+
+void LcmPublisher::publish_encoded(const std::string& channel, const void* data, size_t size) {
+  lcm_publish(lcm_, channel.c_str(), data, static_cast<unsigned>(size));
+  if (record_) record_->write(channel.c_str(), drivers::wall_clock_us(), data, size);
 }
 
 void LcmPublisher::publish_image(bool raw, const dsp::ImageView& img, const ImageStamp& s) {
@@ -68,10 +76,10 @@ void LcmPublisher::publish_image(bool raw, const dsp::ImageView& img, const Imag
   std::snprintf(text, sizeof text, "%" PRId64, s.sequence);
   set_meta(4, text);
   set_meta(5, s.rectified ? "1" : "0");
-  publish(raw ? ch_.raw : ch_.image, image_);
+  publish(raw ? ch_.raw : ch_.image, image_, buf_, !raw);  // raw frames are recorded at capture
 }
 
-void LcmPublisher::publish_info() { publish(ch_.info, info_); }
-void LcmPublisher::publish_health() { publish(ch_.health, health_); }
+void LcmPublisher::publish_info() { publish(ch_.info, info_, buf_); }
+void LcmPublisher::publish_health() { publish(ch_.health, health_, health_buf_); }
 
 }  // namespace rsd::daemon

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "drivers/camera_source.hpp"
+#include "drivers/lcm_log.hpp"
 
 namespace rsd::daemon {
 
@@ -45,10 +46,15 @@ class LcmPublisher {
   rsd::health_t& health() { return health_; }
   void publish_health();
   lcm_t* handle() const { return lcm_; }
+  // rsd --record: every output (rectified image, frame info, health) is also written to this
+  // log, stamped with the wall clock; raw frames are the recorder's (daemon/recording_source).
+  void set_recorder(drivers::LcmLogWriter* log) { record_ = log; }
+  // Publishes an already encoded message (and records it, if recording).
+  void publish_encoded(const std::string& channel, const void* data, size_t size);
 
  private:
   template <class Msg>
-  void publish(const std::string& channel, const Msg& msg);
+  void publish(const std::string& channel, const Msg& msg, std::vector<uint8_t>& buf, bool record = true);
   void set_meta(size_t index, const char* text);
   lcm_t* lcm_;
   Channels ch_;
@@ -56,6 +62,8 @@ class LcmPublisher {
   rsd::frame_info_t info_;
   rsd::health_t health_;
   std::vector<uint8_t> buf_;
+  std::vector<uint8_t> health_buf_;  // health goes out from the service's thread, the rest from the publisher's
+  drivers::LcmLogWriter* record_ = nullptr;
 };
 
 }  // namespace rsd::daemon

@@ -34,7 +34,7 @@ void Pipeline::start() {
   while (out_free_.get()) {}
   for (uint32_t i = 0; i < cfg_.raw_slots; ++i) raw_free_.put(i);
   for (uint32_t i = 0; i < cfg_.out_slots; ++i) out_free_.put(i);
-  camera_lost_ = false;
+  camera_lost_ = end_of_stream_ = finished_ = false;
   capture_done_ = rectify_done_ = false;
   running_ = true;
   capture_ = std::thread([this] { capture_loop(); });
@@ -56,6 +56,10 @@ uint32_t Pipeline::raw_slot_for_capture() {
   for (;;) {
     if (auto s = raw_free_.get()) return *s;
     if (auto s = raw_free_late_.get()) return *s;
+    if (cfg_.lossless) {  // wait for the rectifier to return one
+      std::this_thread::sleep_for(std::chrono::microseconds(50));
+      continue;
+    }
     if (auto s = to_rectify_.reclaim_oldest()) {
       stats_.drops.fetch_add(1, std::memory_order_relaxed);
       return *s;
@@ -81,6 +85,13 @@ std::optional<uint32_t> push_dropping_oldest(DropOldestQueue& q, uint32_t slot, 
 
 }  // namespace
 
+// Queues a slot: dropping the oldest queued frame when full, or (lossless) waiting.
+std::optional<uint32_t> Pipeline::hand_over(DropOldestQueue& q, uint32_t slot) {
+  if (!cfg_.lossless) return push_dropping_oldest(q, slot, stats_.drops);
+  while (!q.push(slot)) std::this_thread::sleep_for(std::chrono::microseconds(50));
+  return std::nullopt;
+}
+
 void Pipeline::capture_loop() {
   uint32_t slot = raw_slot_for_capture();
   while (running_.load(std::memory_order_relaxed)) {
@@ -93,11 +104,14 @@ void Pipeline::capture_loop() {
       camera_lost_ = true;
       break;
     }
-    if (st == drivers::CaptureStatus::EndOfStream) break;
+    if (st == drivers::CaptureStatus::EndOfStream) {
+      end_of_stream_ = true;
+      break;
+    }
     if (st != drivers::CaptureStatus::Frame) continue;
     r.ready_ns = monotonic_ns();
     stats_.frames_in.fetch_add(1, std::memory_order_relaxed);
-    const auto reclaimed = push_dropping_oldest(to_rectify_, slot, stats_.drops);
+    const auto reclaimed = hand_over(to_rectify_, slot);
     slot = reclaimed ? *reclaimed : raw_slot_for_capture();
   }
   capture_done_ = true;
@@ -116,8 +130,11 @@ void Pipeline::rectify_loop() {
     }
     std::optional<uint32_t> out_slot = spare ? spare : out_free_.get();
     spare.reset();
-    while (!out_slot) {  // the publisher holds every output slot: drop its oldest
-      if ((out_slot = to_publish_.reclaim_oldest())) stats_.drops.fetch_add(1, std::memory_order_relaxed);
+    while (!out_slot) {  // the publisher holds every output slot: drop its oldest (or wait)
+      if (cfg_.lossless) {
+        std::this_thread::sleep_for(std::chrono::microseconds(50));
+        out_slot = out_free_.get();
+      } else if ((out_slot = to_publish_.reclaim_oldest())) stats_.drops.fetch_add(1, std::memory_order_relaxed);
       else if (!(out_slot = out_free_.get())) std::this_thread::yield();
     }
     Raw& r = raw_[*in];
@@ -128,7 +145,7 @@ void Pipeline::rectify_loop() {
     (o.result.rectified ? stats_.rectified : stats_.unrectified).fetch_add(1, std::memory_order_relaxed);
     o.raw_slot = cfg_.publish_raw ? static_cast<int>(*in) : -1;
     if (!cfg_.publish_raw) raw_free_.put(*in);  // else the publisher returns it
-    spare = push_dropping_oldest(to_publish_, *out_slot, stats_.drops);
+    spare = hand_over(to_publish_, *out_slot);
     if (spare && out_[*spare].raw_slot >= 0) {  // its raw frame goes back too
       raw_free_.put(static_cast<uint32_t>(out_[*spare].raw_slot));
       out_[*spare].raw_slot = -1;
@@ -186,6 +203,7 @@ void Pipeline::publish_loop() {
     stats_.frames_out.fetch_add(1, std::memory_order_relaxed);
     out_free_.put(*slot);
   }
+  if (end_of_stream_.load()) finished_ = true;
 }
 
 }  // namespace rsd::daemon

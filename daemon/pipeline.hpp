@@ -25,6 +25,10 @@ struct PipelineConfig {
   size_t out_slots = 4;
   size_t queue_depth = 2;
   bool publish_raw = false;
+  // Hand frames over without dropping: a stage waits for the next one instead (replaying a
+  // log as fast as possible, where every frame must come out for the outputs to be
+  // reproducible). A live camera keeps the default: it must never wait.
+  bool lossless = false;
   std::chrono::milliseconds capture_timeout{200};
 };
 
@@ -45,6 +49,8 @@ class Pipeline {
   // Camera loss seen by the capture thread (the service reconnects); cleared by start().
   bool camera_lost() const { return camera_lost_.load(); }
   std::string camera_error() const;
+  // The source reported the end of its stream and every frame has been published.
+  bool finished() const { return finished_.load(); }
 
  private:
   struct Raw {
@@ -63,6 +69,7 @@ class Pipeline {
   void rectify_loop();
   void publish_loop();
   uint32_t raw_slot_for_capture();
+  std::optional<uint32_t> hand_over(DropOldestQueue& q, uint32_t slot);
   void publish_frame(Out& o, uint64_t seq);
 
   PipelineConfig cfg_;
@@ -79,7 +86,7 @@ class Pipeline {
   PipelineStats stats_;
   LatencyStats latency_;
   std::atomic<bool> running_{false}, capture_done_{false}, rectify_done_{false};
-  std::atomic<bool> camera_lost_{false};
+  std::atomic<bool> camera_lost_{false}, end_of_stream_{false}, finished_{false};
   std::string camera_error_;  // written by the capture thread before camera_lost_ is set
   std::thread capture_, rectify_, publish_;
 };

@@ -4,6 +4,7 @@
 #include <memory>
 #include <thread>
 
+#include "daemon/recording_source.hpp"
 #include "daemon/systemd_notify.hpp"
 #include "daemon/velocity_input.hpp"
 
@@ -37,38 +38,97 @@ bool open_with_backoff(drivers::CameraSource& src, StopFlags& flags, SystemdNoti
 // the publisher and the rectifier are sized for it once.
 struct Session {
   const Config& cfg;
+  std::unique_ptr<drivers::LcmLogWriter> recorder;  // rsd --record (outlives its writers)
   std::unique_ptr<drivers::CameraSource> source;
+  std::unique_ptr<RecordingSource> recording;       // the source, recorded
   std::unique_ptr<LcmPublisher> pub;
   VelocityBuffer velocity;
   std::unique_ptr<VelocityInput> velocity_in;
   std::unique_ptr<FrameRectifier> rectifier;
   std::unique_ptr<Pipeline> pipeline;
+  std::vector<uint8_t> pose_buf = std::vector<uint8_t>(512);
   int reconnects = 0;
   // Counters of the pipelines before a reconnect: health and limits count since start.
   uint64_t in_before = 0, out_before = 0, drops_before = 0;
   uint64_t frames_out() const { return out_before + pipeline->stats().frames_out.load(); }
 
   Session(const Config& c, const SourceFactory& factory)
-      : cfg(c), source(factory ? factory(c) : make_source(c.source)), velocity(c.velocity_limits) {}
+      : cfg(c), source(factory ? factory(c) : make_source(c.source)), velocity(c.velocity_limits) {
+    if (!cfg.record_file.empty()) {
+      recorder = std::make_unique<drivers::LcmLogWriter>(cfg.record_file, cfg.record_append);
+      recording = std::make_unique<RecordingSource>(*source, *recorder, cfg.channels.raw);
+    }
+    // Before open(): the lcm source subscribes there. Poses are delivered from capture() only,
+    // after wire() has made the velocity input and the publisher.
+    if (drivers::MessageSource* m = messages(); m && !cfg.velocity_input.pose_channel.empty())
+      m->set_pose_message_sink(cfg.velocity_input.pose_channel, [this](const bot_core::pose_t& p) {
+        velocity_in->deliver(p);
+        const int len = p.encode(pose_buf.data(), 0, static_cast<int>(pose_buf.size()));  // sized once: fixed-size type
+        if (len > 0) pub->publish_encoded(cfg.velocity_input.pose_channel, pose_buf.data(), static_cast<size_t>(len));
+      });
+  }
+  drivers::CameraSource& active() { return recording ? static_cast<drivers::CameraSource&>(*recording) : *source; }
+  drivers::MessageSource* messages() const { return dynamic_cast<drivers::MessageSource*>(source.get()); }
+  drivers::ReplaySource* replay() const { return dynamic_cast<drivers::ReplaySource*>(source.get()); }
 
   // After the camera has opened: LCM, the velocity input and the rectifier.
   void wire() {
     pub = std::make_unique<LcmPublisher>(cfg.lcm_url, cfg.channels, source->format());
+    pub->set_recorder(recorder.get());
     velocity_in = std::make_unique<VelocityInput>(pub->handle(), cfg.velocity_channel, velocity, cfg.velocity_input);
-    lcm_t* lcm = pub->handle();
-    const std::string channel = cfg.velocity_channel;
-    source->set_velocity_sink([lcm, channel](const drivers::VelocitySample& s) { VelocityInput::publish(lcm, channel, s); });
+    // The source's own velocity goes into the buffer on the source's thread, before the frame
+    // it precedes (see VelocityInput::deliver), and out on LCM (and into the recording).
+    auto on_velocity = [this](const rsd::velocity_t& m) {
+      velocity_in->deliver(m);
+      uint8_t buf[128];
+      const int len = m.encode(buf, 0, sizeof buf);
+      if (len > 0) pub->publish_encoded(cfg.velocity_channel, buf, static_cast<size_t>(len));
+    };
+    velocity_in->set_recorder(recorder.get());
+    if (drivers::MessageSource* m = messages()) m->set_velocity_message_sink(on_velocity);
+    else source->set_velocity_sink([on_velocity](const drivers::VelocitySample& s) { on_velocity(VelocityInput::to_message(s)); });
     velocity_in->start();
   }
 
   void start_pipeline() {
-    rectifier = std::make_unique<FrameRectifier>(cfg.rectify, camera_model(cfg.source, source->format()), source->timing(),
-                                                 source->format());
-    pipeline = std::make_unique<Pipeline>(cfg.pipeline, *source, *rectifier, *pub, velocity);
-    source->start();
+    const drivers::MessageSource* m = messages();
+    const dsp::CameraModel cam =
+        camera_model(cfg.source, source->format(), m ? m->recorded_camera() : std::optional<dsp::CameraModel>());
+    if (recording) recording->set_camera(cam);
+    rectifier = std::make_unique<FrameRectifier>(cfg.rectify, cam, source->timing(), source->format());
+    PipelineConfig pc = cfg.pipeline;
+    if (replay() && replay()->config().speed <= 0) pc.lossless = true;  // every frame, reproducibly
+    pipeline = std::make_unique<Pipeline>(pc, active(), *rectifier, *pub, velocity);
+    active().start();
     pipeline->start();
   }
 };
+
+// "\rrsd: replay [#######.............]  35%  120 frames  84.2 fps" on stderr.
+void print_progress(const drivers::ReplaySource& r, double seconds) {
+  constexpr int kWidth = 30;
+  const double p = r.progress();
+  char bar[kWidth + 1];
+  for (int i = 0; i < kWidth; ++i) bar[i] = i < static_cast<int>(p * kWidth + 0.5) ? '#' : '.';
+  bar[kWidth] = '\0';
+  std::fprintf(stderr, "\rrsd: replay [%s] %3.0f%%  %llu frames  %.1f fps   ", bar, 100 * p,
+               static_cast<unsigned long long>(r.frames()), seconds > 0 ? static_cast<double>(r.frames()) / seconds : 0.0);
+}
+
+std::string replay_summary(const drivers::ReplaySource& r, double seconds) {
+  char text[512];
+  std::snprintf(text, sizeof text, "replayed %llu frames from %s in %.2f s (%.1f fps), %llu velocity messages",
+                static_cast<unsigned long long>(r.frames()), r.config().file.c_str(), seconds,
+                seconds > 0 ? static_cast<double>(r.frames()) / seconds : 0.0,
+                static_cast<unsigned long long>(r.velocity_messages()));
+  std::string s = text;
+  if (r.ignored()) s += ", " + std::to_string(r.ignored()) + " recorded outputs ignored";
+  if (r.passes()) s += ", looped " + std::to_string(r.passes()) + " times";
+  const drivers::LcmLogReader* rd = r.reader();
+  if (rd && rd->skipped_total()) s += "; skipped " + std::to_string(rd->skipped_total()) + " events: " + rd->skip_summary();
+  else s += "; nothing skipped";
+  return s;
+}
 
 void report_health(Session& s, const char* state, double dt, uint64_t& last_in, uint64_t& last_out, bool line,
                    SystemdNotify& sd) {
@@ -107,18 +167,25 @@ int run_service(const Config& cfg, const std::string&, StopFlags& flags, const R
   const auto deadline = limits.max_seconds > 0
                             ? Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limits.max_seconds))
                             : Clock::time_point::max();
-  if (!open_with_backoff(*s.source, flags, sd, deadline)) return 0;
+  if (!open_with_backoff(s.active(), flags, sd, deadline)) return 0;
   s.wire();
   s.start_pipeline();
   sd.ready();
   const auto t_start = Clock::now();
-  auto t_health = t_start;
+  auto t_health = t_start, t_progress = t_start;
   uint64_t last_in = 0, last_out = 0;
+  const bool progress = limits.progress && s.replay();
+  const bool line = limits.status_line && !progress;
   while (!flags.stop.load() && !flags.reload.load()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     sd.watchdog();
     const auto now = Clock::now();
     if (limits.max_frames && s.frames_out() >= limits.max_frames) break;
+    if (s.pipeline->finished()) break;  // a replay has played its log to the end
+    if (progress && now - t_progress >= std::chrono::milliseconds(200)) {
+      print_progress(*s.replay(), std::chrono::duration<double>(now - t_start).count());
+      t_progress = now;
+    }
     if (limits.max_seconds > 0 && now - t_start >= std::chrono::duration<double>(limits.max_seconds)) break;
     if (s.pipeline->camera_lost()) {  // reconnect: stop, reopen with backoff, restart
       std::fprintf(stderr, "\nrsd: camera lost: %s\n", s.pipeline->camera_error().c_str());
@@ -130,23 +197,40 @@ int run_service(const Config& cfg, const std::string&, StopFlags& flags, const R
       s.drops_before += s.pipeline->stats().drops.load();
       s.pub->health().source_state = "reconnecting";
       s.pub->publish_health();
-      if (!open_with_backoff(*s.source, flags, sd, deadline)) break;
+      if (!open_with_backoff(s.active(), flags, sd, deadline)) break;
       s.start_pipeline();
     }
     if (now - t_health >= std::chrono::seconds(1)) {
-      report_health(s, "streaming", std::chrono::duration<double>(now - t_health).count(), last_in, last_out,
-                    limits.status_line, sd);
+      report_health(s, "streaming", std::chrono::duration<double>(now - t_health).count(), last_in, last_out, line, sd);
       t_health = now;
     }
   }
   sd.stopping();
   s.pipeline->stop();  // flushes what is in flight
-  s.source->stop();
+  s.active().stop();
   s.velocity_in->stop();
+  const double seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
+  if (progress) print_progress(*s.replay(), seconds);
   report_health(s, "stopped", std::max(1e-3, std::chrono::duration<double>(Clock::now() - t_health).count()), last_in,
-                last_out, limits.status_line, sd);
-  if (limits.status_line) std::fprintf(stderr, "\n");
-  if (summary) *summary = {s.frames_out(), s.reconnects};
+                last_out, line, sd);
+  if (line || progress) std::fprintf(stderr, "\n");
+  RunSummary out;
+  out.frames_out = s.frames_out();
+  out.reconnects = s.reconnects;
+  out.seconds = seconds;
+  if (const drivers::ReplaySource* r = s.replay()) {
+    out.replayed = r->frames();
+    out.skipped = r->reader() ? r->reader()->skipped_total() : 0;
+    out.skips = r->reader() ? r->reader()->skip_summary() : std::string();
+    if (limits.status_line) std::fprintf(stderr, "rsd: %s\n", replay_summary(*r, seconds).c_str());
+  }
+  if (s.recorder) {
+    s.recorder->flush();
+    if (limits.status_line)
+      std::fprintf(stderr, "rsd: recorded %llu events to %s\n", static_cast<unsigned long long>(s.recorder->events()),
+                   s.recorder->path().c_str());
+  }
+  if (summary) *summary = out;
   return 0;
 }
 

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 
 #include "daemon/config.hpp"
 
@@ -16,12 +17,17 @@ struct RunLimits {
   uint64_t max_frames = 0;  // 0: run until stopped
   double max_seconds = 0;   // 0: run until stopped
   bool status_line = true;
+  bool progress = false;  // a progress bar for replays (instead of the status line)
 };
 
 // What a run did, for tests and the exit message.
 struct RunSummary {
   uint64_t frames_out = 0;
   int reconnects = 0;
+  // Replays: frames read from the log, events skipped (and why), seconds taken.
+  uint64_t replayed = 0, skipped = 0;
+  std::string skips;
+  double seconds = 0;
 };
 
 // Makes the camera source; the default builds the configured driver. Tests substitute one.

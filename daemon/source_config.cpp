@@ -107,6 +107,30 @@ void read_libcamera(YamlMap m, drivers::LibcameraConfig& l) {
   m.finish();
 }
 
+void read_replay(YamlMap m, drivers::ReplayConfig& r) {
+  std::filesystem::path file = m.text("file", r.file);
+  if (!file.empty() && file.is_relative()) file = std::filesystem::path(m.file()).parent_path() / file;
+  r.file = file.string();
+  if (m.has("speed") && !drivers::parse_speed(m.text("speed", ""), r.speed))
+    m.fail("speed", "must be a positive factor (1: real time) or fast");
+  r.loop = m.boolean("loop", r.loop);
+  r.channel = m.text("channel", r.channel);
+  r.velocity_channel = m.text("velocity_channel", r.velocity_channel);
+  m.finish();
+}
+
+void read_lcm_source(YamlMap m, drivers::LcmSourceConfig& l) {
+  l.url = m.text("url", l.url);
+  l.allow_multicast = m.boolean("allow_multicast", l.allow_multicast);
+  if (l.url.rfind("udpm://", 0) == 0 && !l.allow_multicast)
+    m.fail("url", "is multicast; set allow_multicast: true to use it (this keeps tests off the network)");
+  l.channel = m.text("channel", l.channel);
+  l.velocity_channel = m.text("velocity_channel", l.velocity_channel);
+  l.open_timeout_s = positive(m, "open_timeout_s", l.open_timeout_s);
+  l.fallback_fps = positive(m, "fps", l.fallback_fps);
+  m.finish();
+}
+
 // Intrinsics (and a rolling-shutter line delay, if Kalibr estimated one) from a Kalibr
 // camchain or ROS camera_info file, relative paths taken from the configuration's directory.
 void read_intrinsics_file(YamlMap& m, SourceConfig& s) {
@@ -125,12 +149,16 @@ void read_intrinsics_file(YamlMap& m, SourceConfig& s) {
 
 void read_source(YamlMap m, SourceConfig& s) {
   s.driver = m.text("driver", s.driver);
-  if (s.driver != "sim" && s.driver != "aravis" && s.driver != "v4l2" && s.driver != "libcamera")
-    m.fail("driver", "must be sim, aravis, v4l2 or libcamera, not '" + s.driver + "'");
+  if (s.driver != "sim" && s.driver != "aravis" && s.driver != "v4l2" && s.driver != "libcamera" &&
+      s.driver != "replay" && s.driver != "lcm")
+    m.fail("driver", "must be sim, aravis, v4l2, libcamera, replay or lcm, not '" + s.driver + "'");
   if (m.has("sim")) read_sim(m.map("sim"), s.sim);
   if (m.has("aravis")) read_aravis(m.map("aravis"), s.aravis);
   if (m.has("v4l2")) read_v4l2(m.map("v4l2"), s.v4l2);
   if (m.has("libcamera")) read_libcamera(m.map("libcamera"), s.libcamera);
+  if (m.has("replay")) read_replay(m.map("replay"), s.replay);
+  if (s.driver == "replay" && s.replay.file.empty()) m.fail("driver", "'replay' needs replay.file: the LCM log to play");
+  if (m.has("lcm")) read_lcm_source(m.map("lcm"), s.lcm);
   if (m.has("camera")) {
     dsp::CameraModel none;  // no defaults for a real camera: size and focal length are required
     none.width = none.height = 0;
@@ -141,7 +169,8 @@ void read_source(YamlMap m, SourceConfig& s) {
     if (s.camera) m.fail("intrinsics_file", "and source.camera both give intrinsics: keep one");
     read_intrinsics_file(m, s);
   }
-  if (s.driver != "sim" && !s.camera)
+  // Replayed and received frames may carry their intrinsics (rsd --record writes them).
+  if (s.driver != "sim" && s.driver != "replay" && s.driver != "lcm" && !s.camera)
     m.fail("driver", "'" + s.driver + "' needs the camera's intrinsics: add source.camera {width, height, fx, fy, cx, cy, distortion} or source.intrinsics_file (Kalibr camchain or ROS camera_info)");
   m.finish();
 }
@@ -150,12 +179,18 @@ std::unique_ptr<drivers::CameraSource> make_source(const SourceConfig& s) {
   if (s.driver == "aravis") return std::make_unique<drivers::AravisSource>(s.aravis);
   if (s.driver == "v4l2") return std::make_unique<drivers::V4l2Source>(s.v4l2);
   if (s.driver == "libcamera") return std::make_unique<drivers::LibcameraSource>(s.libcamera);
+  if (s.driver == "replay") return std::make_unique<drivers::ReplaySource>(s.replay);
+  if (s.driver == "lcm") return std::make_unique<drivers::LcmSource>(s.lcm);
   return std::make_unique<drivers::SimSource>(s.sim);
 }
 
-dsp::CameraModel camera_model(const SourceConfig& s, const drivers::FrameFormat& f) {
+dsp::CameraModel camera_model(const SourceConfig& s, const drivers::FrameFormat& f,
+                              const std::optional<dsp::CameraModel>& recorded) {
   if (s.driver == "sim") return s.sim.camera;
-  const dsp::CameraModel& c = *s.camera;
+  if (!s.camera && !recorded)
+    throw std::runtime_error("source '" + s.driver + "': the frames carry no intrinsics (only rsd --record writes them): "
+                             "add source.camera or source.intrinsics_file");
+  const dsp::CameraModel& c = s.camera ? *s.camera : *recorded;
   if (c.width != f.width || c.height != f.height)
     throw std::runtime_error("source.camera is " + std::to_string(c.width) + "x" + std::to_string(c.height) +
                              " but the camera delivers " + std::to_string(f.width) + "x" + std::to_string(f.height));

@@ -7,7 +7,9 @@
 #include <string>
 
 #include "drivers/aravis_source.hpp"
+#include "drivers/lcm_source.hpp"
 #include "drivers/libcamera_source.hpp"
+#include "drivers/replay_source.hpp"
 #include "drivers/sim_source.hpp"
 #include "drivers/v4l2_source.hpp"
 #include "drivers/yaml_map.hpp"
@@ -15,11 +17,13 @@
 namespace rsd::daemon {
 
 struct SourceConfig {
-  std::string driver = "sim";  // sim, aravis, v4l2, libcamera
+  std::string driver = "sim";  // sim, aravis, v4l2, libcamera, replay, lcm
   drivers::SimSourceConfig sim;
   drivers::AravisConfig aravis;
   drivers::V4l2Config v4l2;
   drivers::LibcameraConfig libcamera;
+  drivers::ReplayConfig replay;
+  drivers::LcmSourceConfig lcm;
   std::optional<dsp::CameraModel> camera;  // intrinsics of a real camera (source.camera)
 };
 
@@ -29,7 +33,8 @@ void read_source(drivers::YamlMap m, SourceConfig& s);
 std::unique_ptr<drivers::CameraSource> make_source(const SourceConfig& s);
 
 // The intrinsics the rectifier uses, for the format the camera delivers: the configured ones
-// (sizes must match), or the simulated camera's own.
-dsp::CameraModel camera_model(const SourceConfig& s, const drivers::FrameFormat& f);
+// (sizes must match), the simulated camera's own, or (replay, lcm) those the frames carry.
+dsp::CameraModel camera_model(const SourceConfig& s, const drivers::FrameFormat& f,
+                              const std::optional<dsp::CameraModel>& recorded = std::nullopt);
 
 }  // namespace rsd::daemon

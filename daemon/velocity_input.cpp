@@ -1,7 +1,6 @@
 #include "daemon/velocity_input.hpp"
 
 #include <bot_core/pose_t.hpp>
-#include <rsd/velocity_t.hpp>
 
 #include <Eigen/LU>
 #include <chrono>
@@ -33,32 +32,67 @@ void VelocityInput::push(int64_t utime, const Eigen::Matrix3d& r, const double* 
   s.t_ns = utime * 1000;
   s.has_linear = has_linear && !cfg_.gyro_only;
   for (int i = 0; i < 3; ++i) s.w[i] = wc[i], s.v[i] = s.has_linear ? vc[i] : 0.0;
+  std::lock_guard<std::mutex> lock(writer_);  // the buffer has one writer at a time
   buffer_.push(s);  // rejects and counts insane samples
 }
 
 void VelocityInput::on_velocity(const lcm_recv_buf_t* rbuf, const char*, void* user) {
   auto* self = static_cast<VelocityInput*>(user);
+  if (self->source_feeds_.load()) {
+    self->ignored_.fetch_add(1);
+    return;
+  }
+  if (self->record_) self->record_->write(self->channel_.c_str(), drivers::wall_clock_us(), rbuf->data, rbuf->data_size);
   rsd::velocity_t m;
   if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) {
     self->malformed_.fetch_add(1);
     return;
   }
+  self->accept(m);
+}
+
+void VelocityInput::accept(const rsd::velocity_t& m) {
   if (m.frame == rsd::velocity_t::FRAME_CAMERA)
-    self->push(m.utime, Eigen::Matrix3d::Identity(), m.angular_velocity, m.linear_velocity, m.has_linear);
+    push(m.utime, Eigen::Matrix3d::Identity(), m.angular_velocity, m.linear_velocity, m.has_linear);
   else if (m.frame == rsd::velocity_t::FRAME_IMU)
-    self->push(m.utime, self->cfg_.imu_to_camera, m.angular_velocity, m.linear_velocity, m.has_linear);
+    push(m.utime, cfg_.imu_to_camera, m.angular_velocity, m.linear_velocity, m.has_linear);
   else
-    self->malformed_.fetch_add(1);  // a frame this version does not know
+    malformed_.fetch_add(1);  // a frame this version does not know
+}
+
+void VelocityInput::deliver(const rsd::velocity_t& m) {
+  source_feeds_.store(true);
+  accept(m);
+}
+
+rsd::velocity_t VelocityInput::to_message(const drivers::VelocitySample& s) {
+  rsd::velocity_t m{};
+  m.utime = s.t_ns / 1000;
+  m.frame = rsd::velocity_t::FRAME_CAMERA;
+  for (int i = 0; i < 3; ++i) m.angular_velocity[i] = s.w[i], m.linear_velocity[i] = s.v[i];
+  m.has_linear = s.has_linear;
+  return m;
 }
 
 void VelocityInput::on_pose(const lcm_recv_buf_t* rbuf, const char*, void* user) {
   auto* self = static_cast<VelocityInput*>(user);
+  if (self->source_feeds_pose_.load()) {
+    self->ignored_.fetch_add(1);
+    return;
+  }
+  if (self->record_)
+    self->record_->write(self->cfg_.pose_channel.c_str(), drivers::wall_clock_us(), rbuf->data, rbuf->data_size);
   bot_core::pose_t m;
   if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) {
     self->malformed_.fetch_add(1);
     return;
   }
   self->push(m.utime, self->cfg_.body_to_camera, m.rotation_rate, m.vel, true);
+}
+
+void VelocityInput::deliver(const bot_core::pose_t& m) {
+  source_feeds_pose_.store(true);
+  push(m.utime, cfg_.body_to_camera, m.rotation_rate, m.vel, true);
 }
 
 void VelocityInput::start() {
@@ -76,11 +110,7 @@ void VelocityInput::stop() {
 }
 
 void VelocityInput::publish(lcm_t* lcm, const std::string& channel, const drivers::VelocitySample& s) {
-  rsd::velocity_t m{};
-  m.utime = s.t_ns / 1000;
-  m.frame = rsd::velocity_t::FRAME_CAMERA;
-  for (int i = 0; i < 3; ++i) m.angular_velocity[i] = s.w[i], m.linear_velocity[i] = s.v[i];
-  m.has_linear = s.has_linear;
+  const rsd::velocity_t m = to_message(s);
   uint8_t buf[128];
   const int len = m.encode(buf, 0, sizeof buf);
   if (len > 0) lcm_publish(lcm, channel.c_str(), buf, static_cast<unsigned>(len));

@@ -10,13 +10,17 @@
 #pragma once
 
 #include <lcm/lcm.h>
+#include <bot_core/pose_t.hpp>
+#include <rsd/velocity_t.hpp>
 
 #include <Eigen/Core>
 #include <atomic>
+#include <mutex>
 #include <string>
 #include <thread>
 
 #include "daemon/velocity_buffer.hpp"
+#include "drivers/lcm_log.hpp"
 
 namespace rsd::daemon {
 
@@ -42,10 +46,27 @@ class VelocityInput {
   uint64_t malformed() const { return malformed_.load(); }
   // Encodes and publishes a sample as rsd.velocity_t (the simulated camera's IMU).
   static void publish(lcm_t* lcm, const std::string& channel, const drivers::VelocitySample& s);
+  // A sample as the rsd.velocity_t message it is published as (FRAME_CAMERA, utime in us).
+  static rsd::velocity_t to_message(const drivers::VelocitySample& s);
+
+  // Velocity from the camera source itself (the simulator's truth, a replayed log, the lcm
+  // source), delivered synchronously on the source's thread before the frame it precedes:
+  // which samples a frame sees no longer depends on thread timing, so a replay reproduces a
+  // live run. Decoded exactly as a message on the channel would be. Once a source delivers,
+  // messages on the velocity channel are ignored (counted): they are the source's own
+  // samples echoed by LCM, and two time lines cannot share the buffer.
+  void deliver(const rsd::velocity_t& m);
+  // The same for bot_core.pose_t on the pose channel (a replayed log's, the lcm source's).
+  void deliver(const bot_core::pose_t& m);
+  uint64_t ignored() const { return ignored_.load(); }
+  // rsd --record: velocity and pose messages received over LCM (an IMU, a localiser) are
+  // written to the recording as they arrive, unless they are a source's echo.
+  void set_recorder(drivers::LcmLogWriter* log) { record_ = log; }
 
  private:
   static void on_velocity(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
   static void on_pose(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
+  void accept(const rsd::velocity_t& m);
   void push(int64_t utime, const Eigen::Matrix3d& r, const double* w, const double* v, bool has_linear);
   lcm_t* lcm_;
   std::string channel_;
@@ -54,7 +75,10 @@ class VelocityInput {
   lcm_subscription_t* sub_ = nullptr;
   lcm_subscription_t* pose_sub_ = nullptr;
   std::atomic<bool> running_{false};
-  std::atomic<uint64_t> malformed_{0};
+  std::atomic<uint64_t> malformed_{0}, ignored_{0};
+  std::atomic<bool> source_feeds_{false}, source_feeds_pose_{false};
+  drivers::LcmLogWriter* record_ = nullptr;
+  std::mutex writer_;  // the source's thread and the LCM thread (pose_t) both push
   std::thread thread_;
 };
 

@@ -1,13 +1,15 @@
 // Model-discrepancy diagnosis of an observation recording (../shared/formats/recording-v1.md):
 // how badly the nominal model fits (robust baseline), where the mismatch lives (located
-// signals), and which named effects explain it (fitted with Ceres, chosen by BIC forward
-// selection with a backward check), with a held-out comparison on frames the fit did not see.
-// Pure computation: the rsd-diagnose tool reads the files and writes the JSON and report.
+// signals), and which named effects explain it (gross errors searched globally first, then
+// robust fits and BIC forward selection with a backward check), with a held-out comparison
+// on frames the fit did not see. Pure computation: the rsd-diagnose tool reads the files and
+// writes the JSON and report. Method and measured accuracy: docs/diagnosis.md.
 #pragma once
 
 #include <string>
 #include <vector>
 
+#include "dsp/diagnosis_fit.hpp"
 #include "dsp/diagnosis_model.hpp"
 
 namespace rsd::dsp {
@@ -25,9 +27,11 @@ constexpr double kOutlierSigmas = 5.0;
 RobustStats robust_stats(const std::vector<Eigen::Vector2d>& residuals);
 
 // Where the residual lives: `strength` is the share (0..1) of the inlier residual energy a
-// signal's pattern explains.
+// signal's pattern explains. Signals: image_velocity, row, radius, image_scale, time_trend,
+// time, angular_rate (gyro recordings), depth (trajectory recordings); see
+// dsp/diagnosis_locate.cpp. Uses at most 3000 of `idx`.
 struct Located {
-  std::string signal;  // image_velocity, row, radius, image_scale, time
+  std::string signal;
   double strength;
   std::string detail;
 };
@@ -51,26 +55,29 @@ struct Diagnosis {
   std::vector<Located> located;
   std::vector<NamedEffect> effects;  // in order of selection; empty = fits within noise
   ModelParams fitted;
-  double sigma_px = 0;  // the noise scale the fits and BIC used
-  double final_rms_px = 0;
+  double sigma_px = 0;  // the residual sigma the fits and BIC used (noise_floor_px when known)
+  double final_rms_px = 0;  // over the usable observations
   double heldout_baseline_rms_px = 0, heldout_final_rms_px = 0;
   int heldout_observations = 0;
+  // The per-coordinate residual RMS that noise alone gives: noise_px for landmarks,
+  // sqrt(2) noise_px for matches (the transfer carries frame_a's noise); 0 when the recording
+  // states no noise.
+  double noise_floor_px = 0;
+  // Matches spanning a gyro gap longer than DiagnosisModel::max_gyro_gap (at the gross time
+  // offset) cannot be predicted: they are left out of fit, final and held-out RMS.
+  int unusable = 0;
+  std::vector<int> heldout_indices;    // observations (DiagnosisModel order) left out of the fit
+  std::vector<std::string> candidates;  // the effects considered for this recording's kinds
+  ModelParams gross;                    // where the global search put offset and focal length
 };
 
 struct DiagnosisOptions {
-  int heldout_every = 5;         // every n-th frame is held out of the fit (0: none)
-  double min_bic_drop = 10;      // "very strong" evidence on the usual BIC scale
-  int max_iterations = 30;
+  int heldout_every = 5;          // every n-th frame is held out of the fit (0: none)
+  double min_bic_drop = 10;       // "very strong" evidence on the usual BIC scale
+  int max_iterations = 30;        // final fits
+  int screen_observations = 5000;  // candidates are fitted on this many fitting observations
+  int num_threads = 1;            // reserved: the solver runs on the caller's thread
 };
-
-// Fits the parameters in `free` (starting at `start`), residuals in units of sigma under a
-// Huber loss. Returns the fitted parameters.
-ModelParams fit_params(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& start,
-                       const ParamMask& free, double sigma_px, int max_iterations = 30);
-// Global search of the time offset (others held at `p`): a coarse scan over the offsets that
-// keep the frames inside the motion data (at most +-1 s around p's), then a fine one.
-double scan_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p,
-                        double sigma_px);
 
 Diagnosis diagnose(const Recording& rec, const DiagnosisOptions& opt = {});
 

@@ -1,15 +1,17 @@
 // rsd-diagnose: does a recording (../shared/formats/recording-v1.md) agree with its nominal
 // model, and if not, which of the spec's named effects explain the difference? Writes the
-// spec's diagnosis JSON and a Markdown report; the analysis is dsp/diagnosis.hpp.
+// spec's diagnosis JSON and a report (index.md with uncertainties and PLplot figures,
+// diagnosis_report.hpp); the analysis is dsp/diagnosis.hpp.
 #include <CLI/CLI.hpp>
 
-#include <filesystem>
+#include <chrono>
 #include <fstream>
 #include <iostream>
 #include <sstream>
 #include <string>
 
 #include "cli_util.hpp"
+#include "diagnosis_report.hpp"
 #include "dsp/diagnosis.hpp"
 #include "recording_v1.hpp"
 
@@ -21,9 +23,12 @@ namespace {
 constexpr const char* kDescription =
     "rsd-diagnose: compares an observation recording (rsd-recording/1) with the nominal model its\n"
     "recording.yaml states, says where the residual lives, and names the effects that explain it\n"
-    "(rolling_shutter, time_offset, readout_direction, lens_distortion, focal_length), fitted\n"
-    "robustly and chosen by BIC. Every 5th frame is held out of the fit and used to compare the\n"
-    "nominal and the final model.\n\n"
+    "(rolling_shutter, readout_direction, time_offset, clock_drift, lens_distortion,\n"
+    "focal_length, gyro_bias, lever_arm), fitted robustly and chosen by BIC. Every 5th frame\n"
+    "is held out of the fit and used to compare the nominal and the final model. With --report,\n"
+    "REPORT_DIR gets index.md (verdict, effects with 1-sigma uncertainties, held-out RMS\n"
+    "before and after, located signals) and PNG figures of the residual against row, radius\n"
+    "and time and over the image, before and after.\n\n"
     "Example: rsd-diagnose rec/ --json diagnosis.json --report report/\n"
     "Exit status: 0 on success (whatever the verdict), 2 on bad arguments, 1 on other errors\n"
     "(an unreadable recording is named by file:line:col).";
@@ -61,27 +66,6 @@ std::string diagnosis_json(const Diagnosis& d) {
   return o.str();
 }
 
-std::string report_markdown(const std::string& dir, const Diagnosis& d) {
-  std::ostringstream o;
-  o << "# Diagnosis of `" << dir << "`\n\n"
-    << "Baseline (nominal model): RMS " << format_number(d.baseline.rms_px) << " px over " << d.baseline.observations
-    << " observations, " << d.baseline.outliers << " outliers (beyond " << kOutlierSigmas << " robust sigmas).\n"
-    << "Noise sigma used: " << format_number(d.sigma_px) << " px.\n\n## Located\n\n";
-  if (d.located.empty()) o << "No structured residual.\n";
-  for (const Located& l : d.located) o << "- `" << l.signal << "` (" << format_number(l.strength, 3) << "): " << l.detail << "\n";
-  o << "\n## Effects\n\n";
-  if (d.effects.empty()) o << "None: the nominal model fits within the noise.\n";
-  for (const NamedEffect& e : d.effects) {
-    o << "- **" << e.name << "**:";
-    for (const EffectParam& p : e.params) o << " " << p.name << " = " << (p.text.empty() ? format_number(p.value, 6) : p.text);
-    o << ". " << e.explains << ". RMS " << format_number(e.rms_px) << " px, BIC drop " << format_number(e.bic_drop) << ".\n";
-  }
-  o << "\n## Result\n\nFinal RMS " << format_number(d.final_rms_px) << " px. Held out (" << d.heldout_observations
-    << " observations): nominal " << format_number(d.heldout_baseline_rms_px) << " px, final "
-    << format_number(d.heldout_final_rms_px) << " px.\n";
-  return o.str();
-}
-
 void write_file(const std::string& path, const std::string& text) {
   std::ofstream f(path);
   f << text;
@@ -98,14 +82,21 @@ int run(int argc, char** argv) {
       ->check(int_range(0, 1000))->capture_default_str();
   if (const auto rc = parse_command_line(app, argc, argv)) return *rc;
   require_writable(o.json, "--json");
+  std::cerr << "rsd-diagnose: reading " << o.dir << "\n";
   const Recording rec = read_recording(o.dir);
+  // The model is built first so that an unsupported recording fails before the long part.
+  const DiagnosisModel model(rec);
+  std::cerr << "rsd-diagnose: diagnosing " << model.size() << " observations...\n";
   DiagnosisOptions opt;
   opt.heldout_every = o.heldout_every;
+  const auto t0 = std::chrono::steady_clock::now();
   const Diagnosis d = diagnose(rec, opt);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::cerr << "rsd-diagnose: diagnosed in " << format_number(secs, 3) << " s\n";
   write_file(o.json, diagnosis_json(d));
   if (!o.report.empty()) {
-    std::filesystem::create_directories(o.report);
-    write_file((std::filesystem::path(o.report) / "index.md").string(), report_markdown(o.dir, d));
+    std::cerr << "rsd-diagnose: writing the report to " << o.report << "\n";
+    write_report(o.report, {o.dir, &model, &d, o.heldout_every, secs});
   }
   std::cout << "baseline RMS " << format_number(d.baseline.rms_px) << " px; effects:";
   for (const NamedEffect& e : d.effects) std::cout << " " << e.name;

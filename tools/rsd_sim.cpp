@@ -2,7 +2,7 @@
 //
 //   rsd-sim recording SCENARIO.yaml OUTDIR   observation recording (recording-v1)
 //   rsd-sim frames SCENARIO.yaml OUTDIR      rendered PNG frames of the scenario's target
-//   rsd-sim lcm SCENARIO.yaml OUT.lcmlog     raw frames + true velocity as an LCM log
+//   rsd-sim lcm SCENARIO.yaml OUT.lcmlog     raw frames + true velocity (+ body pose) as an LCM log
 //   rsd-sim figure1 OUTDIR                   the paper's Figure 1 (rotating checkerboard)
 #include <chrono>
 #include <cmath>
@@ -30,6 +30,7 @@ struct FrameOptions {
   int supersample = 2;
   int blur_samples = 1;
   double exposure_s = 0;
+  bool pose = false;  // lcm: also the body trajectory as bot_core.pose_t
 };
 
 int run_recording(const std::string& scenario, const std::string& out) {
@@ -136,15 +137,20 @@ int run_lcm(const std::string& scenario, const std::string& out, const FrameOpti
   std::vector<double> times;
   for (size_t k = 0; k < rig.frames; ++k) times.push_back(rig.sim.rec.frames[k].t);
   const tools::SimLogSpec spec{out, rig.timing, 200.0};
+  tools::SimPoseLog poses;
+  if (o.pose) poses.poses = rig.sim.rec.trajectory;  // world = the target's frame, motion clock
   tools::write_sim_lcm_log(spec, times, rig.truth.cam.width, rig.truth.cam.height,
                            o.rgb ? dsp::PixelFormat::Rgb8 : dsp::PixelFormat::Mono8,
                            [&](size_t k, const dsp::ImageView& v) {
                              rig.renderer->render(rig.scene, *rig.motion, times[k], v);
                              progress(k, times.size());
                            },
-                           *rig.motion);
+                           *rig.motion, poses);
   std::printf("rsd-sim: wrote %zu raw frames on %s and the true velocity at 200 Hz on %s to %s\n", times.size(),
               tools::kRawChannel, tools::kVelocityChannel, out.c_str());
+  if (o.pose)
+    std::printf("  and %zu body poses at %.4g Hz on %s\n", poses.poses.size(), rig.sc.sim.trajectory_rate_hz,
+                tools::kPoseChannel);
   return 0;
 }
 
@@ -202,6 +208,9 @@ int main(int argc, char** argv) {
   lcmlog->add_option("--noise", fo.noise, "pixel noise sigma in grey levels")->check(CLI::NonNegativeNumber);
   lcmlog->add_option("--exposure", fo.exposure_s, "row exposure in s (motion blur)")->check(CLI::NonNegativeNumber);
   lcmlog->add_option("--blur-samples", fo.blur_samples, "time samples over the exposure")->check(CLI::Range(1, 64));
+  lcmlog->add_flag("--pose", fo.pose,
+                   "also write the body's pose (world = the target's frame, motion clock) as bot_core.pose_t on RSD_POSE, "
+                   "like motion capture (rsd-extract's landmarks input)");
   auto* fig = app.add_subcommand("figure1", "render the paper's Figure 1 (four PNGs)");
   fig->add_option("outdir", out, "output directory (created)")->required();
   if (const auto rc = tools::parse_command_line(app, argc, argv)) return *rc;

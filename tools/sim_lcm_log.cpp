@@ -3,10 +3,12 @@
 #include "drivers/lcm_image.hpp"
 
 #include <bot_core/image_t.hpp>
+#include <bot_core/pose_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 #include <rsd/velocity_t.hpp>
 
 #include <charconv>
+#include <limits>
 #include <cmath>
 #include <stdexcept>
 
@@ -42,6 +44,25 @@ void write(lcm::LogFile& log, const std::string& path, const char* channel, int6
   if (log.writeEvent(&ev) != 0) throw std::runtime_error(path + ": cannot write LCM event (disk full?)");
 }
 
+// Pose sample i as bot_core.pose_t; rates by differences over the neighbouring samples.
+bot_core::pose_t pose_message(const std::vector<dsp::PoseSample>& poses, size_t i) {
+  const dsp::PoseSample& s = poses[i];
+  const dsp::PoseSample& lo = poses[i > 0 ? i - 1 : i];
+  const dsp::PoseSample& hi = poses[i + 1 < poses.size() ? i + 1 : i];
+  bot_core::pose_t m{};
+  m.utime = to_utime(s.t);
+  const Eigen::Quaterniond q = s.q.normalized();
+  m.orientation[0] = q.w(), m.orientation[1] = q.x(), m.orientation[2] = q.y(), m.orientation[3] = q.z();
+  Eigen::Vector3d w = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero();
+  if (hi.t > lo.t) {
+    const Eigen::Matrix3d R = q.toRotationMatrix();
+    w = dsp::log_so3(lo.q.normalized().toRotationMatrix().transpose() * hi.q.normalized().toRotationMatrix()) / (hi.t - lo.t);
+    v = R.transpose() * (hi.p - lo.p) / (hi.t - lo.t);
+  }
+  for (int k = 0; k < 3; ++k) m.pos[k] = s.p[k], m.vel[k] = v[k], m.rotation_rate[k] = w[k], m.accel[k] = 0;
+  return m;
+}
+
 }  // namespace
 
 void camera_velocity(const dsp::CameraMotion& motion, double t, Eigen::Vector3d& w, Eigen::Vector3d& v) {
@@ -63,12 +84,19 @@ void camera_velocity(const dsp::CameraMotion& motion, double t, Eigen::Vector3d&
 
 void write_sim_lcm_log(const SimLogSpec& spec, const std::vector<double>& frame_times, int width, int height,
                        dsp::PixelFormat format, const std::function<void(size_t, const dsp::ImageView&)>& render,
-                       const dsp::CameraMotion& motion) {
+                       const dsp::CameraMotion& motion, const SimPoseLog& poses) {
   lcm::LogFile log(spec.path, "w");
   if (!log.good()) throw std::runtime_error(spec.path + ": cannot open LCM log for writing");
   dsp::Image frame(width, height, format);
   const double period = 1.0 / spec.velocity_rate_hz;
   double next_velocity = frame_times.empty() ? 0 : frame_times.front() - 0.1;
+  size_t next_pose = 0;
+  auto write_poses_until = [&](double t_end) {
+    for (; next_pose < poses.poses.size() && poses.poses[next_pose].t <= t_end; ++next_pose) {
+      const bot_core::pose_t m = pose_message(poses.poses, next_pose);
+      write(log, spec.path, poses.channel.c_str(), m.utime, m);
+    }
+  };
   for (size_t k = 0; k < frame_times.size(); ++k) {
     // Velocity messages up to this frame's end of readout, in time order with the frames.
     const double frame_end = frame_times[k] + spec.timing.frame_readout_s();
@@ -82,6 +110,7 @@ void write_sim_lcm_log(const SimLogSpec& spec, const std::vector<double>& frame_
       vel.has_linear = 1;
       write(log, spec.path, kVelocityChannel, vel.utime, vel);
     }
+    write_poses_until(frame_end);
     render(k, frame.view());
     bot_core::image_t img{};
     img.utime = to_utime(frame_times[k]);
@@ -100,6 +129,7 @@ void write_sim_lcm_log(const SimLogSpec& spec, const std::vector<double>& frame_
     // The log event is stamped when the last row has been read, as a live camera would be.
     write(log, spec.path, kRawChannel, to_utime(frame_end), img);
   }
+  write_poses_until(std::numeric_limits<double>::infinity());  // the trajectory's tail
 }
 
 }  // namespace rsd::tools

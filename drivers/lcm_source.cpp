@@ -1,0 +1,132 @@
+#include "drivers/lcm_source.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "drivers/sim_source.hpp"  // monotonic_ns
+
+namespace rsd::drivers {
+
+LcmSource::LcmSource(LcmSourceConfig cfg) : cfg_(std::move(cfg)) {}
+
+LcmSource::~LcmSource() {
+  if (lcm_) lcm_destroy(lcm_);
+}
+
+void LcmSource::skip(LogSkip r, const std::string& detail) {
+  if (++skips_[static_cast<size_t>(r)] <= 3)
+    std::fprintf(stderr, "rsd: lcm source %s: message skipped: %s: %s\n", cfg_.url.c_str(), to_string(r), detail.c_str());
+}
+
+void LcmSource::open() {
+  if (!lcm_) {
+    if (cfg_.url.rfind("udpm://", 0) == 0 && !cfg_.allow_multicast)
+      throw std::runtime_error("lcm source: '" + cfg_.url + "' is multicast; set allow_multicast: true to use it");
+    // Kept across reopen attempts: messages that arrive meanwhile wait in LCM's queue.
+    lcm_ = lcm_create(cfg_.url.c_str());
+    if (!lcm_) throw CameraError("lcm source: cannot open '" + cfg_.url + "'");
+    lcm_subscribe(lcm_, cfg_.channel.c_str(), &LcmSource::on_image, this);
+    lcm_subscribe(lcm_, cfg_.velocity_channel.c_str(), &LcmSource::on_velocity, this);
+    if (!pose_channel_.empty()) lcm_subscribe(lcm_, pose_channel_.c_str(), &LcmSource::on_pose, this);
+  }
+  if (first_.format.width > 0) return;  // reopened after a loss: the format is known
+  opening_ = true;
+  got_frame_ = false;
+  early_velocity_.clear();
+  early_pose_.clear();
+  const int64_t until = monotonic_ns() + static_cast<int64_t>(cfg_.open_timeout_s * 1e9);
+  while (!got_frame_ && monotonic_ns() < until)
+    if (lcm_handle_timeout(lcm_, 100) < 0) break;
+  opening_ = false;
+  if (!got_frame_)
+    throw CameraError("lcm source: no frame on '" + cfg_.channel + "' at " + cfg_.url + " within " +
+                      std::to_string(cfg_.open_timeout_s) + " s");
+  timing_ = row_timing(first_, cfg_.fallback_fps);
+}
+
+void LcmSource::on_image(const lcm_recv_buf_t* rbuf, const char* channel, void* user) {
+  auto* self = static_cast<LcmSource*>(user);
+  const auto* data = static_cast<const uint8_t*>(rbuf->data);
+  DecodeStatus st = check_image_t(data, rbuf->data_size, self->why_);
+  if (st == DecodeStatus::Ok) st = decode_checked(data, rbuf->data_size, self->img_, self->why_);
+  if (st != DecodeStatus::Ok) return self->skip(to_skip(st), std::string(channel) + ": " + self->why_);
+  if (!parse_frame(self->img_, self->frame_, self->why_))
+    return self->skip(LogSkip::Undecodable, std::string(channel) + ": " + self->why_);
+  if (self->opening_) {
+    self->first_ = self->frame_;
+    const FrameFormat& f = self->first_.format;
+    self->pending_image_ = dsp::Image(f.width, f.height, f.format);
+    copy_pixels(self->img_, self->pending_image_.view());
+    self->pending_meta_ = self->frame_.meta;
+    self->pending_ = self->got_frame_ = true;
+    return;
+  }
+  const FrameFormat& f = self->frame_.format;
+  if (!self->target_ || f.width != self->first_.format.width || f.height != self->first_.format.height ||
+      f.format != self->first_.format.format)
+    return self->skip(LogSkip::Undecodable, std::string(channel) + ": frame size or format changed");
+  copy_pixels(self->img_, *self->target_);
+  *self->target_meta_ = self->frame_.meta;
+  self->got_frame_ = true;
+}
+
+void LcmSource::on_velocity(const lcm_recv_buf_t* rbuf, const char* channel, void* user) {
+  auto* self = static_cast<LcmSource*>(user);
+  rsd::velocity_t m;
+  const DecodeStatus st = decode_checked(static_cast<const uint8_t*>(rbuf->data), rbuf->data_size, m, self->why_);
+  if (st != DecodeStatus::Ok) return self->skip(to_skip(st), std::string(channel) + ": " + self->why_);
+  // Before the first frame the daemon has not connected its sink yet: keep them (bounded).
+  if (self->opening_ || self->pending_) {
+    if (self->early_velocity_.size() < 4096) self->early_velocity_.push_back(m);
+    return;
+  }
+  self->deliver_velocity(m);
+}
+
+void LcmSource::on_pose(const lcm_recv_buf_t* rbuf, const char* channel, void* user) {
+  auto* self = static_cast<LcmSource*>(user);
+  bot_core::pose_t m;
+  const DecodeStatus st = decode_checked(static_cast<const uint8_t*>(rbuf->data), rbuf->data_size, m, self->why_);
+  if (st != DecodeStatus::Ok) return self->skip(to_skip(st), std::string(channel) + ": " + self->why_);
+  // Before the first frame only the newest matters for a 0.1 s velocity window: keep few.
+  if (self->opening_ || self->pending_) {
+    if (self->early_pose_.size() < 4096) self->early_pose_.push_back(m);
+    return;
+  }
+  self->deliver_pose(m);
+}
+
+CaptureStatus LcmSource::capture(const dsp::ImageView& dst, FrameMeta& meta, std::chrono::milliseconds timeout) {
+  if (pending_) {  // the frame open() received, after the velocity that came before it
+    pending_ = false;
+    for (const auto& v : early_velocity_) deliver_velocity(v);
+    for (const auto& p : early_pose_) deliver_pose(p);
+    early_velocity_.clear();
+    early_pose_.clear();
+    const dsp::ImageView src = pending_image_.view();
+    const size_t row = static_cast<size_t>(src.width) * dsp::bytes_per_pixel(src.format);
+    for (int y = 0; y < src.height; ++y) std::memcpy(dst.row(y), src.row(y), row);
+    meta = pending_meta_;
+    return CaptureStatus::Frame;
+  }
+  target_ = &dst;
+  target_meta_ = &meta;
+  got_frame_ = false;
+  const int64_t until = monotonic_ns() + std::chrono::duration_cast<std::chrono::nanoseconds>(timeout).count();
+  // One message per lcm_handle: the velocity before a frame is delivered before it.
+  while (!got_frame_) {
+    const int64_t left_ms = (until - monotonic_ns()) / 1000000;
+    if (left_ms <= 0) break;
+    if (lcm_handle_timeout(lcm_, static_cast<int>(left_ms)) < 0) {
+      // A log being read has ended (file:// provider), or the connection failed.
+      target_ = nullptr;
+      if (cfg_.url.rfind("file://", 0) == 0) return CaptureStatus::EndOfStream;
+      throw CameraError("lcm source: " + cfg_.url + " stopped delivering");
+    }
+  }
+  target_ = nullptr;
+  return got_frame_ ? CaptureStatus::Frame : CaptureStatus::Timeout;
+}
+
+}  // namespace rsd::drivers

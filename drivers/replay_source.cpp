@@ -1,0 +1,177 @@
+#include "drivers/replay_source.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <thread>
+
+#include "drivers/sim_source.hpp"  // monotonic_ns
+
+namespace rsd::drivers {
+
+bool ReplayPacer::wait(int64_t log_us, std::chrono::milliseconds timeout) {
+  if (speed_ <= 0) return true;
+  const int64_t now = monotonic_ns();
+  if (!started_) {
+    started_ = true;
+    log0_us_ = log_us;
+    wall0_ns_ = now;
+    return true;
+  }
+  const int64_t due = wall0_ns_ + static_cast<int64_t>(static_cast<double>(log_us - log0_us_) * 1000.0 / speed_);
+  const int64_t limit = std::chrono::duration_cast<std::chrono::nanoseconds>(timeout).count();
+  if (due - now > limit) {
+    std::this_thread::sleep_for(timeout);
+    return false;
+  }
+  if (due > now) std::this_thread::sleep_for(std::chrono::nanoseconds(due - now));
+  return true;
+}
+
+bool parse_speed(const std::string& text, double& speed) {
+  if (text == "fast" || text == "max") return speed = 0, true;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || *end != '\0' || !(v > 0) || !std::isfinite(v)) return false;
+  speed = v;
+  return true;
+}
+
+ReplaySource::ReplaySource(ReplayConfig cfg) : cfg_(std::move(cfg)), pacer_(cfg_.speed) {}
+
+bool ReplaySource::ignored_channel(const std::string& c) const {
+  return std::find(cfg_.ignore.begin(), cfg_.ignore.end(), c) != cfg_.ignore.end();
+}
+
+void ReplaySource::open() {
+  // A separate, silent reader finds the first usable frame (and the second, for the frame
+  // rate of logs that do not record it); the replay's own reader reports what it skips.
+  LcmLogReader probe(cfg_.file);
+  probe.set_message_handler({});
+  LogEvent ev;
+  std::optional<RecordedFrame> first, second;
+  uint64_t events = 0;
+  while ((!first || (!first->frame_rate_hz && !second)) && probe.next(ev)) {
+    ++events;
+    if (ev.channel != cfg_.channel) continue;
+    std::string why;
+    if (check_image_t(ev.data.data(), ev.data.size(), why) != DecodeStatus::Ok) continue;
+    if (decode_checked(ev.data.data(), ev.data.size(), img_, why) != DecodeStatus::Ok) continue;
+    RecordedFrame f;
+    if (!parse_frame(img_, f, why)) continue;
+    (first ? second : first) = f;
+  }
+  if (!first)
+    throw std::runtime_error(cfg_.file + ": no usable raw frame (bot_core.image_t) on channel '" + cfg_.channel + "' in " +
+                             std::to_string(events) + " events" +
+                             (probe.skipped_total() ? "; skipped " + probe.skip_summary() : std::string()));
+  first_ = *first;
+  double fps = cfg_.fallback_fps;
+  if (second && second->meta.first_row_ns > first->meta.first_row_ns)
+    fps = 1e9 / static_cast<double>(second->meta.first_row_ns - first->meta.first_row_ns);
+  timing_ = row_timing(first_, fps);
+  reader_ = std::make_unique<LcmLogReader>(cfg_.file);
+  if (cfg_.quiet_skips) reader_->set_message_handler({});
+}
+
+void ReplaySource::start() {
+  reader_->rewind();
+  pacer_.reset();
+  pending_ = false;
+  frames_this_pass_ = 0;
+}
+
+double ReplaySource::progress() const {
+  if (!reader_ || reader_->size() == 0) return 0;
+  return std::min(1.0, static_cast<double>(position_.load(std::memory_order_relaxed)) / static_cast<double>(reader_->size()));
+}
+
+CaptureStatus ReplaySource::capture(const dsp::ImageView& dst, FrameMeta& meta, std::chrono::milliseconds timeout) {
+  for (;;) {
+    if (!pending_) {
+      if (!reader_->next(ev_)) {
+        if (!cfg_.loop || frames_this_pass_ == 0) return CaptureStatus::EndOfStream;
+        // Again from the start, later by the log's length plus one frame period, so that
+        // frame and velocity times keep increasing.
+        offset_ns_ += last_frame_ns_ - first_frame_ns_ + static_cast<int64_t>(1e9 / timing_.frame_rate_hz);
+        ts_offset_us_ += last_ts_us_ - first_ts_us_ + static_cast<int64_t>(1e6 / timing_.frame_rate_hz);
+        reader_->rewind();
+        frames_this_pass_ = 0;
+        ++passes_;
+        continue;
+      }
+      pending_ = true;
+      position_.store(reader_->position(), std::memory_order_relaxed);
+      if (frames_ == 0 && passes_ == 0 && first_ts_us_ == 0) first_ts_us_ = ev_.timestamp_us;
+      last_ts_us_ = std::max(last_ts_us_, ev_.timestamp_us);
+    }
+    const bool frame = ev_.channel == cfg_.channel, velocity = ev_.channel == cfg_.velocity_channel;
+    const bool pose = !pose_channel_.empty() && ev_.channel == pose_channel_;
+    if ((frame || velocity || pose) && !pacer_.wait(ev_.timestamp_us + ts_offset_us_, timeout)) return CaptureStatus::Timeout;
+    pending_ = false;
+    if (frame) {
+      if (take_frame(dst, meta)) return CaptureStatus::Frame;
+    } else if (velocity) {
+      take_velocity();
+    } else if (pose) {
+      take_pose();
+    } else if (ignored_channel(ev_.channel)) {
+      ++ignored_;
+    } else {
+      reader_->skip(LogSkip::UnknownChannel, ev_.offset, "channel '" + ev_.channel + "'");
+    }
+  }
+}
+
+bool ReplaySource::take_frame(const dsp::ImageView& dst, FrameMeta& meta) {
+  DecodeStatus st = check_image_t(ev_.data.data(), ev_.data.size(), why_);
+  if (st == DecodeStatus::Ok) st = decode_checked(ev_.data.data(), ev_.data.size(), img_, why_);
+  if (st != DecodeStatus::Ok) {
+    reader_->skip(to_skip(st), ev_.offset, "channel '" + ev_.channel + "': " + why_);
+    return false;
+  }
+  if (!parse_frame(img_, frame_, why_)) {
+    reader_->skip(LogSkip::Undecodable, ev_.offset, "channel '" + ev_.channel + "': " + why_);
+    return false;
+  }
+  if (frame_.format.width != first_.format.width || frame_.format.height != first_.format.height ||
+      frame_.format.format != first_.format.format) {
+    reader_->skip(LogSkip::Undecodable, ev_.offset,
+                  "frame of " + std::to_string(frame_.format.width) + "x" + std::to_string(frame_.format.height) +
+                      " in a log that started with " + std::to_string(first_.format.width) + "x" +
+                      std::to_string(first_.format.height));
+    return false;
+  }
+  copy_pixels(img_, dst);
+  meta = frame_.meta;
+  if (frames_this_pass_ == 0 && passes_ == 0) first_frame_ns_ = meta.first_row_ns;
+  last_frame_ns_ = std::max(last_frame_ns_, meta.first_row_ns);
+  meta.first_row_ns += offset_ns_;
+  frames_.fetch_add(1, std::memory_order_relaxed);
+  ++frames_this_pass_;
+  return true;
+}
+
+void ReplaySource::take_pose() {
+  bot_core::pose_t m;
+  const DecodeStatus st = decode_checked(ev_.data.data(), ev_.data.size(), m, why_);
+  if (st != DecodeStatus::Ok) {
+    reader_->skip(to_skip(st), ev_.offset, "channel '" + ev_.channel + "': " + why_);
+    return;
+  }
+  m.utime += offset_ns_ / 1000;
+  deliver_pose(m);
+}
+
+void ReplaySource::take_velocity() {
+  rsd::velocity_t m;
+  const DecodeStatus st = decode_checked(ev_.data.data(), ev_.data.size(), m, why_);
+  if (st != DecodeStatus::Ok) {
+    reader_->skip(to_skip(st), ev_.offset, "channel '" + ev_.channel + "': " + why_);
+    return;
+  }
+  m.utime += offset_ns_ / 1000;
+  deliver_velocity(m);
+}
+
+}  // namespace rsd::drivers

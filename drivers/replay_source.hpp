@@ -1,0 +1,100 @@
+// The replay source: an LCM log (rsd --record, rsd-sim, lcm-logger) played into the pipeline
+// as if it were a live camera. Raw frames (bot_core.image_t on `channel`) become captures;
+// velocity (rsd.velocity_t on `velocity_channel`) is delivered in log order, before the
+// frames that follow it, so the velocity the rectifier sees at each frame is the same on
+// every replay; so are bot_core.pose_t messages on the daemon's pose channel, if it has one
+// (set_pose_message_sink). Recorded outputs (rectified images, frame info, health) are ignored; other
+// channels and damaged events are skipped and counted (drivers/lcm_log.hpp).
+//
+// Pacing follows the events' timestamps: speed 1 is real time, N is N times faster, 0 ("fast")
+// does not wait at all (the daemon then hands frames over without dropping any).
+#pragma once
+
+#include <bot_core/image_t.hpp>
+
+#include <atomic>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "drivers/lcm_log.hpp"
+#include "drivers/message_source.hpp"
+#include "drivers/recorded_frame.hpp"
+
+namespace rsd::drivers {
+
+struct ReplayConfig {
+  std::string file;
+  double speed = 1.0;  // 1: real time; N: N x; 0: as fast as possible
+  bool loop = false;   // start again at the end (times continue, shifted by the log's length)
+  std::string channel = "RSD_RAW";
+  std::string velocity_channel = "RSD_VELOCITY";
+  // Channels rsd itself records (outputs): skipped without counting them as unknown.
+  std::vector<std::string> ignore = {"RSD_RECT", "RSD_FRAME_INFO", "RSD_HEALTH"};
+  double fallback_fps = 30;  // frame rate when the log does not say and has one frame only
+  bool quiet_skips = false;  // count skips without printing them
+};
+
+// Sleeps until a log time, scaled: the first time seen maps to now.
+class ReplayPacer {
+ public:
+  explicit ReplayPacer(double speed = 1.0) : speed_(speed) {}
+  void reset() { started_ = false; }
+  // Waits until the event at `log_us` is due, at most `timeout`; true when due.
+  bool wait(int64_t log_us, std::chrono::milliseconds timeout);
+  bool fast() const { return speed_ <= 0; }
+
+ private:
+  double speed_;
+  bool started_ = false;
+  int64_t log0_us_ = 0, wall0_ns_ = 0;
+};
+
+// Parses "fast" / "max" (0) or a positive factor; false otherwise.
+bool parse_speed(const std::string& text, double& speed);
+
+class ReplaySource final : public MessageSource {
+ public:
+  explicit ReplaySource(ReplayConfig cfg);
+  std::string name() const override { return "replay"; }
+  // Reads the log up to its first usable raw frame for the format, timing and intrinsics.
+  // Throws std::runtime_error (not CameraError: retrying cannot help) naming the file.
+  void open() override;
+  FrameFormat format() const override { return first_.format; }
+  dsp::RowTiming timing() const override { return timing_; }
+  void start() override;
+  CaptureStatus capture(const dsp::ImageView& dst, FrameMeta& meta, std::chrono::milliseconds timeout) override;
+  void stop() override {}
+  std::optional<dsp::CameraModel> recorded_camera() const override { return first_.camera; }
+
+  const ReplayConfig& config() const { return cfg_; }
+  // For a progress bar and the closing summary (read from another thread: approximate).
+  double progress() const;
+  uint64_t frames() const { return frames_.load(std::memory_order_relaxed); }
+  uint64_t ignored() const { return ignored_; }
+  uint64_t passes() const { return passes_; }
+  const LcmLogReader* reader() const { return reader_.get(); }
+
+ private:
+  bool take_frame(const dsp::ImageView& dst, FrameMeta& meta);
+  void take_velocity();
+  void take_pose();
+  bool ignored_channel(const std::string& c) const;
+  ReplayConfig cfg_;
+  RecordedFrame first_;
+  dsp::RowTiming timing_;
+  std::unique_ptr<LcmLogReader> reader_;
+  LogEvent ev_;
+  bool pending_ = false;
+  ReplayPacer pacer_;
+  bot_core::image_t img_;
+  RecordedFrame frame_;
+  std::string why_;
+  // Read by the service's thread for the progress bar while the capture thread writes them.
+  std::atomic<uint64_t> frames_{0}, position_{0};
+  uint64_t frames_this_pass_ = 0, ignored_ = 0, passes_ = 0;
+  int64_t first_frame_ns_ = 0, last_frame_ns_ = 0, offset_ns_ = 0, ts_offset_us_ = 0, last_ts_us_ = 0, first_ts_us_ = 0;
+  std::vector<std::string> unknown_seen_;
+};
+
+}  // namespace rsd::drivers

@@ -1,0 +1,474 @@
+// rsd-extract: an LCM recording (raw frames plus gyro or a trajectory) -> an observation
+// recording (../shared/formats/recording-v1.md) that rsd-diagnose reads. The matches kind comes
+// from feature tracking between consecutive frames (tools/feature_tracks.hpp), the landmarks
+// kind from detecting a checkerboard or AprilGrid (tools/target_observations.hpp). The nominal
+// model is the user's (--nominal / --intrinsics and the timing options); see docs/extract.md.
+#include <CLI/CLI.hpp>
+#include <bot_core/image_t.hpp>
+#include <bot_core/pose_t.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <opencv2/imgproc.hpp>
+#include <rsd/velocity_t.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli_util.hpp"
+#include "drivers/intrinsics_file.hpp"
+#include "drivers/yaml_map.hpp"
+#include "feature_tracks.hpp"
+#include "frame_sources.hpp"
+#include "recording_v1.hpp"
+#include "target_observations.hpp"
+
+using namespace rsd;
+using namespace rsd::tools;
+
+namespace {
+
+constexpr const char* kDescription =
+    "rsd-extract: turns an LCM log of raw frames (bot_core.image_t) plus motion into an observation\n"
+    "recording (rsd-recording/1) for rsd-diagnose.\n"
+    "  matches kind:   features tracked between consecutive frames; motion = the angular velocity\n"
+    "                  of rsd.velocity_t (camera or IMU axes) as gyro.csv.\n"
+    "  landmarks kind: a checkerboard or AprilGrid detected in every frame (--target); motion = the\n"
+    "                  body pose of bot_core.pose_t (world = the target's frame) as trajectory.csv.\n"
+    "The nominal model is yours: intrinsics from --nominal (recording.yaml's camera/timing/motion\n"
+    "keys) or --intrinsics (Kalibr camchain / ROS camera_info). Timing precedence: options, then\n"
+    "--nominal, then the intrinsics file (Kalibr line_delay, timeshift_cam_imu), then the log's\n"
+    "metadata (line_delay_ns, readout), then global shutter. The frame rate defaults to the log's\n"
+    "median frame interval. To test whether a sensor is really what a simulation assumed, state\n"
+    "that assumption, e.g. --assume-global-shutter.\n\n"
+    "Example:\n"
+    "  rsd-extract run.lcmlog rec/ --nominal nominal.yaml --assume-global-shutter \\\n"
+    "      --target checkerboard:9x7:0.05 && rsd-diagnose rec/ --json diagnosis.json\n"
+    "Exit status: 0 on success, 2 on bad arguments, 1 on other errors. See docs/extract.md.";
+
+struct Options {
+  std::string log, out, nominal, intrinsics, intrinsics_camera, kind = "auto", target;
+  std::string image_channel = "RSD_RAW", velocity_channel = "RSD_VELOCITY", pose_channel = "RSD_POSE";
+  bool global_shutter = false;
+  std::optional<double> line_delay_s, frame_rate_hz, time_offset_s, noise_px;
+  std::string readout, imu_to_camera, lever_arm;
+  TrackOptions track;
+};
+
+// ---------------------------------------------------------------- pass 1: the log's contents
+
+struct FrameMeta {
+  double t;                              // first row's capture time, s
+  std::optional<double> line_delay_s;    // metadata line_delay_ns
+  std::optional<dsp::Readout> readout;   // metadata readout
+  int width, height;
+};
+
+struct LogScan {
+  std::vector<FrameMeta> frames;
+  std::vector<dsp::GyroSample> gyro;
+  std::optional<int> gyro_frame;  // rsd::velocity_t::FRAME_*, the one all samples share
+  std::vector<dsp::PoseSample> poses;
+  std::map<std::string, int> channels;  // every channel with its event count (for errors)
+  int malformed = 0;
+};
+
+std::string meta(const bot_core::image_t& m, const std::string& key) {
+  for (const auto& md : m.metadata)
+    if (md.key == key) return std::string(md.value.begin(), md.value.end());
+  return {};
+}
+
+FrameMeta frame_meta(const bot_core::image_t& m, const std::string& where) {
+  FrameMeta f{m.utime * 1e-6, std::nullopt, std::nullopt, m.width, m.height};
+  // The first row's capture time; without the key, utime is taken to be it.
+  if (const std::string s = meta(m, "frame_utime"); !s.empty()) {
+    const auto v = parse_number(s);
+    if (!v) throw std::runtime_error(where + ": metadata frame_utime '" + s + "' is not a number");
+    f.t = *v * 1e-6;
+  }
+  if (const std::string s = meta(m, "line_delay_ns"); !s.empty()) {
+    const auto v = parse_number(s);
+    if (!v || *v < 0) throw std::runtime_error(where + ": metadata line_delay_ns '" + s + "' is not a non-negative number");
+    f.line_delay_s = *v * 1e-9;
+  }
+  if (const std::string s = meta(m, "readout"); !s.empty()) {
+    dsp::Readout r;
+    if (!dsp::parse_readout(s, r)) throw std::runtime_error(where + ": metadata readout '" + s + "' is not top_to_bottom or bottom_to_top");
+    f.readout = r;
+  }
+  return f;
+}
+
+void add_velocity(const lcm::LogEvent& ev, LogScan& s, const std::string& where) {
+  rsd::velocity_t m{};
+  if (m.decode(ev.data, 0, ev.datalen) < 0 ||
+      (m.frame != rsd::velocity_t::FRAME_CAMERA && m.frame != rsd::velocity_t::FRAME_IMU)) {
+    ++s.malformed;  // not an rsd.velocity_t, or a frame this version does not know
+    return;
+  }
+  if (s.gyro_frame && *s.gyro_frame != m.frame)
+    throw std::runtime_error(where + ": velocity frame changes between camera and IMU axes within the log");
+  s.gyro_frame = m.frame;
+  const Eigen::Vector3d w(m.angular_velocity[0], m.angular_velocity[1], m.angular_velocity[2]);
+  if (!w.allFinite()) return void(++s.malformed);
+  s.gyro.push_back({m.utime * 1e-6, w});
+}
+
+void add_pose(const lcm::LogEvent& ev, LogScan& s) {
+  bot_core::pose_t m{};
+  if (m.decode(ev.data, 0, ev.datalen) < 0) return void(++s.malformed);
+  const Eigen::Quaterniond q(m.orientation[0], m.orientation[1], m.orientation[2], m.orientation[3]);
+  const Eigen::Vector3d p(m.pos[0], m.pos[1], m.pos[2]);
+  if (!p.allFinite() || !q.coeffs().allFinite() || q.norm() < 0.5) return void(++s.malformed);
+  s.poses.push_back({m.utime * 1e-6, p, q.normalized()});
+}
+
+LogScan scan_log(const Options& o) {
+  lcm::LogFile log(o.log, "r");
+  if (!log.good()) throw UsageError("LOG: '" + o.log + "' is not a readable LCM log");
+  LogScan s;
+  int event = 0;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    ++event;
+    ++s.channels[ev->channel];
+    const std::string where = o.log + ": event " + std::to_string(event) + " on " + ev->channel;
+    if (ev->channel == o.image_channel) {
+      bot_core::image_t m;
+      if (m.decode(ev->data, 0, ev->datalen) < 0) throw std::runtime_error(where + ": not a bot_core.image_t");
+      s.frames.push_back(frame_meta(m, where));
+      if (s.frames.back().width != s.frames.front().width || s.frames.back().height != s.frames.front().height)
+        throw std::runtime_error(where + ": frame is " + std::to_string(m.width) + "x" + std::to_string(m.height) + ", the first was " +
+                                 std::to_string(s.frames.front().width) + "x" + std::to_string(s.frames.front().height));
+    } else if (ev->channel == o.velocity_channel) {
+      add_velocity(*ev, s, where);
+    } else if (ev->channel == o.pose_channel) {
+      add_pose(*ev, s);
+    }
+  }
+  if (event == 0) throw UsageError("LOG: '" + o.log + "' holds no LCM events (not an LCM log, or empty)");
+  // Motion may be logged out of order (several publishers): recording-v1 wants it ordered.
+  std::stable_sort(s.gyro.begin(), s.gyro.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+  std::stable_sort(s.poses.begin(), s.poses.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+  return s;
+}
+
+std::string channel_list(const LogScan& s) {
+  std::string list;
+  for (const auto& [name, n] : s.channels) list += (list.empty() ? "" : ", ") + name + " (" + std::to_string(n) + ")";
+  return list;
+}
+
+// ---------------------------------------------------------------- the nominal model
+
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+Eigen::Matrix3d rotation(const std::vector<double>& r, const std::string& what) {
+  const Eigen::Matrix3d R = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(r.data());
+  if ((R * R.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-6 || R.determinant() < 0)
+    throw UsageError(what + ": not a rotation matrix (row-major, orthonormal, determinant +1)");
+  return R;
+}
+
+// What the user says the camera is, with where each value came from (printed on stderr).
+struct Nominal {
+  dsp::NominalModel model;
+  bool have_camera = false;
+  std::optional<Eigen::Matrix3d> imu_to_camera;
+  std::vector<std::string> notes;
+};
+
+void read_nominal_timing(drivers::YamlMap t, Nominal& n, bool& line_delay_given) {
+  n.model.frame_rate_hz = t.number("frame_rate_hz", n.model.frame_rate_hz);
+  if (t.has("line_delay_s")) line_delay_given = true;
+  n.model.time.line_delay_s = t.number("line_delay_s", n.model.time.line_delay_s);
+  if (t.has("readout") && !dsp::parse_readout(t.text("readout", ""), n.model.time.readout))
+    t.fail("readout", "must be top_to_bottom or bottom_to_top");
+  n.model.time.time_offset_s = t.number("time_offset_s", n.model.time.time_offset_s);
+  n.model.time.drift_ppm = t.number("drift_ppm", n.model.time.drift_ppm);
+  if (n.model.time.line_delay_s < 0) t.fail("line_delay_s", "must not be negative");
+  t.finish();
+}
+
+// --nominal: recording.yaml's camera, timing and motion keys; a whole recording.yaml is
+// accepted (its other keys are ignored), so a simulator's header can serve as the nominal.
+void read_nominal_file(const std::string& file, Nominal& n, bool& line_delay_given) {
+  drivers::YamlMap root = drivers::YamlMap::load(file);
+  if (root.has("camera")) {
+    drivers::YamlMap c = root.map("camera");
+    if (!c.has("fx")) c.fail("fx", "is missing (the nominal focal length, pixels)");
+    n.model.cam = drivers::read_camera_section(c, n.model.cam);
+    n.have_camera = true;
+  }
+  if (root.has("timing")) read_nominal_timing(root.map("timing"), n, line_delay_given);
+  if (root.has("motion")) {
+    drivers::YamlMap m = root.map("motion");
+    if (m.has("imu_to_camera")) n.imu_to_camera = rotation(m.numbers("imu_to_camera", 9), file + ": motion.imu_to_camera");
+    if (m.has("lever_arm_m")) {
+      const auto l = m.numbers("lever_arm_m", 3);
+      n.model.lever_arm = Eigen::Vector3d(l[0], l[1], l[2]);
+    }
+    m.text("kind", ""), m.text("file", "");  // a recording.yaml's own files: not ours to follow
+    m.finish();
+  }
+  if (root.has("observations")) root.map("observations");
+  root.text("format", ""), root.text("frames", ""), root.number("noise_px", 0.0);
+  root.finish();
+}
+
+// The options, highest precedence, over what the files and the log said.
+void apply_options(const Options& o, Nominal& n, std::string& line_delay_from) {
+  if (o.frame_rate_hz) n.model.frame_rate_hz = *o.frame_rate_hz;
+  if (o.time_offset_s) n.model.time.time_offset_s = *o.time_offset_s;
+  if (!o.readout.empty() && !dsp::parse_readout(o.readout, n.model.time.readout))
+    throw UsageError("--readout: expected top_to_bottom or bottom_to_top, got '" + o.readout + "'");
+  if (o.line_delay_s) n.model.time.line_delay_s = *o.line_delay_s, line_delay_from = "--line-delay";
+  if (o.global_shutter) n.model.time.line_delay_s = 0, line_delay_from = "--assume-global-shutter";
+  if (!o.lever_arm.empty()) n.model.lever_arm = *parse_vec3(o.lever_arm);
+  if (!o.imu_to_camera.empty()) {
+    const std::string expected = "--imu-to-camera: expected nine comma-separated numbers, got '" + o.imu_to_camera + "'";
+    std::vector<double> r;
+    std::stringstream in(o.imu_to_camera);
+    for (std::string x; std::getline(in, x, ',');) {
+      const auto v = parse_number(x);
+      if (!v) throw UsageError(expected);
+      r.push_back(*v);
+    }
+    if (r.size() != 9) throw UsageError(expected);
+    n.imu_to_camera = rotation(r, "--imu-to-camera");
+  }
+}
+
+Nominal nominal_model(const Options& o, const LogScan& s) {
+  Nominal n;
+  const FrameMeta& f0 = s.frames.front();
+  n.model.cam.width = f0.width, n.model.cam.height = f0.height;
+  n.model.cam.cx = 0.5 * (f0.width - 1), n.model.cam.cy = 0.5 * (f0.height - 1);
+  std::vector<double> dt;
+  for (size_t k = 1; k < s.frames.size(); ++k) dt.push_back(s.frames[k].t - s.frames[k - 1].t);
+  if (!dt.empty() && median(dt) > 0) n.model.frame_rate_hz = 1.0 / median(dt);
+  std::string line_delay_from = "global shutter (nothing says otherwise)";
+  bool line_delay_given = false;
+  // Lowest precedence first: the log's metadata, then the intrinsics file, the nominal file, options.
+  if (f0.line_delay_s) n.model.time.line_delay_s = *f0.line_delay_s, line_delay_from = "the log's line_delay_ns metadata";
+  if (f0.readout) n.model.time.readout = *f0.readout;
+  if (!o.intrinsics.empty()) {
+    const drivers::Intrinsics in = drivers::load_intrinsics(o.intrinsics, o.intrinsics_camera);
+    n.model.cam = in.cam, n.have_camera = true;
+    if (in.line_delay_s) n.model.time.line_delay_s = *in.line_delay_s, line_delay_from = in.source;
+    if (in.timeshift_cam_imu_s) n.model.time.time_offset_s = *in.timeshift_cam_imu_s;  // t_imu = t_cam + shift
+    n.notes.push_back("intrinsics from " + in.source);
+  }
+  if (!o.nominal.empty()) {
+    if (!o.intrinsics.empty()) {
+      drivers::YamlMap probe = drivers::YamlMap::load(o.nominal);
+      if (probe.has("camera")) throw UsageError("--nominal " + o.nominal + " has a camera: block and --intrinsics was given: state the camera once");
+    }
+    read_nominal_file(o.nominal, n, line_delay_given);
+    if (line_delay_given) line_delay_from = o.nominal;
+  }
+  if (!n.have_camera)
+    throw UsageError("no nominal intrinsics: give --nominal FILE with a camera: block (fx, fy, cx, cy) or --intrinsics FILE");
+  if (n.model.cam.width != f0.width || n.model.cam.height != f0.height)
+    throw UsageError("the nominal camera is " + std::to_string(n.model.cam.width) + "x" + std::to_string(n.model.cam.height) +
+                     " but " + o.log + " has " + std::to_string(f0.width) + "x" + std::to_string(f0.height) + " frames on " + o.image_channel);
+  apply_options(o, n, line_delay_from);
+  n.notes.push_back("line delay " + format_number(n.model.time.line_delay_s, 6) + " s from " + line_delay_from);
+  return n;
+}
+
+// ---------------------------------------------------------------- pass 2: observations
+
+cv::Mat grey8(const dsp::Image& img, double& scale16) {
+  const cv::Mat m(img.height, img.width,
+                  img.format == dsp::PixelFormat::Mono8 ? CV_8UC1 : img.format == dsp::PixelFormat::Rgb8 ? CV_8UC3 : CV_16UC1,
+                  const_cast<uint8_t*>(img.data.data()), static_cast<size_t>(img.stride()));
+  cv::Mat g;
+  if (m.type() == CV_8UC1) g = m.clone();
+  else if (m.type() == CV_8UC3) cv::cvtColor(m, g, cv::COLOR_RGB2GRAY);
+  else {
+    // One scale for the whole log (from the first frame's maximum): LK assumes constant brightness.
+    if (scale16 <= 0) {
+      double mx = 0;
+      cv::minMaxLoc(m, nullptr, &mx);
+      scale16 = mx > 0 ? 255.0 / mx : 1.0 / 256;
+    }
+    m.convertTo(g, CV_8U, scale16);
+  }
+  return g;
+}
+
+// Frames whose whole readout the motion covers (at the nominal time offset): outside it the
+// motion would be extrapolated, and the diagnosis would blame the camera for it.
+std::vector<bool> covered(const LogScan& s, const Nominal& n, bool by_gyro) {
+  const double t0 = by_gyro ? s.gyro.front().t : s.poses.front().t;
+  const double t1 = by_gyro ? s.gyro.back().t : s.poses.back().t;
+  std::vector<bool> ok;
+  for (const FrameMeta& f : s.frames) {
+    const double tm = f.t + n.model.time.time_offset_s;
+    ok.push_back(tm >= t0 && tm + 1.0 / n.model.frame_rate_hz <= t1);
+  }
+  return ok;
+}
+
+void progress(size_t k, size_t n, const std::string& what) {
+  std::fprintf(stderr, "\rrsd-extract: frame %zu/%zu, %s", k + 1, n, what.c_str());
+  if (k + 1 == n) std::fprintf(stderr, "\n");
+}
+
+struct Pass2 {
+  std::unique_ptr<FrameSource> src;
+  double scale16 = 0;
+  cv::Mat next(const Options& o, size_t k) {
+    std::optional<SourceFrame> f = src->next();
+    if (!f) throw std::runtime_error(o.log + ": frame " + std::to_string(k) + " on " + o.image_channel + " vanished on the second read");
+    return grey8(f->image, scale16);
+  }
+};
+
+void extract_matches(const Options& o, const LogScan& s, const std::vector<bool>& ok, dsp::Recording& rec) {
+  Pass2 p{open_frame_source({o.log}, FrameSourceOptions{o.image_channel, 0})};
+  cv::Mat prev;
+  int lost = 0, fb = 0, unlike = 0, pairs = 0;
+  for (size_t k = 0; k < s.frames.size(); ++k) {
+    cv::Mat cur = p.next(o, k);
+    if (ok[k] && k > 0 && ok[k - 1] && !prev.empty()) {
+      const PairTracks t = track_pair(prev, cur, o.track);
+      for (size_t i = 0; i < t.a.size(); ++i)
+        rec.matches.push_back({static_cast<int>(k - 1), t.a[i], static_cast<int>(k), t.b[i]});
+      lost += t.lost, fb += t.fb_rejected, unlike += t.ncc_rejected, ++pairs;
+    }
+    prev = cur;
+    progress(k, s.frames.size(), std::to_string(rec.matches.size()) + " matches");
+  }
+  std::printf("rsd-extract: %zu matches over %d consecutive frame pairs (%.0f per pair); dropped %d lost tracks, %d "
+              "failing the %.2f px forward-backward check and %d whose patches correlate below %.2f\n",
+              rec.matches.size(), pairs, pairs ? double(rec.matches.size()) / pairs : 0.0, lost, fb, o.track.max_fb_error_px,
+              unlike, o.track.min_ncc);
+  if (rec.matches.empty()) throw std::runtime_error(o.log + ": no features could be tracked between consecutive frames");
+}
+
+void extract_landmarks(const Options& o, const TargetSpec& target, const LogScan& s, const std::vector<bool>& ok,
+                       dsp::Recording& rec) {
+  Pass2 p{open_frame_source({o.log}, FrameSourceOptions{o.image_channel, 0})};
+  int seen = 0;
+  for (size_t k = 0; k < s.frames.size(); ++k) {
+    const cv::Mat img = p.next(o, k);
+    if (ok[k]) {
+      const std::vector<CornerObservation> c = detect_target(img, target);
+      for (const CornerObservation& ob : c) rec.observations.push_back({static_cast<int>(k), ob.id, ob.px});
+      seen += !c.empty();
+    }
+    progress(k, s.frames.size(), "target in " + std::to_string(seen) + " frames");
+  }
+  rec.points = target_points(target);
+  std::printf("rsd-extract: target %s in %d of %zu frames, %zu corner observations of %zu points\n", o.target.c_str(), seen,
+              s.frames.size(), rec.observations.size(), rec.points.size());
+  if (rec.observations.empty()) throw std::runtime_error(o.log + ": the target " + o.target + " was not found in any frame on " + o.image_channel);
+}
+
+// ---------------------------------------------------------------- the run
+
+dsp::ObservationKind choose_kind(const Options& o, const LogScan& s) {
+  const std::string ch = " (channels in the log: " + channel_list(s) + ")";
+  if (o.kind == "landmarks" || (o.kind == "auto" && !o.target.empty() && !s.poses.empty())) {
+    if (o.target.empty()) throw UsageError("--kind landmarks needs --target (checkerboard:COLSxROWS:SQUARE_M or aprilgrid:...)");
+    if (s.poses.size() < 2)
+      throw UsageError(o.log + ": fewer than two bot_core.pose_t on " + o.pose_channel + ": the landmarks kind needs the body trajectory (see --pose-channel)" + ch);
+    return dsp::ObservationKind::Landmarks;
+  }
+  if (s.gyro.size() < 2)
+    throw UsageError(o.log + ": fewer than two rsd.velocity_t on " + o.velocity_channel +
+                     ": the matches kind needs the angular velocity (see --velocity-channel" +
+                     (o.kind == "auto" ? "; or --target with poses on " + o.pose_channel + " for the landmarks kind)" : ")") + ch);
+  return dsp::ObservationKind::Matches;
+}
+
+int run(const Options& o) {
+  std::optional<TargetSpec> target;
+  if (!o.target.empty()) {
+    try {
+      target = parse_target(o.target);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--target: ") + e.what());
+    }
+  }
+  std::fprintf(stderr, "rsd-extract: reading %s\n", o.log.c_str());
+  const LogScan s = scan_log(o);
+  if (s.frames.empty())
+    throw UsageError(o.log + ": no bot_core.image_t frames on channel " + o.image_channel + " (see --image-channel; channels in the log: " + channel_list(s) + ")");
+  const dsp::ObservationKind kind = choose_kind(o, s);
+  Nominal n = nominal_model(o, s);
+  dsp::Recording rec;
+  rec.kind = kind;
+  rec.noise_px = o.noise_px;
+  if (kind == dsp::ObservationKind::Matches) {
+    rec.motion = dsp::MotionKind::Gyro;
+    rec.gyro = s.gyro;
+    if (*s.gyro_frame == rsd::velocity_t::FRAME_CAMERA) {
+      n.model.imu_to_camera = Eigen::Matrix3d::Identity();  // the rates are already in camera axes
+      n.notes.push_back("gyro in camera axes (rsd.velocity_t FRAME_CAMERA): imu_to_camera = identity");
+    } else {
+      if (!n.imu_to_camera) throw UsageError(o.log + ": the velocity on " + o.velocity_channel + " is in IMU axes: give --imu-to-camera or motion.imu_to_camera in --nominal");
+      n.model.imu_to_camera = *n.imu_to_camera;
+    }
+  } else {
+    rec.motion = dsp::MotionKind::Trajectory;
+    rec.trajectory = s.poses;
+  }
+  rec.nominal = n.model;
+  for (const std::string& note : n.notes) std::fprintf(stderr, "rsd-extract: %s\n", note.c_str());
+  const std::vector<bool> ok = covered(s, n, kind == dsp::ObservationKind::Matches);
+  for (size_t k = 0; k < s.frames.size(); ++k)
+    if (ok[k]) rec.frames.push_back({static_cast<int>(k), s.frames[k].t});
+  if (rec.frames.empty()) throw std::runtime_error(o.log + ": the motion does not cover any frame's readout (frames and motion on different clocks?)");
+  if (rec.frames.size() < s.frames.size())
+    std::fprintf(stderr, "rsd-extract: %zu of %zu frames lie outside the motion's time span and are left out\n",
+                 s.frames.size() - rec.frames.size(), s.frames.size());
+  if (kind == dsp::ObservationKind::Matches) extract_matches(o, s, ok, rec);
+  else extract_landmarks(o, *target, s, ok, rec);
+  write_recording(o.out, rec);
+  std::printf("rsd-extract: wrote a %s recording (%zu frames, %zu %s samples) to %s\n", dsp::to_string(kind), rec.frames.size(),
+              kind == dsp::ObservationKind::Matches ? rec.gyro.size() : rec.trajectory.size(), dsp::to_string(rec.motion), o.out.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  CLI::App app(kDescription, "rsd-extract");
+  app.add_option("LOG", o.log, "LCM log with raw frames and motion")->required()->check(CLI::ExistingFile);
+  app.add_option("OUTDIR", o.out, "Observation recording directory to write (created)")->required();
+  app.add_option("--nominal", o.nominal, "YAML with recording.yaml's camera: / timing: / motion: keys (a recording.yaml will do)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--intrinsics", o.intrinsics, "Kalibr camchain or ROS camera_info YAML with the nominal intrinsics")->check(CLI::ExistingFile);
+  app.add_option("--intrinsics-camera", o.intrinsics_camera, "Kalibr camera (cam0, cam1, ...) in --intrinsics");
+  app.add_option("--kind", o.kind, "matches, landmarks, or auto: landmarks when --target is given and the log has poses")
+      ->check(CLI::IsMember({"auto", "matches", "landmarks"}))->capture_default_str();
+  app.add_option("--target", o.target, "checkerboard:COLSxROWS:SQUARE_M (inner corners) or aprilgrid:COLSxROWS:TAG_M[:SPACING]");
+  app.add_flag("--assume-global-shutter", o.global_shutter, "nominal line delay 0 (whatever the log or files say)");
+  app.add_option("--line-delay", o.line_delay_s, "nominal line delay, s")->check(CLI::NonNegativeNumber);
+  app.add_option("--readout", o.readout, "nominal readout: top_to_bottom or bottom_to_top (default: the log's metadata)");
+  app.add_option("--frame-rate", o.frame_rate_hz, "nominal frame rate, Hz (default: the log's median frame interval)")->check(positive("Hz"));
+  app.add_option("--time-offset", o.time_offset_s, "nominal time offset, s (t_motion = t_camera + offset)")->check(finite_number("s"));
+  app.add_option("--imu-to-camera", o.imu_to_camera, "9 numbers, row-major R with w_camera = R w_imu (IMU-frame velocity)");
+  app.add_option("--lever-arm", o.lever_arm, "camera origin in the tracked body's frame, m")->check(vec3("x,y,z in m"));
+  app.add_option("--noise-px", o.noise_px, "state the known pixel noise sigma in recording.yaml (default: omitted)")->check(positive("px"));
+  app.add_option("--image-channel", o.image_channel, "bot_core.image_t channel")->capture_default_str();
+  app.add_option("--velocity-channel", o.velocity_channel, "rsd.velocity_t channel (matches kind)")->capture_default_str();
+  app.add_option("--pose-channel", o.pose_channel, "bot_core.pose_t channel (landmarks kind)")->capture_default_str();
+  app.add_option("--max-matches", o.track.max_per_pair, "matches kept per frame pair")->check(int_range(1, 100000))->capture_default_str();
+  app.add_option("--max-fb-error", o.track.max_fb_error_px, "forward-backward tracking check, px")->check(positive("px"))->capture_default_str();
+  app.add_option("--min-ncc", o.track.min_ncc, "least correlation of the patches around a match's two ends")
+      ->check(CLI::Range(-1.0, 1.0))->capture_default_str();
+  if (const auto rc = parse_command_line(app, argc, argv)) return *rc;
+  return run_tool("rsd-extract", [&] { return run(o); });
+}
