@@ -46,7 +46,7 @@ RobustStats robust_stats(const std::vector<Eigen::Vector2d>& residuals) {
 namespace {
 
 NamedEffect describe(const SelectedEffect& st, const ModelParams& p, const NominalModel& n) {
-  NamedEffect out{effect_name(st.effect), {}, "", st.rms_px, st.bic_drop};
+  NamedEffect out{effect_name(st.effect), {}, "", st.rms_px, st.bic_drop, st.heldout_drop};
   std::ostringstream x;
   auto param = [&](Param q) { return EffectParam{param_name(q), p[q], ""}; };
   switch (st.effect) {
@@ -109,6 +109,40 @@ double estimate_sigma(const DiagnosisModel& m, const std::vector<int>& screen, c
   return std::max(robust_stats(m.residuals(rich, screen)).scale_px, 1e-3);
 }
 
+// Where the residual lives. A gross error (a clock offset of a large fraction of a second, a
+// focal length several percent off) swamps every linear pattern, so when the global search
+// moved the offset or the focal length, that is reported first, with the share of the
+// residual energy it removes, and the patterns then describe what remains after it.
+std::vector<Located> locate_with_gross(const DiagnosisModel& m, const ModelParams& nominal, const ModelParams& gross,
+                                       const std::vector<int>& fit) {
+  const double offset = gross[Param::TimeOffset] - nominal[Param::TimeOffset];
+  const double scale = gross[Param::Fx] / nominal[Param::Fx] - 1;
+  // Gross: beyond a frame period (a rolling shutter alone shifts features by up to half of
+  // one, and the row pattern describes that) or 2% of the focal length.
+  const double gross_offset = 1.0 / m.recording().nominal.frame_rate_hz;
+  if (std::abs(offset) < gross_offset && std::abs(scale) < 0.02) return locate(m, nominal, fit);
+  const std::vector<int> sub = subsample(fit, 3000);
+  const double before = robust_stats(m.residuals(nominal, sub)).rms_px, after = robust_stats(m.residuals(gross, sub)).rms_px;
+  const double share = before > 0 ? std::clamp(1 - (after * after) / (before * before), 0.0, 1.0) : 0.0;
+  std::vector<Located> out;
+  std::ostringstream d;
+  if (std::abs(offset) >= gross_offset) {
+    d << "a global search for the clock offset moves the motion clock by " << offset * 1e3 << " ms and removes "
+      << std::lround(share * 100) << "% of the residual energy";
+    out.push_back({"image_velocity", share, d.str()});
+  }
+  if (std::abs(scale) >= 0.02) {
+    d.str("");
+    d << "a global search for the focal length scales it by " << scale * 100 << "%";
+    out.push_back({"image_scale", out.empty() ? share : 0.0, d.str()});
+  }
+  for (Located l : locate(m, gross, fit)) {
+    l.detail += " (what remains after the global search)";
+    out.push_back(std::move(l));
+  }
+  return out;
+}
+
 // The observations of idx that the gyro covers (no gap longer than max_gyro_gap).
 std::vector<int> usable(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx) {
   std::vector<int> out;
@@ -128,19 +162,19 @@ Diagnosis diagnose(const Recording& rec, const DiagnosisOptions& opt) {
   const size_t n_screen = static_cast<size_t>(std::max(opt.screen_observations, 100));
   const ModelParams nominal = nominal_params(rec.nominal);
   d.baseline = robust_stats(m.residuals(nominal, all));
-  d.located = locate(m, nominal, fit);
   for (Effect e : applicable_effects(m)) d.candidates.push_back(effect_name(e));
   d.noise_floor_px = rec.noise_px ? *rec.noise_px * m.noise_gain() : 0.0;
   // Gross errors first, with the stated noise or a first guess of it (the baseline's scale).
   const double guess = d.noise_floor_px > 0 ? d.noise_floor_px : std::max(d.baseline.scale_px, 1e-3);
   d.gross = gross_start(m, subsample(fit, n_screen), nominal, guess);
+  d.located = locate_with_gross(m, nominal, d.gross, fit);
   const std::vector<int> use_all = usable(m, d.gross, all), use_fit = usable(m, d.gross, fit),
                          use_held = usable(m, d.gross, held);
   d.unusable = m.size() - static_cast<int>(use_all.size());
   const std::vector<int> screen = subsample(use_fit, n_screen);
   d.sigma_px = d.noise_floor_px > 0 ? d.noise_floor_px : estimate_sigma(m, screen, d.gross, guess);
   const SelectionOptions so{opt.min_bic_drop, opt.max_iterations};
-  const Selection sel = select_effects(m, use_fit, screen, nominal, d.gross, d.sigma_px, so);
+  const Selection sel = select_effects(m, use_fit, use_held, screen, nominal, d.gross, d.sigma_px, so);
   for (const SelectedEffect& st : sel.effects) d.effects.push_back(describe(st, sel.params, rec.nominal));
   d.fitted = sel.params;
   d.final_rms_px = robust_stats(m.residuals(sel.params, use_all)).rms_px;

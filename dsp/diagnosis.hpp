@@ -48,6 +48,7 @@ struct NamedEffect {
   std::string explains;
   double rms_px = 0;    // fitting-set RMS once this effect (and those before it) is in
   double bic_drop = 0;  // how much BIC fell when it was added
+  double heldout_drop = 0;  // how much the held-out robust chi-square fell when it was added
 };
 
 struct Diagnosis {

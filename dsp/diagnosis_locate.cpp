@@ -5,7 +5,7 @@
 // residual), so they mean the same for landmarks and matches: for a match the time-offset
 // pattern follows the change of the image motion over the frame interval (the angular
 // acceleration), the line-delay pattern follows it row by row. Signals: image_velocity (time
-// offset), row (line delay), radius (k1, k2), image_scale (fx, fy), time_trend (drift beyond
+// offset), row (line delay), column (a delay across the columns), radius (k1, k2), image_scale (fx, fy), time_trend (drift beyond
 // a constant offset), time (energy concentrated in some frames), angular_rate (gyro bias;
 // gyro recordings), depth (lever arm; trajectory recordings).
 #include <Eigen/Dense>
@@ -61,6 +61,20 @@ Eigen::MatrixXd derivatives(const DiagnosisModel& m, const ModelParams& p, const
     }
   }
   return A;
+}
+
+// The time-shift pattern (column 0 of A) weighted by each inlier's image column, centred
+// and as a share of the width: a delay growing across the columns, as a sensor read out
+// column by column (mounted a quarter turn from its nominal orientation) would give.
+Eigen::MatrixXd column_pattern(const DiagnosisModel& m, const std::vector<int>& idx, const Patterns& s,
+                               const Eigen::MatrixXd& A) {
+  const CameraModel& cam = m.recording().nominal.cam;
+  Eigen::MatrixXd out(A.rows(), 1);
+  for (size_t j = 0; j < s.keep.size(); ++j) {
+    const double c = (m.observed(idx[s.keep[j]]).x() - cam.cx) / cam.width;
+    out.block<2, 1>(2 * j, 0) = A.block<2, 1>(2 * j, 0) * c;
+  }
+  return out;
 }
 
 Eigen::MatrixXd columns(const Eigen::MatrixXd& A, std::vector<int> cols) {
@@ -124,6 +138,10 @@ std::vector<Located> locate(const DiagnosisModel& m, const ModelParams& p, const
       {"time_trend", std::max(0.0, explained(columns(A, {0, 6}), s.r) - explained(columns(A, {0}), s.r)),
        "the time shift grows linearly over the recording: clock rate"},
       time_signal(s.frame_energy)};
+  Eigen::MatrixXd timing(A.rows(), 3);
+  timing << columns(A, {0, 1}), column_pattern(m, idx, s, A);
+  out.push_back({"column", std::max(0.0, explained(timing, s.r) - both),
+                 "residual along the image motion grows with image column: columns read at different times"});
   if (m.has_gyro())
     out.push_back({"angular_rate", explained(columns(A, {7, 8, 9}), s.r),
                    "residual is the image motion of a constant angular-rate error: gyro rate"});

@@ -60,9 +60,10 @@ ParamMask mask_of(const std::vector<Effect>& effects) {
 
 class Selector {
  public:
-  Selector(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& screen,
-           const ModelParams& nominal, const ModelParams& start, double sigma, const SelectionOptions& opt)
-      : m_(m), fit_(fit), screen_(screen), nominal_(nominal), start_(start), sigma_(sigma), opt_(opt) {}
+  Selector(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
+           const std::vector<int>& screen, const ModelParams& nominal, const ModelParams& start, double sigma,
+           const SelectionOptions& opt)
+      : m_(m), fit_(fit), held_(held), screen_(screen), nominal_(nominal), start_(start), sigma_(sigma), opt_(opt) {}
 
   // BIC = robust chi-square + k ln(2N): the flip counts as one parameter.
   double bic(const ModelParams& p, const std::vector<Effect>& effects, const std::vector<int>& idx) const {
@@ -122,8 +123,16 @@ class Selector {
 
   double rms(const ModelParams& p) const { return robust_stats(m_.residuals(p, fit_)).rms_px; }
 
+  // Robust chi-square drop on the held-out observations from `poorer` to `richer` (0 when
+  // nothing is held out).
+  double heldout_drop(const State& poorer, const State& richer) const {
+    if (held_.empty()) return 0;
+    return robust_chi2(m_.residuals(poorer.params, held_), sigma_) - robust_chi2(m_.residuals(richer.params, held_), sigma_);
+  }
+
   const DiagnosisModel& m_;
   const std::vector<int>& fit_;
+  const std::vector<int>& held_;
   const std::vector<int>& screen_;
   ModelParams nominal_, start_;
   double sigma_;
@@ -145,7 +154,8 @@ double projected_drop(const Selector& sel, const State& from, const State& to) {
 // focal length, which the subsample cannot tell apart) are refitted on all fitting
 // observations and the lowest BIC there wins. Returns false when nothing clears the
 // threshold.
-bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, State& s, double& drop) {
+bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, State& s, double& drop,
+                   double& held_drop) {
   State here = s;
   here.bic = sel.bic(s.params, s.effects, sel.screen_);
   std::vector<std::pair<double, State>> screened;
@@ -171,18 +181,21 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
   // by a few percent, too much to rank near-degenerate candidates by).
   drop = sel.drop(s, best);
   if (drop < sel.opt_.min_bic_drop) return false;
+  // The held-out observations must agree: the effect predicts frames the fit never saw better.
+  held_drop = sel.heldout_drop(s, best);
+  if (!sel.held_.empty() && held_drop <= 0) return false;
   s = std::move(best);
   return true;
 }
 
 std::vector<SelectedEffect> forward(const Selector& sel, const std::vector<Effect>& candidates, State& s) {
   std::vector<SelectedEffect> steps;
-  double drop = 0;
+  double drop = 0, held_drop = 0;
   while (true) {
     const size_t before = s.effects.size();
-    if (!forward_round(sel, candidates, s, drop)) return steps;
+    if (!forward_round(sel, candidates, s, drop, held_drop)) return steps;
     const double rms = sel.rms(s.params);
-    for (size_t k = before; k < s.effects.size(); ++k) steps.push_back({s.effects[k], rms, drop});
+    for (size_t k = before; k < s.effects.size(); ++k) steps.push_back({s.effects[k], rms, drop, held_drop});
   }
 }
 
@@ -211,10 +224,10 @@ void backward(const Selector& sel, State& s, std::vector<SelectedEffect>& steps)
 
 }  // namespace
 
-Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& screen,
-                         const ModelParams& nominal, const ModelParams& start, double sigma_px,
-                         const SelectionOptions& opt) {
-  const Selector sel(m, fit, screen, nominal, start, sigma_px, opt);
+Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
+                         const std::vector<int>& screen, const ModelParams& nominal, const ModelParams& start,
+                         double sigma_px, const SelectionOptions& opt) {
+  const Selector sel(m, fit, held, screen, nominal, start, sigma_px, opt);
   State s = sel.initial();
   std::vector<SelectedEffect> steps = forward(sel, applicable_effects(m), s);
   backward(sel, s, steps);

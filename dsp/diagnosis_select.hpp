@@ -29,6 +29,7 @@ struct SelectedEffect {
   Effect effect;
   double rms_px;    // fitting-set RMS once it (and those before it) is in
   double bic_drop;  // how much BIC fell when it was added
+  double heldout_drop;  // how much the held-out robust chi-square fell (0: nothing held out)
 };
 
 struct Selection {
@@ -37,8 +38,11 @@ struct Selection {
 };
 
 // `start` holds the gross estimates (gross_start) the candidates start from; `nominal` the
-// values of the effects not selected.
-Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& screen,
+// values of the effects not selected. An effect is added only when it lowers BIC on `fit` by
+// more than min_bic_drop AND lowers the robust chi-square of the `held` observations, which
+// no fit saw (an over-fitted parameter explains noise of the fitting set only).
+Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
+                         const std::vector<int>& screen,
                          const ModelParams& nominal, const ModelParams& start, double sigma_px,
                          const SelectionOptions& opt);
 

@@ -88,11 +88,15 @@ TEST(Diagnosis, RollingShutterAloneWithinThreePercent) {
               d.baseline.rms_px, d.final_rms_px);
   EXPECT_NEAR(got, truth, 0.03 * truth);
   EXPECT_NEAR(param(d.effects[0], "frame_readout_s"), truth * 480, 0.03 * truth * 480);
+  // Chosen by the held-out frames too: the effect must predict them better than the nominal model.
+  EXPECT_GT(d.effects[0].heldout_drop, 100.0);
   EXPECT_GT(d.baseline.rms_px, 2.0);
   EXPECT_LT(d.final_rms_px, 0.6);
   EXPECT_LT(d.heldout_final_rms_px, 0.65);
   ASSERT_FALSE(d.located.empty());
   EXPECT_EQ(d.located[0].signal, "row");
+  // Rows, not columns, are read at different times.
+  for (const auto& l : d.located) EXPECT_NE(l.signal, "column") << l.strength;
 }
 
 void expect_offset(double truth, unsigned seed) {

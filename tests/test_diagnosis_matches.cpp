@@ -211,6 +211,12 @@ TEST(DiagnosisMatches, GrossOffsetAndFocalFoundFirst) {
   EXPECT_NEAR(param(find(d, "time_offset"), "time_offset_s"), 0.6, 5e-4);
   EXPECT_NEAR(param(find(d, "focal_length"), "fx"), 575, 0.002 * 575);
   EXPECT_NEAR(param(find(d, "rolling_shutter"), "frame_readout_s"), 0.02, 0.03 * 0.02);
+  // Located: the gross offset first (it carries nearly all the energy), then what remains.
+  ASSERT_GE(d.located.size(), 2u);
+  EXPECT_EQ(d.located[0].signal, "image_velocity");
+  EXPECT_GT(d.located[0].strength, 0.9);
+  EXPECT_NE(d.located[0].detail.find("clock offset moves the motion clock by 6"), std::string::npos) << d.located[0].detail;
+  EXPECT_EQ(d.located[1].signal, "image_scale") << d.located[1].detail;
 }
 
 TEST(DiagnosisMatches, OutliersDoNotBiasTheFit) {

@@ -471,10 +471,11 @@ std::string effects_table(const Diagnosis& d, const std::vector<ParamUncertainty
     o << "| `" << p.effect << "` | `" << p.param << "` | " << (p.text.empty() ? format_number(p.value, 6) : p.text)
       << " | " << (p.sigma ? format_number(*p.sigma, 3) : std::string("-")) << " | " << nominal_value(n, p.param)
       << " |\n";
-  o << "\n| effect (order selected) | explains | fitting-set RMS with it (px) | BIC drop |\n| --- | --- | --- | --- |\n";
+  o << "\n| effect (order selected) | explains | fitting-set RMS with it (px) | BIC drop | held-out chi-square drop |\n"
+       "| --- | --- | --- | --- | --- |\n";
   for (const NamedEffect& e : d.effects)
     o << "| `" << e.name << "` | " << e.explains << " | " << format_number(e.rms_px) << " | "
-      << format_number(e.bic_drop) << " |\n";
+      << format_number(e.bic_drop) << " | " << format_number(e.heldout_drop) << " |\n";
   return o.str();
 }
 
