@@ -8,8 +8,13 @@
 
 #include "dsp/diagnosis.hpp"
 #include "dsp/recording_simulation.hpp"
+#include "tests/diagnosis_configs.hpp"
+#include "tests/diagnosis_lookup.hpp"
 
 using namespace rsd::dsp;
+using rsd::test::find;
+using rsd::test::names;
+using rsd::test::param;
 
 namespace {
 
@@ -19,30 +24,9 @@ SimConfig small_landmarks(unsigned seed) {
   c.seed = seed;
   c.duration_s = 1.0;
   c.noise_px = 0.5;
-  c.nominal.cam.width = 640, c.nominal.cam.height = 480;
-  c.nominal.cam.fx = c.nominal.cam.fy = 500, c.nominal.cam.cx = 319.5, c.nominal.cam.cy = 239.5;
-  c.nominal.frame_rate_hz = 30;
-  c.target_rows = 5, c.target_cols = 6, c.target_spacing_m = 0.12, c.target_distance_m = 1.0;
-  c.translation_amplitude_m = 0.1, c.rotation_amplitude_rad = 0.15;
+  rsd::test::vga_camera(c.nominal);
+  rsd::test::small_target(c);
   return c;
-}
-
-const NamedEffect* find(const Diagnosis& d, const std::string& name) {
-  const auto it = std::find_if(d.effects.begin(), d.effects.end(), [&](const NamedEffect& e) { return e.name == name; });
-  return it == d.effects.end() ? nullptr : &*it;
-}
-
-double param(const NamedEffect& e, const std::string& name) {
-  for (const auto& p : e.params)
-    if (p.name == name) return p.value;
-  ADD_FAILURE() << e.name << " has no parameter " << name;
-  return NAN;
-}
-
-std::string names(const Diagnosis& d) {
-  std::string s;
-  for (const auto& e : d.effects) s += e.name + " ";
-  return s;
 }
 
 }  // namespace
@@ -83,11 +67,11 @@ TEST(Diagnosis, RollingShutterAloneWithinThreePercent) {
   const Diagnosis d = diagnose(simulate_recording(c).rec);
   ASSERT_EQ(d.effects.size(), 1u) << names(d);
   ASSERT_EQ(d.effects[0].name, "rolling_shutter");
-  const double got = param(d.effects[0], "line_delay_s");
+  const double got = param(&d.effects[0], "line_delay_s");
   std::printf("rolling_shutter: line_delay_s %.4g (truth %.4g), baseline %.3f px, final %.3f px\n", got, truth,
               d.baseline.rms_px, d.final_rms_px);
   EXPECT_NEAR(got, truth, 0.03 * truth);
-  EXPECT_NEAR(param(d.effects[0], "frame_readout_s"), truth * 480, 0.03 * truth * 480);
+  EXPECT_NEAR(param(&d.effects[0], "frame_readout_s"), truth * 480, 0.03 * truth * 480);
   // Chosen by the held-out frames too: the effect must predict them better than the nominal model.
   EXPECT_GT(d.effects[0].heldout_drop, 100.0);
   EXPECT_GT(d.baseline.rms_px, 2.0);
@@ -105,7 +89,7 @@ void expect_offset(double truth, unsigned seed) {
   const Diagnosis d = diagnose(simulate_recording(c).rec);
   ASSERT_EQ(d.effects.size(), 1u) << names(d);
   ASSERT_EQ(d.effects[0].name, "time_offset");
-  const double got = param(d.effects[0], "time_offset_s");
+  const double got = param(&d.effects[0], "time_offset_s");
   std::printf("time_offset: %.6f s (truth %.6f), final %.3f px\n", got, truth, d.final_rms_px);
   EXPECT_NEAR(got, truth, 5e-4);
   EXPECT_LT(d.heldout_final_rms_px, 0.65);
@@ -124,8 +108,8 @@ TEST(Diagnosis, RollingShutterAndTimeOffsetTogether) {
   const NamedEffect* to = find(d, "time_offset");
   ASSERT_TRUE(rs && to) << names(d);
   std::printf("together: line_delay_s %.4g (truth 4e-05), time_offset_s %.6f (truth -0.01)\n",
-              param(*rs, "line_delay_s"), param(*to, "time_offset_s"));
-  EXPECT_NEAR(param(*rs, "line_delay_s"), 4e-5, 0.03 * 4e-5);
-  EXPECT_NEAR(param(*to, "time_offset_s"), -0.01, 5e-4);
+              param(rs, "line_delay_s"), param(to, "time_offset_s"));
+  EXPECT_NEAR(param(rs, "line_delay_s"), 4e-5, 0.03 * 4e-5);
+  EXPECT_NEAR(param(to, "time_offset_s"), -0.01, 5e-4);
   EXPECT_LT(d.final_rms_px, 0.6);
 }

@@ -13,8 +13,13 @@
 
 #include "dsp/diagnosis.hpp"
 #include "dsp/recording_simulation.hpp"
+#include "tests/diagnosis_configs.hpp"
+#include "tests/diagnosis_lookup.hpp"
 
 using namespace rsd::dsp;
+using rsd::test::find;
+using rsd::test::names;
+using rsd::test::param;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
@@ -28,11 +33,8 @@ SimConfig target(unsigned seed, double duration_s = 3.0) {
   c.seed = seed;
   c.duration_s = duration_s;
   c.noise_px = kNoise;
-  c.nominal.cam.width = 640, c.nominal.cam.height = 480;
-  c.nominal.cam.fx = c.nominal.cam.fy = 500, c.nominal.cam.cx = 319.5, c.nominal.cam.cy = 239.5;
-  c.nominal.frame_rate_hz = 30;
-  c.target_rows = 5, c.target_cols = 6, c.target_spacing_m = 0.12, c.target_distance_m = 1.0;
-  c.translation_amplitude_m = 0.1, c.rotation_amplitude_rad = 0.15;
+  rsd::test::vga_camera(c.nominal);
+  rsd::test::small_target(c);
   return c;
 }
 
@@ -48,28 +50,6 @@ double effect_rms(SimConfig c) {
   const SimulatedRecording sim = simulate_recording(c);
   const DiagnosisModel m(sim.rec);
   return robust_stats(m.residuals(nominal_params(sim.rec.nominal), everything(m))).rms_px;
-}
-
-const NamedEffect* find(const Diagnosis& d, const std::string& name) {
-  const auto it = std::find_if(d.effects.begin(), d.effects.end(), [&](const NamedEffect& e) { return e.name == name; });
-  return it == d.effects.end() ? nullptr : &*it;
-}
-
-double param(const NamedEffect* e, const std::string& name) {
-  if (!e) return NAN;
-  for (const auto& p : e->params)
-    if (p.name == name) return p.value;
-  ADD_FAILURE() << e->name << " has no parameter " << name;
-  return NAN;
-}
-
-std::string names(const Diagnosis& d) {
-  std::vector<std::string> n;
-  for (const auto& e : d.effects) n.push_back(e.name);
-  std::sort(n.begin(), n.end());
-  std::string s;
-  for (const auto& x : n) s += x + " ";
-  return s;
 }
 
 Diagnosis expect_named(const Recording& rec, const std::string& expected) {

@@ -14,8 +14,13 @@
 
 #include "dsp/diagnosis.hpp"
 #include "dsp/recording_simulation.hpp"
+#include "tests/diagnosis_configs.hpp"
+#include "tests/diagnosis_lookup.hpp"
 
 using namespace rsd::dsp;
+using rsd::test::find;
+using rsd::test::names;
+using rsd::test::param;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
@@ -32,9 +37,7 @@ SimConfig phone(unsigned seed, double duration_s = 4.0) {
   c.noise_px = kNoise;
   c.outlier_fraction = 0.1;
   c.matches_per_pair = 60;
-  c.nominal.cam.width = 640, c.nominal.cam.height = 480;
-  c.nominal.cam.fx = c.nominal.cam.fy = 500, c.nominal.cam.cx = 319.5, c.nominal.cam.cy = 239.5;
-  c.nominal.frame_rate_hz = 30;
+  rsd::test::vga_camera(c.nominal);
   c.nominal.imu_to_camera << 0, -1, 0, -1, 0, 0, 0, 0, -1;
   c.rotation_amplitude_rad = 0.25, c.motion_frequency_hz = 1.2;
   c.gyro = {20, 200, 0.01, 0.03, 0.0005, 0.002};
@@ -60,28 +63,6 @@ double effect_rms(SimConfig c) {
   std::vector<int> all(m.size());
   for (int i = 0; i < m.size(); ++i) all[i] = i;
   return robust_stats(m.residuals(nominal_params(sim.rec.nominal), all)).rms_px;
-}
-
-const NamedEffect* find(const Diagnosis& d, const std::string& name) {
-  const auto it = std::find_if(d.effects.begin(), d.effects.end(), [&](const NamedEffect& e) { return e.name == name; });
-  return it == d.effects.end() ? nullptr : &*it;
-}
-
-double param(const NamedEffect* e, const std::string& name) {
-  if (!e) return NAN;
-  for (const auto& p : e->params)
-    if (p.name == name) return p.value;
-  ADD_FAILURE() << e->name << " has no parameter " << name;
-  return NAN;
-}
-
-std::string names(const Diagnosis& d) {
-  std::vector<std::string> n;
-  for (const auto& e : d.effects) n.push_back(e.name);
-  std::sort(n.begin(), n.end());
-  std::string s;
-  for (const auto& x : n) s += x + " ";
-  return s;
 }
 
 // Diagnoses the recording and checks the effects named (sorted names, space-separated) and the

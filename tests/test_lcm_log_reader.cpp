@@ -16,6 +16,7 @@
 #include <random>
 
 #include "drivers/lcm_log.hpp"
+#include "tests/temp_dir.hpp"
 #include "drivers/recorded_frame.hpp"
 #include "drivers/replay_source.hpp"
 
@@ -26,23 +27,9 @@ namespace {
 
 constexpr int kFrames = 10, kW = 32, kH = 24;
 
-std::filesystem::path tmp_dir() {
-  return std::filesystem::temp_directory_path() / ("rsd_test_lcm_log_" + std::to_string(getpid()));
-}
-
-std::string tmp(const std::string& name) {
-  std::filesystem::create_directories(tmp_dir());
-  return (tmp_dir() / name).string();
-}
-
 // The logs this process wrote go when it ends.
-struct RemoveTmp : ::testing::Environment {
-  void TearDown() override {
-    std::error_code ec;
-    std::filesystem::remove_all(tmp_dir(), ec);
-  }
-};
-const auto* const g_remove_tmp = ::testing::AddGlobalTestEnvironment(new RemoveTmp);
+const test::TempDir& g_tmp = test::register_temp_dir("rsd_test_lcm_log_");
+std::string tmp(const std::string& name) { return g_tmp.path(name); }
 
 std::vector<uint8_t> velocity_bytes(int64_t utime, double wz) {
   rsd::velocity_t m{};

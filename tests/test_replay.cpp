@@ -23,6 +23,7 @@
 #include "drivers/lcm_log.hpp"
 #include "drivers/recorded_frame.hpp"
 #include "drivers/sim_source.hpp"
+#include "tests/temp_dir.hpp"
 
 #include "tests/allocation_counter.hpp"  // every C++ allocation of this process, counted
 
@@ -30,23 +31,9 @@ using namespace rsd;
 
 namespace {
 
-std::filesystem::path tmp_dir() {
-  return std::filesystem::temp_directory_path() / ("rsd_test_replay_" + std::to_string(getpid()));
-}
-
-std::string tmp(const std::string& name) {
-  std::filesystem::create_directories(tmp_dir());
-  return (tmp_dir() / name).string();
-}
-
 // The logs this process wrote go when it ends.
-struct RemoveTmp : ::testing::Environment {
-  void TearDown() override {
-    std::error_code ec;
-    std::filesystem::remove_all(tmp_dir(), ec);
-  }
-};
-const auto* const g_remove_tmp = ::testing::AddGlobalTestEnvironment(new RemoveTmp);
+const test::TempDir& g_tmp = test::register_temp_dir("rsd_test_replay_");
+std::string tmp(const std::string& name) { return g_tmp.path(name); }
 
 daemon::Config sim_config(const std::string& record) {
   daemon::Config c;
