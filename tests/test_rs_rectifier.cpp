@@ -6,48 +6,18 @@
 //   delay of 1e-12 s), from the rendered rolling-shutter frame;
 // - its sampling against a double-precision bilinear interpolation;
 // - zero motion is the identity, SIMD equals scalar bit for bit, and rectify() allocates
-//   nothing (global operator new counted below).
+//   nothing (every global operator new counted: tests/allocation_counter.hpp).
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
-#include <cstdlib>
-#include <new>
 #include <random>
 
 #include "dsp/rs_projection.hpp"
 #include "dsp/rs_rectifier.hpp"
 #include "dsp/rs_renderer.hpp"
-
-// ---- Allocation counter: every global new while counting is on ---------------------------
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<long> g_allocations{0};
-void* counted_alloc(std::size_t n) {
-  if (g_counting) ++g_allocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* counted_aligned(std::size_t n, std::align_val_t al) {
-  if (g_counting) ++g_allocations;
-  const std::size_t a = static_cast<std::size_t>(al);
-  if (void* p = std::aligned_alloc(a, (n + a - 1) / a * a)) return p;
-  throw std::bad_alloc();
-}
-}  // namespace
-void* operator new(std::size_t n) { return counted_alloc(n); }
-void* operator new[](std::size_t n) { return counted_alloc(n); }
-void* operator new(std::size_t n, std::align_val_t a) { return counted_aligned(n, a); }
-void* operator new[](std::size_t n, std::align_val_t a) { return counted_aligned(n, a); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+#include "tests/allocation_counter.hpp"  // every C++ allocation of this process, counted
 
 using namespace rsd::dsp;
 using Eigen::Vector2d;
@@ -398,10 +368,9 @@ TEST(RsRectifier, RectifyAllocatesNothingAfterConstruction) {
     return rect.rectify(src.view(), dst.view(), tw, depths[i % 3], mid);
   };
   for (int i = 0; i < 10; ++i) frame(i);  // warm-up
-  g_allocations = 0;
-  g_counting = true;
+  const uint64_t before = g_allocations.load();
   for (int i = 0; i < 1000; ++i) frame(i);
-  g_counting = false;
-  std::printf("[ alloc ] %ld allocations in 1000 rectify() calls\n", g_allocations.load());
-  EXPECT_EQ(g_allocations.load(), 0);
+  const uint64_t allocations = g_allocations.load() - before;
+  std::printf("[ alloc ] %llu allocations in 1000 rectify() calls\n", static_cast<unsigned long long>(allocations));
+  EXPECT_EQ(allocations, 0u);
 }
