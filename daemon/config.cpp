@@ -2,22 +2,22 @@
 
 #include <cmath>
 
-#include "drivers/yaml_map.hpp"
+#include "formats/yaml_map.hpp"
 
 namespace rsd::daemon {
 
-using drivers::YamlMap;
+using formats::YamlMap;
 
 namespace {
 
-double positive(YamlMap& m, const std::string& key, double fallback) {
+double positive(formats::YamlMap& m, const std::string& key, double fallback) {
   const double v = m.number(key, fallback);
   if (!(v > 0)) m.fail(key, "must be positive");
   return v;
 }
 
 // A row-major 3x3 rotation (nine numbers), checked orthonormal with determinant +1.
-Eigen::Matrix3d rotation(YamlMap& m, const std::string& key, const Eigen::Matrix3d& fallback) {
+Eigen::Matrix3d rotation(formats::YamlMap& m, const std::string& key, const Eigen::Matrix3d& fallback) {
   if (!m.has(key)) return fallback;
   const auto v = m.numbers(key, 9);
   Eigen::Matrix3d r;
@@ -26,7 +26,7 @@ Eigen::Matrix3d rotation(YamlMap& m, const std::string& key, const Eigen::Matrix
   return r;
 }
 
-void read_pipeline(YamlMap m, PipelineConfig& p) {
+void read_pipeline(formats::YamlMap m, PipelineConfig& p) {
   p.raw_slots = static_cast<size_t>(m.integer("raw_slots", static_cast<int>(p.raw_slots)));
   p.out_slots = static_cast<size_t>(m.integer("out_slots", static_cast<int>(p.out_slots)));
   p.queue_depth = static_cast<size_t>(m.integer("queue_depth", static_cast<int>(p.queue_depth)));
@@ -37,7 +37,7 @@ void read_pipeline(YamlMap m, PipelineConfig& p) {
   m.finish();
 }
 
-void read_rectification(YamlMap m, RectifyConfig& r) {
+void read_rectification(formats::YamlMap m, RectifyConfig& r) {
   r.enabled = m.boolean("enabled", true);
   const std::string ref = m.text("reference", "middle_row");
   if (ref == "middle_row") r.reference = dsp::ReferenceRow::Middle;
@@ -57,7 +57,7 @@ void read_rectification(YamlMap m, RectifyConfig& r) {
   m.finish();
 }
 
-void read_velocity(YamlMap m, Config& c) {
+void read_velocity(formats::YamlMap m, Config& c) {
   c.velocity_channel = m.text("channel", c.velocity_channel);
   c.velocity_limits.max_age_s = positive(m, "max_age_s", c.velocity_limits.max_age_s);
   c.velocity_limits.max_angular_rad_s = positive(m, "max_angular_rad_s", c.velocity_limits.max_angular_rad_s);
@@ -71,7 +71,7 @@ void read_velocity(YamlMap m, Config& c) {
   m.finish();
 }
 
-void read_lcm(YamlMap m, Config& c) {
+void read_lcm(formats::YamlMap m, Config& c) {
   c.lcm_url = m.text("url", c.lcm_url);
   if (c.lcm_url.rfind("udpm://", 0) == 0 && !m.boolean("allow_multicast", false))
     m.fail("url", "is multicast; set allow_multicast: true to use it (this keeps tests off the network)");
@@ -86,7 +86,7 @@ void read_lcm(YamlMap m, Config& c) {
 
 Config load_config(const std::string& file) {
   Config c;
-  YamlMap root = YamlMap::load(file);
+  formats::YamlMap root = formats::YamlMap::load(file);
   if (root.has("source")) read_source(root.map("source"), c.source);
   if (root.has("pipeline")) read_pipeline(root.map("pipeline"), c.pipeline);
   if (root.has("rectification")) read_rectification(root.map("rectification"), c.rectify);

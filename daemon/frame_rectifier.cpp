@@ -1,6 +1,6 @@
 #include "daemon/frame_rectifier.hpp"
 
-#include "dsp/applicability.hpp"
+#include "dsp/analysis/applicability.hpp"
 
 namespace rsd::daemon {
 

@@ -8,10 +8,10 @@
 
 #include "daemon/velocity_buffer.hpp"
 #include "drivers/camera_source.hpp"
-#include "dsp/camera_model.hpp"
-#include "dsp/rs_backprojection.hpp"
-#include "dsp/row_timing.hpp"
-#include "dsp/rs_rectifier.hpp"
+#include "dsp/geometry/camera_model.hpp"
+#include "dsp/geometry/rs_backprojection.hpp"
+#include "dsp/geometry/row_timing.hpp"
+#include "dsp/rectify/rs_rectifier.hpp"
 
 namespace rsd::daemon {
 

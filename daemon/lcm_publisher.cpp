@@ -1,6 +1,6 @@
 #include "daemon/lcm_publisher.hpp"
 
-#include "drivers/lcm_image.hpp"
+#include "formats/image_t_codec.hpp"
 
 #include <cinttypes>
 #include <cstdio>
@@ -23,7 +23,7 @@ LcmPublisher::LcmPublisher(const std::string& url, Channels channels, const driv
   image_.width = fmt.width;
   image_.height = fmt.height;
   image_.row_stride = fmt.width * dsp::bytes_per_pixel(fmt.format);
-  image_.pixelformat = drivers::fourcc(fmt.format);
+  image_.pixelformat = formats::fourcc(fmt.format);
   image_.size = static_cast<int32_t>(fmt.bytes());
   image_.data.resize(fmt.bytes());
   image_.nmetadata = static_cast<int32_t>(std::size(kMetaKeys));
@@ -53,12 +53,12 @@ void LcmPublisher::publish(const std::string& channel, const Msg& msg, std::vect
   const int len = msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
   if (len <= 0) return;
   lcm_publish(lcm_, channel.c_str(), buf.data(), static_cast<unsigned>(len));
-  if (record && record_) record_->write(channel.c_str(), drivers::wall_clock_us(), buf.data(), static_cast<size_t>(len));
+  if (record && record_) record_->write(channel.c_str(), formats::wall_clock_us(), buf.data(), static_cast<size_t>(len));
 }
 
 void LcmPublisher::publish_encoded(const std::string& channel, const void* data, size_t size) {
   lcm_publish(lcm_, channel.c_str(), data, static_cast<unsigned>(size));
-  if (record_) record_->write(channel.c_str(), drivers::wall_clock_us(), data, size);
+  if (record_) record_->write(channel.c_str(), formats::wall_clock_us(), data, size);
 }
 
 void LcmPublisher::publish_image(bool raw, const dsp::ImageView& img, const ImageStamp& s) {

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "drivers/camera_source.hpp"
-#include "drivers/lcm_log.hpp"
+#include "formats/lcm_log.hpp"
 
 namespace rsd::daemon {
 
@@ -48,7 +48,7 @@ class LcmPublisher {
   lcm_t* handle() const { return lcm_; }
   // rsd --record: every output (rectified image, frame info, health) is also written to this
   // log, stamped with the wall clock; raw frames are the recorder's (daemon/recording_source).
-  void set_recorder(drivers::LcmLogWriter* log) { record_ = log; }
+  void set_recorder(formats::LcmLogWriter* log) { record_ = log; }
   // Publishes an already encoded message (and records it, if recording).
   void publish_encoded(const std::string& channel, const void* data, size_t size);
 
@@ -63,7 +63,7 @@ class LcmPublisher {
   rsd::health_t health_;
   std::vector<uint8_t> buf_;
   std::vector<uint8_t> health_buf_;  // health goes out from the service's thread, the rest from the publisher's
-  drivers::LcmLogWriter* record_ = nullptr;
+  formats::LcmLogWriter* record_ = nullptr;
 };
 
 }  // namespace rsd::daemon

@@ -13,7 +13,7 @@
 #include <cstdio>
 
 #include "daemon/service.hpp"
-#include "drivers/yaml_map.hpp"
+#include "formats/yaml_map.hpp"
 
 namespace {
 
@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
   rsd::daemon::Config cfg;
   try {
     if (!config_file.empty()) cfg = rsd::daemon::load_config(config_file);
-  } catch (const rsd::drivers::ConfigError& e) {
+  } catch (const rsd::formats::ConfigError& e) {
     std::fprintf(stderr, "rsd: configuration error: %s\n", e.what());
     return 2;
   }
@@ -89,14 +89,13 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, on_signal);
   std::signal(SIGHUP, on_signal);
   for (;;) {
-    int rc;
     try {
-      rc = rsd::daemon::run_service(cfg, config_file, g_flags, limits);
+      rsd::daemon::run_service(cfg, g_flags, limits);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "rsd: error: %s\n", e.what());
       return 1;
     }
-    if (!g_flags.reload.exchange(false) || g_flags.stop.load()) return rc;
+    if (!g_flags.reload.exchange(false) || g_flags.stop.load()) return 0;
     // SIGHUP: read the configuration again; a broken file keeps the running one. The
     // command line's replay and recording stay, and the recording continues.
     try {
@@ -106,7 +105,7 @@ int main(int argc, char** argv) {
         cfg.record_file = record_file;
       }
       std::fprintf(stderr, "rsd: configuration reloaded\n");
-    } catch (const rsd::drivers::ConfigError& e) {
+    } catch (const rsd::formats::ConfigError& e) {
       std::fprintf(stderr, "rsd: reload refused, keeping the running configuration: %s\n", e.what());
     }
     cfg.record_append = true;

@@ -1,6 +1,6 @@
 #include "daemon/pipeline.hpp"
 
-#include "drivers/sim_source.hpp"
+#include "drivers/monotonic_clock.hpp"
 
 namespace rsd::daemon {
 

@@ -8,7 +8,7 @@ drivers::CaptureStatus RecordingSource::capture(const dsp::ImageView& dst, drive
   if (st == drivers::CaptureStatus::Frame && encoder_) {
     const size_t n = encoder_->encode(dst, meta);
     // Stamped when the frame was captured, like lcm-logger stamps an arriving message.
-    if (n) log_.write(channel_.c_str(), drivers::wall_clock_us(), encoder_->data(), n);
+    if (n) log_.write(channel_.c_str(), formats::wall_clock_us(), encoder_->data(), n);
   }
   return st;
 }

@@ -1,4 +1,5 @@
 #include "daemon/service.hpp"
+#include "drivers/monotonic_clock.hpp"
 
 #include <cstdio>
 #include <memory>
@@ -38,7 +39,7 @@ bool open_with_backoff(drivers::CameraSource& src, StopFlags& flags, SystemdNoti
 // the publisher and the rectifier are sized for it once.
 struct Session {
   const Config& cfg;
-  std::unique_ptr<drivers::LcmLogWriter> recorder;  // rsd --record (outlives its writers)
+  std::unique_ptr<formats::LcmLogWriter> recorder;  // rsd --record (outlives its writers)
   std::unique_ptr<drivers::CameraSource> source;
   std::unique_ptr<RecordingSource> recording;       // the source, recorded
   std::unique_ptr<LcmPublisher> pub;
@@ -55,7 +56,7 @@ struct Session {
   Session(const Config& c, const SourceFactory& factory)
       : cfg(c), source(factory ? factory(c) : make_source(c.source)), velocity(c.velocity_limits) {
     if (!cfg.record_file.empty()) {
-      recorder = std::make_unique<drivers::LcmLogWriter>(cfg.record_file, cfg.record_append);
+      recorder = std::make_unique<formats::LcmLogWriter>(cfg.record_file, cfg.record_append);
       recording = std::make_unique<RecordingSource>(*source, *recorder, cfg.channels.raw);
     }
     // Before open(): the lcm source subscribes there. Poses are delivered from capture() only,
@@ -78,15 +79,23 @@ struct Session {
     velocity_in = std::make_unique<VelocityInput>(pub->handle(), cfg.velocity_channel, velocity, cfg.velocity_input);
     // The source's own velocity goes into the buffer on the source's thread, before the frame
     // it precedes (see VelocityInput::deliver), and out on LCM (and into the recording).
-    auto on_velocity = [this](const rsd::velocity_t& m) {
-      velocity_in->deliver(m);
+    auto publish = [this](const rsd::velocity_t& m) {
       uint8_t buf[128];
       const int len = m.encode(buf, 0, sizeof buf);
       if (len > 0) pub->publish_encoded(cfg.velocity_channel, buf, static_cast<size_t>(len));
     };
     velocity_in->set_recorder(recorder.get());
-    if (drivers::MessageSource* m = messages()) m->set_velocity_message_sink(on_velocity);
-    else source->set_velocity_sink([on_velocity](const drivers::VelocitySample& s) { on_velocity(VelocityInput::to_message(s)); });
+    if (drivers::MessageSource* m = messages()) {
+      m->set_velocity_message_sink([this, publish](const rsd::velocity_t& msg) {
+        velocity_in->deliver(msg);
+        publish(msg);
+      });
+    } else {
+      source->set_velocity_sink([this, publish](const drivers::VelocitySample& s) {
+        velocity_in->deliver(s);
+        publish(VelocityInput::to_message(s));
+      });
+    }
     velocity_in->start();
   }
 
@@ -124,7 +133,7 @@ std::string replay_summary(const drivers::ReplaySource& r, double seconds) {
   std::string s = text;
   if (r.ignored()) s += ", " + std::to_string(r.ignored()) + " recorded outputs ignored";
   if (r.passes()) s += ", looped " + std::to_string(r.passes()) + " times";
-  const drivers::LcmLogReader* rd = r.reader();
+  const formats::LcmLogReader* rd = r.reader();
   if (rd && rd->skipped_total()) s += "; skipped " + std::to_string(rd->skipped_total()) + " events: " + rd->skip_summary();
   else s += "; nothing skipped";
   return s;
@@ -160,14 +169,14 @@ void report_health(Session& s, const char* state, double dt, uint64_t& last_in, 
 
 }  // namespace
 
-int run_service(const Config& cfg, const std::string&, StopFlags& flags, const RunLimits& limits,
-                const SourceFactory& factory, RunSummary* summary) {
+void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, const SourceFactory& factory,
+                 RunSummary* summary) {
   SystemdNotify sd;
   Session s(cfg, factory);
   const auto deadline = limits.max_seconds > 0
                             ? Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limits.max_seconds))
                             : Clock::time_point::max();
-  if (!open_with_backoff(s.active(), flags, sd, deadline)) return 0;
+  if (!open_with_backoff(s.active(), flags, sd, deadline)) return;
   s.wire();
   s.start_pipeline();
   sd.ready();
@@ -231,7 +240,6 @@ int run_service(const Config& cfg, const std::string&, StopFlags& flags, const R
                    s.recorder->path().c_str());
   }
   if (summary) *summary = out;
-  return 0;
 }
 
 }  // namespace rsd::daemon

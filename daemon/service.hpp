@@ -33,16 +33,17 @@ struct RunSummary {
 // Makes the camera source; the default builds the configured driver. Tests substitute one.
 using SourceFactory = std::function<std::unique_ptr<drivers::CameraSource>(const Config&)>;
 
-// Flags the signal handlers set; the service polls them (every 50 ms: SIGTERM stops it
-// well within 500 ms).
+// Flags the signal handlers set; the service polls them (every 20 ms while streaming, every
+// 50 ms while waiting for a camera: SIGTERM stops it well within 500 ms).
 struct StopFlags {
   std::atomic<bool> stop{false};
   std::atomic<bool> reload{false};
 };
 
 // Runs until asked to stop or to reload (flags.reload stays set for the caller to see).
-// Returns the process exit status. Throws on configuration errors found while wiring.
-int run_service(const Config& cfg, const std::string& config_file, StopFlags& flags, const RunLimits& limits,
-                const SourceFactory& factory = {}, RunSummary* summary = nullptr);
+// Throws on configuration errors found while wiring; a camera that cannot be opened is
+// retried with backoff until a stop, never an error.
+void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, const SourceFactory& factory = {},
+                 RunSummary* summary = nullptr);
 
 }  // namespace rsd::daemon

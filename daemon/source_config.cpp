@@ -3,34 +3,34 @@
 #include <cmath>
 #include <filesystem>
 
-#include "drivers/intrinsics_file.hpp"
+#include "formats/intrinsics_file.hpp"
 
 namespace rsd::daemon {
 
-using drivers::YamlMap;
+using formats::YamlMap;
 
 namespace {
 
-Eigen::Vector3d vec3(YamlMap& m, const std::string& key, const Eigen::Vector3d& fallback) {
+Eigen::Vector3d vec3(formats::YamlMap& m, const std::string& key, const Eigen::Vector3d& fallback) {
   if (!m.has(key)) return fallback;
   const auto v = m.numbers(key, 3);
   return {v[0], v[1], v[2]};
 }
 
-double positive(YamlMap& m, const std::string& key, double fallback) {
+double positive(formats::YamlMap& m, const std::string& key, double fallback) {
   const double v = m.number(key, fallback);
   if (!(v > 0)) m.fail(key, "must be positive");
   return v;
 }
 
-dsp::Readout readout(YamlMap& m, dsp::Readout fallback) {
+dsp::Readout readout(formats::YamlMap& m, dsp::Readout fallback) {
   dsp::Readout r = fallback;
   if (m.has("readout") && !dsp::parse_readout(m.text("readout", ""), r))
     m.fail("readout", "must be top_to_bottom or bottom_to_top");
   return r;
 }
 
-void read_sim(YamlMap m, drivers::SimSourceConfig& s) {
+void read_sim(formats::YamlMap m, drivers::SimSourceConfig& s) {
   const int w = m.integer("width", s.camera.width), h = m.integer("height", s.camera.height);
   if (w < 16 || h < 16 || w > 8192 || h > 8192) m.fail("width", "and height must be 16..8192 pixels");
   const double hfov = m.number("hfov_deg", 60.0);
@@ -59,7 +59,7 @@ void read_sim(YamlMap m, drivers::SimSourceConfig& s) {
   m.finish();
 }
 
-void read_aravis(YamlMap m, drivers::AravisConfig& a) {
+void read_aravis(formats::YamlMap m, drivers::AravisConfig& a) {
   a.camera = m.text("camera", a.camera);
   a.pixel_format = m.text("pixel_format", a.pixel_format);
   a.width = m.integer("width", a.width);
@@ -78,7 +78,7 @@ void read_aravis(YamlMap m, drivers::AravisConfig& a) {
   m.finish();
 }
 
-void read_v4l2(YamlMap m, drivers::V4l2Config& v) {
+void read_v4l2(formats::YamlMap m, drivers::V4l2Config& v) {
   v.device = m.text("device", v.device);
   v.width = m.integer("width", v.width);
   v.height = m.integer("height", v.height);
@@ -91,7 +91,7 @@ void read_v4l2(YamlMap m, drivers::V4l2Config& v) {
   m.finish();
 }
 
-void read_libcamera(YamlMap m, drivers::LibcameraConfig& l) {
+void read_libcamera(formats::YamlMap m, drivers::LibcameraConfig& l) {
   l.camera_id = m.text("camera_id", l.camera_id);
   l.width = m.integer("width", l.width);
   l.height = m.integer("height", l.height);
@@ -107,7 +107,7 @@ void read_libcamera(YamlMap m, drivers::LibcameraConfig& l) {
   m.finish();
 }
 
-void read_replay(YamlMap m, drivers::ReplayConfig& r) {
+void read_replay(formats::YamlMap m, drivers::ReplayConfig& r) {
   std::filesystem::path file = m.text("file", r.file);
   if (!file.empty() && file.is_relative()) file = std::filesystem::path(m.file()).parent_path() / file;
   r.file = file.string();
@@ -119,7 +119,7 @@ void read_replay(YamlMap m, drivers::ReplayConfig& r) {
   m.finish();
 }
 
-void read_lcm_source(YamlMap m, drivers::LcmSourceConfig& l) {
+void read_lcm_source(formats::YamlMap m, drivers::LcmSourceConfig& l) {
   l.url = m.text("url", l.url);
   l.allow_multicast = m.boolean("allow_multicast", l.allow_multicast);
   if (l.url.rfind("udpm://", 0) == 0 && !l.allow_multicast)
@@ -133,10 +133,10 @@ void read_lcm_source(YamlMap m, drivers::LcmSourceConfig& l) {
 
 // Intrinsics (and a rolling-shutter line delay, if Kalibr estimated one) from a Kalibr
 // camchain or ROS camera_info file, relative paths taken from the configuration's directory.
-void read_intrinsics_file(YamlMap& m, SourceConfig& s) {
+void read_intrinsics_file(formats::YamlMap& m, SourceConfig& s) {
   std::filesystem::path file = m.text("intrinsics_file", "");
   if (file.is_relative()) file = std::filesystem::path(m.file()).parent_path() / file;
-  const drivers::Intrinsics in = drivers::load_intrinsics(file.string(), m.text("intrinsics_camera", ""));
+  const formats::Intrinsics in = formats::load_intrinsics(file.string(), m.text("intrinsics_camera", ""));
   s.camera = in.cam;
   if (in.line_delay_s) {  // a calibrated line delay beats "the readout fills the frame"
     if (s.aravis.line_delay_s == 0) s.aravis.line_delay_s = *in.line_delay_s;
@@ -147,7 +147,7 @@ void read_intrinsics_file(YamlMap& m, SourceConfig& s) {
 
 }  // namespace
 
-void read_source(YamlMap m, SourceConfig& s) {
+void read_source(formats::YamlMap m, SourceConfig& s) {
   s.driver = m.text("driver", s.driver);
   if (s.driver != "sim" && s.driver != "aravis" && s.driver != "v4l2" && s.driver != "libcamera" &&
       s.driver != "replay" && s.driver != "lcm")
@@ -163,7 +163,7 @@ void read_source(YamlMap m, SourceConfig& s) {
     dsp::CameraModel none;  // no defaults for a real camera: size and focal length are required
     none.width = none.height = 0;
     none.fx = none.fy = 0;
-    s.camera = drivers::read_camera_section(m.map("camera"), none);
+    s.camera = formats::read_camera_section(m.map("camera"), none);
   }
   if (m.has("intrinsics_file")) {
     if (s.camera) m.fail("intrinsics_file", "and source.camera both give intrinsics: keep one");

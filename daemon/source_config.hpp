@@ -12,7 +12,7 @@
 #include "drivers/replay_source.hpp"
 #include "drivers/sim_source.hpp"
 #include "drivers/v4l2_source.hpp"
-#include "drivers/yaml_map.hpp"
+#include "formats/yaml_map.hpp"
 
 namespace rsd::daemon {
 
@@ -28,7 +28,7 @@ struct SourceConfig {
 };
 
 // Reads the section; throws drivers::ConfigError naming file, line and key.
-void read_source(drivers::YamlMap m, SourceConfig& s);
+void read_source(formats::YamlMap m, SourceConfig& s);
 
 std::unique_ptr<drivers::CameraSource> make_source(const SourceConfig& s);
 

@@ -42,7 +42,7 @@ void VelocityInput::on_velocity(const lcm_recv_buf_t* rbuf, const char*, void* u
     self->ignored_.fetch_add(1);
     return;
   }
-  if (self->record_) self->record_->write(self->channel_.c_str(), drivers::wall_clock_us(), rbuf->data, rbuf->data_size);
+  if (self->record_) self->record_->write(self->channel_.c_str(), formats::wall_clock_us(), rbuf->data, rbuf->data_size);
   rsd::velocity_t m;
   if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) {
     self->malformed_.fetch_add(1);
@@ -65,6 +65,13 @@ void VelocityInput::deliver(const rsd::velocity_t& m) {
   accept(m);
 }
 
+void VelocityInput::deliver(const drivers::VelocitySample& s) {
+  source_feeds_.store(true);
+  // On the time line of rsd.velocity_t (us), so that a replay of the published samples
+  // reproduces the live run.
+  push(s.t_ns / 1000, Eigen::Matrix3d::Identity(), s.w, s.v, s.has_linear);
+}
+
 rsd::velocity_t VelocityInput::to_message(const drivers::VelocitySample& s) {
   rsd::velocity_t m{};
   m.utime = s.t_ns / 1000;
@@ -81,7 +88,7 @@ void VelocityInput::on_pose(const lcm_recv_buf_t* rbuf, const char*, void* user)
     return;
   }
   if (self->record_)
-    self->record_->write(self->cfg_.pose_channel.c_str(), drivers::wall_clock_us(), rbuf->data, rbuf->data_size);
+    self->record_->write(self->cfg_.pose_channel.c_str(), formats::wall_clock_us(), rbuf->data, rbuf->data_size);
   bot_core::pose_t m;
   if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) {
     self->malformed_.fetch_add(1);
@@ -109,11 +116,5 @@ void VelocityInput::stop() {
   if (thread_.joinable()) thread_.join();
 }
 
-void VelocityInput::publish(lcm_t* lcm, const std::string& channel, const drivers::VelocitySample& s) {
-  const rsd::velocity_t m = to_message(s);
-  uint8_t buf[128];
-  const int len = m.encode(buf, 0, sizeof buf);
-  if (len > 0) lcm_publish(lcm, channel.c_str(), buf, static_cast<unsigned>(len));
-}
 
 }  // namespace rsd::daemon

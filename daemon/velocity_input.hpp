@@ -20,7 +20,7 @@
 #include <thread>
 
 #include "daemon/velocity_buffer.hpp"
-#include "drivers/lcm_log.hpp"
+#include "formats/lcm_log.hpp"
 
 namespace rsd::daemon {
 
@@ -44,8 +44,6 @@ class VelocityInput {
   void start();  // the LCM handling thread
   void stop();
   uint64_t malformed() const { return malformed_.load(); }
-  // Encodes and publishes a sample as rsd.velocity_t (the simulated camera's IMU).
-  static void publish(lcm_t* lcm, const std::string& channel, const drivers::VelocitySample& s);
   // A sample as the rsd.velocity_t message it is published as (FRAME_CAMERA, utime in us).
   static rsd::velocity_t to_message(const drivers::VelocitySample& s);
 
@@ -56,12 +54,14 @@ class VelocityInput {
   // messages on the velocity channel are ignored (counted): they are the source's own
   // samples echoed by LCM, and two time lines cannot share the buffer.
   void deliver(const rsd::velocity_t& m);
+  // A source's sample in camera axes (the simulator's truth), straight into the buffer.
+  void deliver(const drivers::VelocitySample& s);
   // The same for bot_core.pose_t on the pose channel (a replayed log's, the lcm source's).
   void deliver(const bot_core::pose_t& m);
   uint64_t ignored() const { return ignored_.load(); }
   // rsd --record: velocity and pose messages received over LCM (an IMU, a localiser) are
   // written to the recording as they arrive, unless they are a source's echo.
-  void set_recorder(drivers::LcmLogWriter* log) { record_ = log; }
+  void set_recorder(formats::LcmLogWriter* log) { record_ = log; }
 
  private:
   static void on_velocity(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
@@ -77,7 +77,7 @@ class VelocityInput {
   std::atomic<bool> running_{false};
   std::atomic<uint64_t> malformed_{0}, ignored_{0};
   std::atomic<bool> source_feeds_{false}, source_feeds_pose_{false};
-  drivers::LcmLogWriter* record_ = nullptr;
+  formats::LcmLogWriter* record_ = nullptr;
   std::mutex writer_;  // the source's thread and the LCM thread (pose_t) both push
   std::thread thread_;
 };

@@ -1,4 +1,5 @@
 #include "drivers/aravis_timestamps.hpp"
+#include "drivers/monotonic_clock.hpp"
 
 #include <algorithm>
 #include <cmath>

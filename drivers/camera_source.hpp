@@ -14,8 +14,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "dsp/image.hpp"
-#include "dsp/row_timing.hpp"
+#include "dsp/core/frame.hpp"
+#include "dsp/geometry/row_timing.hpp"
 
 namespace rsd::drivers {
 
@@ -24,27 +24,12 @@ struct CameraError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-struct FrameFormat {
-  int width = 0, height = 0;
-  dsp::PixelFormat format = dsp::PixelFormat::Mono8;
-  size_t bytes() const { return static_cast<size_t>(width) * height * dsp::bytes_per_pixel(format); }
-};
-
-struct FrameMeta {
-  int64_t first_row_ns = 0;  // CLOCK_MONOTONIC: start of exposure of the first row read
-  uint64_t sequence = 0;     // the source's own counter; gaps mean the source dropped frames
-  double exposure_s = 0;     // row exposure, if the source knows it
-};
+using dsp::FrameFormat;
+using dsp::FrameMeta;
 
 enum class CaptureStatus { Frame, Timeout, EndOfStream };
 
-// The camera's own motion, as some sources know it (the simulator's truth, a replayed log).
-struct VelocitySample {
-  int64_t t_ns = 0;  // CLOCK_MONOTONIC (or the replayed clock)
-  double w[3] = {0, 0, 0};  // rad/s, camera axes
-  double v[3] = {0, 0, 0};  // m/s, camera axes
-  bool has_linear = false;
-};
+using dsp::VelocitySample;
 using VelocitySink = std::function<void(const VelocitySample&)>;
 
 class CameraSource {

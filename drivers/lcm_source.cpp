@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "drivers/sim_source.hpp"  // monotonic_ns
+#include "drivers/monotonic_clock.hpp"  // monotonic_ns
 
 namespace rsd::drivers {
 
@@ -14,7 +14,7 @@ LcmSource::~LcmSource() {
   if (lcm_) lcm_destroy(lcm_);
 }
 
-void LcmSource::skip(LogSkip r, const std::string& detail) {
+void LcmSource::skip(formats::LogSkip r, const std::string& detail) {
   if (++skips_[static_cast<size_t>(r)] <= 3)
     std::fprintf(stderr, "rsd: lcm source %s: message skipped: %s: %s\n", cfg_.url.c_str(), to_string(r), detail.c_str());
 }
@@ -48,16 +48,16 @@ void LcmSource::open() {
 void LcmSource::on_image(const lcm_recv_buf_t* rbuf, const char* channel, void* user) {
   auto* self = static_cast<LcmSource*>(user);
   const auto* data = static_cast<const uint8_t*>(rbuf->data);
-  DecodeStatus st = check_image_t(data, rbuf->data_size, self->why_);
-  if (st == DecodeStatus::Ok) st = decode_checked(data, rbuf->data_size, self->img_, self->why_);
-  if (st != DecodeStatus::Ok) return self->skip(to_skip(st), std::string(channel) + ": " + self->why_);
-  if (!parse_frame(self->img_, self->frame_, self->why_))
-    return self->skip(LogSkip::Undecodable, std::string(channel) + ": " + self->why_);
+  formats::DecodeStatus st = formats::check_image_t(data, rbuf->data_size, self->why_);
+  if (st == formats::DecodeStatus::Ok) st = formats::decode_checked(data, rbuf->data_size, self->img_, self->why_);
+  if (st != formats::DecodeStatus::Ok) return self->skip(formats::to_skip(st), std::string(channel) + ": " + self->why_);
+  if (!formats::parse_frame(self->img_, self->frame_, self->why_))
+    return self->skip(formats::LogSkip::Undecodable, std::string(channel) + ": " + self->why_);
   if (self->opening_) {
     self->first_ = self->frame_;
     const FrameFormat& f = self->first_.format;
     self->pending_image_ = dsp::Image(f.width, f.height, f.format);
-    copy_pixels(self->img_, self->pending_image_.view());
+    formats::copy_pixels(self->img_, self->pending_image_.view());
     self->pending_meta_ = self->frame_.meta;
     self->pending_ = self->got_frame_ = true;
     return;
@@ -65,8 +65,8 @@ void LcmSource::on_image(const lcm_recv_buf_t* rbuf, const char* channel, void* 
   const FrameFormat& f = self->frame_.format;
   if (!self->target_ || f.width != self->first_.format.width || f.height != self->first_.format.height ||
       f.format != self->first_.format.format)
-    return self->skip(LogSkip::Undecodable, std::string(channel) + ": frame size or format changed");
-  copy_pixels(self->img_, *self->target_);
+    return self->skip(formats::LogSkip::Undecodable, std::string(channel) + ": frame size or format changed");
+  formats::copy_pixels(self->img_, *self->target_);
   *self->target_meta_ = self->frame_.meta;
   self->got_frame_ = true;
 }
@@ -74,8 +74,8 @@ void LcmSource::on_image(const lcm_recv_buf_t* rbuf, const char* channel, void* 
 void LcmSource::on_velocity(const lcm_recv_buf_t* rbuf, const char* channel, void* user) {
   auto* self = static_cast<LcmSource*>(user);
   rsd::velocity_t m;
-  const DecodeStatus st = decode_checked(static_cast<const uint8_t*>(rbuf->data), rbuf->data_size, m, self->why_);
-  if (st != DecodeStatus::Ok) return self->skip(to_skip(st), std::string(channel) + ": " + self->why_);
+  const formats::DecodeStatus st = formats::decode_checked(static_cast<const uint8_t*>(rbuf->data), rbuf->data_size, m, self->why_);
+  if (st != formats::DecodeStatus::Ok) return self->skip(formats::to_skip(st), std::string(channel) + ": " + self->why_);
   // Before the first frame the daemon has not connected its sink yet: keep them (bounded).
   if (self->opening_ || self->pending_) {
     if (self->early_velocity_.size() < 4096) self->early_velocity_.push_back(m);
@@ -87,8 +87,8 @@ void LcmSource::on_velocity(const lcm_recv_buf_t* rbuf, const char* channel, voi
 void LcmSource::on_pose(const lcm_recv_buf_t* rbuf, const char* channel, void* user) {
   auto* self = static_cast<LcmSource*>(user);
   bot_core::pose_t m;
-  const DecodeStatus st = decode_checked(static_cast<const uint8_t*>(rbuf->data), rbuf->data_size, m, self->why_);
-  if (st != DecodeStatus::Ok) return self->skip(to_skip(st), std::string(channel) + ": " + self->why_);
+  const formats::DecodeStatus st = formats::decode_checked(static_cast<const uint8_t*>(rbuf->data), rbuf->data_size, m, self->why_);
+  if (st != formats::DecodeStatus::Ok) return self->skip(formats::to_skip(st), std::string(channel) + ": " + self->why_);
   // Before the first frame only the newest matters for a 0.1 s velocity window: keep few.
   if (self->opening_ || self->pending_) {
     if (self->early_pose_.size() < 4096) self->early_pose_.push_back(m);

@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "drivers/lcm_log.hpp"
+#include "formats/lcm_log.hpp"
 #include "drivers/message_source.hpp"
-#include "drivers/recorded_frame.hpp"
+#include "formats/image_t_codec.hpp"
 
 namespace rsd::drivers {
 
@@ -44,16 +44,16 @@ class LcmSource final : public MessageSource {
   CaptureStatus capture(const dsp::ImageView& dst, FrameMeta& meta, std::chrono::milliseconds timeout) override;
   void stop() override {}
   std::optional<dsp::CameraModel> recorded_camera() const override { return first_.camera; }
-  uint64_t skipped(LogSkip r) const { return skips_[static_cast<size_t>(r)]; }
+  uint64_t skipped(formats::LogSkip r) const { return skips_[static_cast<size_t>(r)]; }
 
  private:
   static void on_image(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
   static void on_velocity(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
   static void on_pose(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
-  void skip(LogSkip r, const std::string& detail);
+  void skip(formats::LogSkip r, const std::string& detail);
   LcmSourceConfig cfg_;
   lcm_t* lcm_ = nullptr;
-  RecordedFrame first_, frame_;
+  formats::RecordedFrame first_, frame_;
   dsp::RowTiming timing_;
   bot_core::image_t img_;
   std::string why_;
@@ -64,7 +64,7 @@ class LcmSource final : public MessageSource {
   std::vector<bot_core::pose_t> early_pose_;
   const dsp::ImageView* target_ = nullptr;
   FrameMeta* target_meta_ = nullptr;
-  std::array<uint64_t, kLogSkipKinds> skips_{};
+  std::array<uint64_t, formats::kLogSkipKinds> skips_{};
 };
 
 }  // namespace rsd::drivers

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "drivers/v4l2_logic.hpp"
-#include "dsp/image.hpp"
+#include "dsp/core/image.hpp"
 
 namespace rsd::drivers::lc {
 

@@ -10,7 +10,7 @@
 #include <optional>
 
 #include "drivers/camera_source.hpp"
-#include "dsp/camera_model.hpp"
+#include "dsp/geometry/camera_model.hpp"
 
 namespace rsd::drivers {
 

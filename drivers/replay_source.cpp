@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <thread>
 
-#include "drivers/sim_source.hpp"  // monotonic_ns
+#include "drivers/monotonic_clock.hpp"  // monotonic_ns
 
 namespace rsd::drivers {
 
@@ -46,19 +46,19 @@ bool ReplaySource::ignored_channel(const std::string& c) const {
 void ReplaySource::open() {
   // A separate, silent reader finds the first usable frame (and the second, for the frame
   // rate of logs that do not record it); the replay's own reader reports what it skips.
-  LcmLogReader probe(cfg_.file);
+  formats::LcmLogReader probe(cfg_.file);
   probe.set_message_handler({});
-  LogEvent ev;
-  std::optional<RecordedFrame> first, second;
+  formats::LogEvent ev;
+  std::optional<formats::RecordedFrame> first, second;
   uint64_t events = 0;
   while ((!first || (!first->frame_rate_hz && !second)) && probe.next(ev)) {
     ++events;
     if (ev.channel != cfg_.channel) continue;
     std::string why;
-    if (check_image_t(ev.data.data(), ev.data.size(), why) != DecodeStatus::Ok) continue;
-    if (decode_checked(ev.data.data(), ev.data.size(), img_, why) != DecodeStatus::Ok) continue;
-    RecordedFrame f;
-    if (!parse_frame(img_, f, why)) continue;
+    if (formats::check_image_t(ev.data.data(), ev.data.size(), why) != formats::DecodeStatus::Ok) continue;
+    if (formats::decode_checked(ev.data.data(), ev.data.size(), img_, why) != formats::DecodeStatus::Ok) continue;
+    formats::RecordedFrame f;
+    if (!formats::parse_frame(img_, f, why)) continue;
     (first ? second : first) = f;
   }
   if (!first)
@@ -70,7 +70,7 @@ void ReplaySource::open() {
   if (second && second->meta.first_row_ns > first->meta.first_row_ns)
     fps = 1e9 / static_cast<double>(second->meta.first_row_ns - first->meta.first_row_ns);
   timing_ = row_timing(first_, fps);
-  reader_ = std::make_unique<LcmLogReader>(cfg_.file);
+  reader_ = std::make_unique<formats::LcmLogReader>(cfg_.file);
   if (cfg_.quiet_skips) reader_->set_message_handler({});
 }
 
@@ -118,31 +118,31 @@ CaptureStatus ReplaySource::capture(const dsp::ImageView& dst, FrameMeta& meta, 
     } else if (ignored_channel(ev_.channel)) {
       ++ignored_;
     } else {
-      reader_->skip(LogSkip::UnknownChannel, ev_.offset, "channel '" + ev_.channel + "'");
+      reader_->skip(formats::LogSkip::UnknownChannel, ev_.offset, "channel '" + ev_.channel + "'");
     }
   }
 }
 
 bool ReplaySource::take_frame(const dsp::ImageView& dst, FrameMeta& meta) {
-  DecodeStatus st = check_image_t(ev_.data.data(), ev_.data.size(), why_);
-  if (st == DecodeStatus::Ok) st = decode_checked(ev_.data.data(), ev_.data.size(), img_, why_);
-  if (st != DecodeStatus::Ok) {
-    reader_->skip(to_skip(st), ev_.offset, "channel '" + ev_.channel + "': " + why_);
+  formats::DecodeStatus st = formats::check_image_t(ev_.data.data(), ev_.data.size(), why_);
+  if (st == formats::DecodeStatus::Ok) st = formats::decode_checked(ev_.data.data(), ev_.data.size(), img_, why_);
+  if (st != formats::DecodeStatus::Ok) {
+    reader_->skip(formats::to_skip(st), ev_.offset, "channel '" + ev_.channel + "': " + why_);
     return false;
   }
-  if (!parse_frame(img_, frame_, why_)) {
-    reader_->skip(LogSkip::Undecodable, ev_.offset, "channel '" + ev_.channel + "': " + why_);
+  if (!formats::parse_frame(img_, frame_, why_)) {
+    reader_->skip(formats::LogSkip::Undecodable, ev_.offset, "channel '" + ev_.channel + "': " + why_);
     return false;
   }
   if (frame_.format.width != first_.format.width || frame_.format.height != first_.format.height ||
       frame_.format.format != first_.format.format) {
-    reader_->skip(LogSkip::Undecodable, ev_.offset,
+    reader_->skip(formats::LogSkip::Undecodable, ev_.offset,
                   "frame of " + std::to_string(frame_.format.width) + "x" + std::to_string(frame_.format.height) +
                       " in a log that started with " + std::to_string(first_.format.width) + "x" +
                       std::to_string(first_.format.height));
     return false;
   }
-  copy_pixels(img_, dst);
+  formats::copy_pixels(img_, dst);
   meta = frame_.meta;
   if (frames_this_pass_ == 0 && passes_ == 0) first_frame_ns_ = meta.first_row_ns;
   last_frame_ns_ = std::max(last_frame_ns_, meta.first_row_ns);
@@ -154,9 +154,9 @@ bool ReplaySource::take_frame(const dsp::ImageView& dst, FrameMeta& meta) {
 
 void ReplaySource::take_pose() {
   bot_core::pose_t m;
-  const DecodeStatus st = decode_checked(ev_.data.data(), ev_.data.size(), m, why_);
-  if (st != DecodeStatus::Ok) {
-    reader_->skip(to_skip(st), ev_.offset, "channel '" + ev_.channel + "': " + why_);
+  const formats::DecodeStatus st = formats::decode_checked(ev_.data.data(), ev_.data.size(), m, why_);
+  if (st != formats::DecodeStatus::Ok) {
+    reader_->skip(formats::to_skip(st), ev_.offset, "channel '" + ev_.channel + "': " + why_);
     return;
   }
   m.utime += offset_ns_ / 1000;
@@ -165,9 +165,9 @@ void ReplaySource::take_pose() {
 
 void ReplaySource::take_velocity() {
   rsd::velocity_t m;
-  const DecodeStatus st = decode_checked(ev_.data.data(), ev_.data.size(), m, why_);
-  if (st != DecodeStatus::Ok) {
-    reader_->skip(to_skip(st), ev_.offset, "channel '" + ev_.channel + "': " + why_);
+  const formats::DecodeStatus st = formats::decode_checked(ev_.data.data(), ev_.data.size(), m, why_);
+  if (st != formats::DecodeStatus::Ok) {
+    reader_->skip(formats::to_skip(st), ev_.offset, "channel '" + ev_.channel + "': " + why_);
     return;
   }
   m.utime += offset_ns_ / 1000;

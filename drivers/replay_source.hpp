@@ -4,7 +4,7 @@
 // frames that follow it, so the velocity the rectifier sees at each frame is the same on
 // every replay; so are bot_core.pose_t messages on the daemon's pose channel, if it has one
 // (set_pose_message_sink). Recorded outputs (rectified images, frame info, health) are ignored; other
-// channels and damaged events are skipped and counted (drivers/lcm_log.hpp).
+// channels and damaged events are skipped and counted (formats/lcm_log.hpp).
 //
 // Pacing follows the events' timestamps: speed 1 is real time, N is N times faster, 0 ("fast")
 // does not wait at all (the daemon then hands frames over without dropping any).
@@ -17,9 +17,9 @@
 #include <string>
 #include <vector>
 
-#include "drivers/lcm_log.hpp"
+#include "formats/lcm_log.hpp"
 #include "drivers/message_source.hpp"
-#include "drivers/recorded_frame.hpp"
+#include "formats/image_t_codec.hpp"
 
 namespace rsd::drivers {
 
@@ -73,7 +73,7 @@ class ReplaySource final : public MessageSource {
   uint64_t frames() const { return frames_.load(std::memory_order_relaxed); }
   uint64_t ignored() const { return ignored_; }
   uint64_t passes() const { return passes_; }
-  const LcmLogReader* reader() const { return reader_.get(); }
+  const formats::LcmLogReader* reader() const { return reader_.get(); }
 
  private:
   bool take_frame(const dsp::ImageView& dst, FrameMeta& meta);
@@ -81,14 +81,14 @@ class ReplaySource final : public MessageSource {
   void take_pose();
   bool ignored_channel(const std::string& c) const;
   ReplayConfig cfg_;
-  RecordedFrame first_;
+  formats::RecordedFrame first_;
   dsp::RowTiming timing_;
-  std::unique_ptr<LcmLogReader> reader_;
-  LogEvent ev_;
+  std::unique_ptr<formats::LcmLogReader> reader_;
+  formats::LogEvent ev_;
   bool pending_ = false;
   ReplayPacer pacer_;
   bot_core::image_t img_;
-  RecordedFrame frame_;
+  formats::RecordedFrame frame_;
   std::string why_;
   // Read by the service's thread for the progress bar while the capture thread writes them.
   std::atomic<uint64_t> frames_{0}, position_{0};

@@ -6,12 +6,6 @@
 
 namespace rsd::drivers {
 
-int64_t monotonic_ns() {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
-}
-
 // The camera's pose: its own rate w(t) = w0 + wobble sin(2 pi f t) about each axis and a
 // constant velocity, integrated in closed form per axis-independent small steps is not
 // needed: we integrate the rate analytically as a rotation vector (w0 t + wobble term),

@@ -9,9 +9,10 @@
 #include <random>
 
 #include "drivers/camera_source.hpp"
-#include "dsp/camera_model.hpp"
-#include "dsp/camera_motion.hpp"
-#include "dsp/rs_renderer.hpp"
+#include "drivers/monotonic_clock.hpp"
+#include "dsp/geometry/camera_model.hpp"
+#include "dsp/geometry/camera_motion.hpp"
+#include "dsp/sim/rs_renderer.hpp"
 
 namespace rsd::drivers {
 
@@ -72,8 +73,5 @@ class SimSource final : public CameraSource {
   double next_velocity_s_ = 0;
   std::mt19937 rng_;
 };
-
-// CLOCK_MONOTONIC in nanoseconds.
-int64_t monotonic_ns();
 
 }  // namespace rsd::drivers

@@ -16,7 +16,7 @@
 
 #include "drivers/camera_source.hpp"
 #include "drivers/v4l2_device.hpp"
-#include "dsp/image.hpp"
+#include "dsp/core/image.hpp"
 
 namespace rsd::drivers::v4l2 {
 

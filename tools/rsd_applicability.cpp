@@ -1,7 +1,7 @@
 // rsd-applicability: is the pinhole (global-shutter) model good enough for a rolling-shutter
 // camera moving at a given speed past a scene at a given depth? Prints the paper's limit
 // (Meingast, Geyer, Sastry 2005, Sec. "Domain of applicability") and the general, exact
-// bound of dsp/applicability.hpp; --plot draws the paper's Figure 1 limit lines.
+// bound of dsp/analysis/applicability.hpp; --plot draws the paper's Figure 1 limit lines.
 #include <CLI/CLI.hpp>
 
 #include <cmath>
@@ -10,9 +10,9 @@
 #include <sstream>
 #include <string>
 
-#include "cli_util.hpp"
-#include "dsp/applicability.hpp"
-#include "limit_lines_plot.hpp"
+#include "tools/common/cli_util.hpp"
+#include "dsp/analysis/applicability.hpp"
+#include "tools/report/limit_lines_plot.hpp"
 
 using namespace rsd::dsp;
 using namespace rsd::tools;

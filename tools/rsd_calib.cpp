@@ -3,9 +3,9 @@
 //   rsd-calib led --freq HZ [--fps FPS] [--json] INPUT...
 //     The line delay, row rate r and frame readout time from frames of a lens-less sensor
 //     facing an LED blinking at a known frequency, and whether the inter-frame delay d is
-//     zero (Meingast, Geyer, Sastry 2005, Sec. "Calibration"; dsp/led_calibration.hpp).
+//     zero (Meingast, Geyer, Sastry 2005, Sec. "Calibration"; dsp/calib/led_calibration.hpp).
 //   rsd-calib synth-led --out DIR [...]
-//     Writes a synthetic capture of that set-up (dsp/led_capture_synthesis.hpp), the ground
+//     Writes a synthetic capture of that set-up (dsp/calib/led_capture_synthesis.hpp), the ground
 //     truth of the tests and of docs/led-calibration.md.
 #include <CLI/CLI.hpp>
 
@@ -21,12 +21,13 @@
 #include <string>
 #include <vector>
 
-#include "cli_util.hpp"
-#include "dsp/led_calibration.hpp"
-#include "dsp/led_capture_synthesis.hpp"
-#include "frame_sources.hpp"
-#include "image_io.hpp"
+#include "tools/common/cli_util.hpp"
+#include "dsp/calib/led_calibration.hpp"
+#include "dsp/calib/led_capture_synthesis.hpp"
+#include "tools/common/frame_sources.hpp"
+#include "formats/image_file.hpp"
 
+namespace formats = rsd::formats;
 using namespace rsd::dsp;
 using namespace rsd::tools;
 namespace fs = std::filesystem;
@@ -277,7 +278,7 @@ int run_synth(const SynthOptions& o) {
   for (size_t k = 0; k < cap.frames.size(); ++k) {
     char name[32];
     std::snprintf(name, sizeof name, "frame_%04zu.png", k);
-    write_png((fs::path(o.out) / name).string(), cap.frames[k].view());
+    formats::write_png((fs::path(o.out) / name).string(), cap.frames[k].view());
   }
   const double readout = spec.line_delay_s() * spec.height;
   std::cout << "Wrote " << cap.frames.size() << " frames of " << o.width << " x " << o.height << " (" << o.colour

@@ -10,8 +10,8 @@
 #include <cstdio>
 #include <vector>
 
-#include "dsp/rs_backprojection.hpp"
-#include "dsp/rs_projection.hpp"
+#include "dsp/geometry/rs_backprojection.hpp"
+#include "dsp/geometry/rs_projection.hpp"
 
 using namespace rsd::dsp;
 

@@ -1,7 +1,7 @@
-// rsd-diagnose: does a recording (../shared/formats/recording-v1.md) agree with its nominal
+// rsd-diagnose: does a recording (docs/formats/recording-v1.md) agree with its nominal
 // model, and if not, which of the spec's named effects explain the difference? Writes the
 // spec's diagnosis JSON and a report (index.md with uncertainties and PLplot figures,
-// diagnosis_report.hpp); the analysis is dsp/diagnosis.hpp.
+// diagnosis_report.hpp); the analysis is dsp/diagnosis/diagnosis.hpp.
 #include <CLI/CLI.hpp>
 
 #include <chrono>
@@ -10,11 +10,12 @@
 #include <sstream>
 #include <string>
 
-#include "cli_util.hpp"
-#include "diagnosis_report.hpp"
-#include "dsp/diagnosis.hpp"
-#include "recording_v1.hpp"
+#include "tools/common/cli_util.hpp"
+#include "tools/report/diagnosis_report.hpp"
+#include "dsp/diagnosis/diagnosis.hpp"
+#include "formats/recording_v1.hpp"
 
+namespace formats = rsd::formats;
 using namespace rsd::dsp;
 using namespace rsd::tools;
 
@@ -83,7 +84,7 @@ int run(int argc, char** argv) {
   if (const auto rc = parse_command_line(app, argc, argv)) return *rc;
   require_writable(o.json, "--json");
   std::cerr << "rsd-diagnose: reading " << o.dir << "\n";
-  const Recording rec = read_recording(o.dir);
+  const Recording rec = formats::read_recording(o.dir);
   // The model is built first so that an unsupported recording fails before the long part.
   const DiagnosisModel model(rec);
   std::cerr << "rsd-diagnose: diagnosing " << model.size() << " observations...\n";

@@ -12,8 +12,8 @@
 #include <sstream>
 #include <thread>
 
-#include "cli_util.hpp"
-#include "diagnosis_suite.hpp"
+#include "tools/common/cli_util.hpp"
+#include "tools/report/diagnosis_suite.hpp"
 
 using namespace rsd;
 using namespace rsd::tools;

@@ -1,7 +1,7 @@
 // rsd-extract: an LCM recording (raw frames plus gyro or a trajectory) -> an observation
-// recording (../shared/formats/recording-v1.md) that rsd-diagnose reads. The matches kind comes
-// from feature tracking between consecutive frames (tools/feature_tracks.hpp), the landmarks
-// kind from detecting a checkerboard or AprilGrid (tools/target_observations.hpp). The nominal
+// recording (docs/formats/recording-v1.md) that rsd-diagnose reads. The matches kind comes
+// from feature tracking between consecutive frames (dsp/features/feature_tracks.hpp), the landmarks
+// kind from detecting a checkerboard or AprilGrid (dsp/features/target_observations.hpp). The nominal
 // model is the user's (--nominal / --intrinsics and the timing options); see docs/extract.md.
 #include <CLI/CLI.hpp>
 #include <bot_core/image_t.hpp>
@@ -19,16 +19,19 @@
 #include <string>
 #include <vector>
 
-#include "cli_util.hpp"
-#include "drivers/intrinsics_file.hpp"
-#include "drivers/yaml_map.hpp"
-#include "feature_tracks.hpp"
-#include "frame_sources.hpp"
-#include "recording_v1.hpp"
-#include "target_observations.hpp"
+#include "tools/common/cli_util.hpp"
+#include "formats/intrinsics_file.hpp"
+#include "formats/yaml_map.hpp"
+#include "dsp/features/feature_tracks.hpp"
+#include "tools/common/frame_sources.hpp"
+#include "formats/recording_v1.hpp"
+#include "formats/target_spec.hpp"
+#include "dsp/features/target_observations.hpp"
 
+namespace formats = rsd::formats;
 using namespace rsd;
 using namespace rsd::tools;
+using namespace rsd::dsp;
 
 namespace {
 
@@ -185,7 +188,7 @@ struct Nominal {
   std::vector<std::string> notes;
 };
 
-void read_nominal_timing(drivers::YamlMap t, Nominal& n, bool& line_delay_given) {
+void read_nominal_timing(formats::YamlMap t, Nominal& n, bool& line_delay_given) {
   n.model.frame_rate_hz = t.number("frame_rate_hz", n.model.frame_rate_hz);
   if (t.has("line_delay_s")) line_delay_given = true;
   n.model.time.line_delay_s = t.number("line_delay_s", n.model.time.line_delay_s);
@@ -200,16 +203,16 @@ void read_nominal_timing(drivers::YamlMap t, Nominal& n, bool& line_delay_given)
 // --nominal: recording.yaml's camera, timing and motion keys; a whole recording.yaml is
 // accepted (its other keys are ignored), so a simulator's header can serve as the nominal.
 void read_nominal_file(const std::string& file, Nominal& n, bool& line_delay_given) {
-  drivers::YamlMap root = drivers::YamlMap::load(file);
+  formats::YamlMap root = formats::YamlMap::load(file);
   if (root.has("camera")) {
-    drivers::YamlMap c = root.map("camera");
+    formats::YamlMap c = root.map("camera");
     if (!c.has("fx")) c.fail("fx", "is missing (the nominal focal length, pixels)");
-    n.model.cam = drivers::read_camera_section(c, n.model.cam);
+    n.model.cam = formats::read_camera_section(c, n.model.cam);
     n.have_camera = true;
   }
   if (root.has("timing")) read_nominal_timing(root.map("timing"), n, line_delay_given);
   if (root.has("motion")) {
-    drivers::YamlMap m = root.map("motion");
+    formats::YamlMap m = root.map("motion");
     if (m.has("imu_to_camera")) n.imu_to_camera = rotation(m.numbers("imu_to_camera", 9), file + ": motion.imu_to_camera");
     if (m.has("lever_arm_m")) {
       const auto l = m.numbers("lever_arm_m", 3);
@@ -260,7 +263,7 @@ Nominal nominal_model(const Options& o, const LogScan& s) {
   if (f0.line_delay_s) n.model.time.line_delay_s = *f0.line_delay_s, line_delay_from = "the log's line_delay_ns metadata";
   if (f0.readout) n.model.time.readout = *f0.readout;
   if (!o.intrinsics.empty()) {
-    const drivers::Intrinsics in = drivers::load_intrinsics(o.intrinsics, o.intrinsics_camera);
+    const formats::Intrinsics in = formats::load_intrinsics(o.intrinsics, o.intrinsics_camera);
     n.model.cam = in.cam, n.have_camera = true;
     if (in.line_delay_s) n.model.time.line_delay_s = *in.line_delay_s, line_delay_from = in.source;
     if (in.timeshift_cam_imu_s) n.model.time.time_offset_s = *in.timeshift_cam_imu_s;  // t_imu = t_cam + shift
@@ -268,7 +271,7 @@ Nominal nominal_model(const Options& o, const LogScan& s) {
   }
   if (!o.nominal.empty()) {
     if (!o.intrinsics.empty()) {
-      drivers::YamlMap probe = drivers::YamlMap::load(o.nominal);
+      formats::YamlMap probe = formats::YamlMap::load(o.nominal);
       if (probe.has("camera")) throw UsageError("--nominal " + o.nominal + " has a camera: block and --intrinsics was given: state the camera once");
     }
     read_nominal_file(o.nominal, n, line_delay_given);
@@ -395,7 +398,7 @@ int run(const Options& o) {
   std::optional<TargetSpec> target;
   if (!o.target.empty()) {
     try {
-      target = parse_target(o.target);
+      target = formats::parse_target(o.target);
     } catch (const std::invalid_argument& e) {
       throw UsageError(std::string("--target: ") + e.what());
     }
@@ -434,7 +437,7 @@ int run(const Options& o) {
                  s.frames.size() - rec.frames.size(), s.frames.size());
   if (kind == dsp::ObservationKind::Matches) extract_matches(o, s, ok, rec);
   else extract_landmarks(o, *target, s, ok, rec);
-  write_recording(o.out, rec);
+  formats::write_recording(o.out, rec);
   std::printf("rsd-extract: wrote a %s recording (%zu frames, %zu %s samples) to %s\n", dsp::to_string(kind), rec.frames.size(),
               kind == dsp::ObservationKind::Matches ? rec.gyro.size() : rec.trajectory.size(), dsp::to_string(rec.motion), o.out.c_str());
   return 0;

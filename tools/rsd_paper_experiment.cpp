@@ -2,7 +2,7 @@
 // fig. simfigs — two-view bundle adjustment of rolling-shutter images with the rolling-shutter
 // model and with the perspective model, over the paper's 4 speeds x 6 noise levels.
 // Writes DIR/paper-experiment.csv, .png and .svg and prints the result table (Markdown).
-// The computation is dsp/paper_experiment.hpp; docs/paper-experiment.md states the set-up.
+// The computation is dsp/analysis/paper_experiment.hpp; docs/paper-experiment.md states the set-up.
 #include <CLI/CLI.hpp>
 #include <plplot.h>
 
@@ -20,8 +20,8 @@
 #include <thread>
 #include <vector>
 
-#include "cli_util.hpp"
-#include "dsp/paper_experiment.hpp"
+#include "tools/common/cli_util.hpp"
+#include "dsp/analysis/paper_experiment.hpp"
 
 using namespace rsd::dsp;
 using namespace rsd::tools;
@@ -46,7 +46,7 @@ constexpr const char* kDescription =
     "view, 15 fps, r = 7200 rows/s), each moving with v = (0, v_y, 0) in its own frame during\n"
     "its readout; v_y in {1.875, 3.75, 5.625, 7.5} km/h and pixel noise sigma in {0.5, 1.33,\n"
     "2.16, 3, 3.83, 4.66} px. Per trial, two-view bundle adjustment (Ceres) with the\n"
-    "rolling-shutter model eq. (rollshutterproj) and with the perspective model, from the\n"
+    "rolling-shutter model eq. (4) and with the perspective model, from the\n"
     "same perturbed truth. Errors: RMS reprojection (px), |log(R0^-1 R)| (deg), angle of the\n"
     "translation direction (deg). See docs/paper-experiment.md.\n\n"
     "Writes DIR/paper-experiment.csv, DIR/paper-experiment.png and DIR/paper-experiment.svg;\n"

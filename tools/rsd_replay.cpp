@@ -6,7 +6,7 @@
 //   rsd-replay LOG --info
 //
 // Unlike lcm-logplayer it checks every message first (damaged events, wrong types and absurd
-// sizes are skipped and counted, drivers/lcm_log.hpp) and plays only the camera's channels.
+// sizes are skipped and counted, formats/lcm_log.hpp) and plays only the camera's channels.
 #include <CLI/CLI.hpp>
 #include <lcm/lcm.h>
 #include <bot_core/pose_t.hpp>
@@ -19,13 +19,14 @@
 #include <map>
 #include <thread>
 
-#include "drivers/lcm_log.hpp"
-#include "drivers/recorded_frame.hpp"
+#include "formats/lcm_log.hpp"
+#include "formats/image_t_codec.hpp"
 #include "drivers/replay_source.hpp"
-#include "drivers/sim_source.hpp"  // monotonic_ns
+#include "drivers/monotonic_clock.hpp"  // monotonic_ns
 
 namespace {
 
+namespace formats = rsd::formats;
 using namespace rsd::drivers;
 
 volatile std::sig_atomic_t g_stop = 0;
@@ -39,8 +40,8 @@ struct Options {
 
 // Events per channel, frames (and how many rsd rectified), the time span, what was skipped.
 int describe(const Options& o) {
-  LcmLogReader reader(o.log);
-  LogEvent ev;
+  formats::LcmLogReader reader(o.log);
+  formats::LogEvent ev;
   std::map<std::string, uint64_t> per_channel;
   uint64_t frames = 0, infos = 0, rectified = 0;
   int64_t t0 = 0, t1 = 0;
@@ -51,13 +52,13 @@ int describe(const Options& o) {
     t1 = ev.timestamp_us;
     ++per_channel[ev.channel];
     if (ev.channel == o.channel) {
-      DecodeStatus st = check_image_t(ev.data.data(), ev.data.size(), why);
-      if (st == DecodeStatus::Ok) st = decode_checked(ev.data.data(), ev.data.size(), img, why);
-      if (st != DecodeStatus::Ok) reader.skip(to_skip(st), ev.offset, o.channel + ": " + why);
+      formats::DecodeStatus st = formats::check_image_t(ev.data.data(), ev.data.size(), why);
+      if (st == formats::DecodeStatus::Ok) st = formats::decode_checked(ev.data.data(), ev.data.size(), img, why);
+      if (st != formats::DecodeStatus::Ok) reader.skip(formats::to_skip(st), ev.offset, o.channel + ": " + why);
       else ++frames;
     } else if (ev.channel == "RSD_FRAME_INFO") {
       rsd::frame_info_t info;
-      if (decode_checked(ev.data.data(), ev.data.size(), info, why) == DecodeStatus::Ok) {
+      if (formats::decode_checked(ev.data.data(), ev.data.size(), info, why) == formats::DecodeStatus::Ok) {
         ++infos;
         rectified += info.rectified ? 1 : 0;
       }
@@ -77,18 +78,18 @@ int play(const Options& o) {
     std::fprintf(stderr, "rsd-replay: --lcm-url %s is multicast; add --allow-multicast to use it\n", o.url.c_str());
     return 2;
   }
-  LcmLogReader reader(o.log);
+  formats::LcmLogReader reader(o.log);
   lcm_t* lcm = lcm_create(o.url.c_str());
   if (!lcm) {
     std::fprintf(stderr, "rsd-replay: cannot open LCM URL '%s'\n", o.url.c_str());
     return 1;
   }
   ReplayPacer pacer(o.speed);
-  LogEvent ev;
+  formats::LogEvent ev;
   bot_core::image_t img;
   rsd::velocity_t vel;
   bot_core::pose_t pose;
-  RecordedFrame frame;
+  formats::RecordedFrame frame;
   std::string why;
   uint64_t frames = 0, velocities = 0, ignored = 0;
   const int64_t start = monotonic_ns();
@@ -98,16 +99,16 @@ int play(const Options& o) {
     const bool is_pose = !o.pose_channel.empty() && ev.channel == o.pose_channel;
     if (!is_frame && !is_velocity && !is_pose) {
       if (ev.channel == "RSD_RECT" || ev.channel == "RSD_FRAME_INFO" || ev.channel == "RSD_HEALTH") ++ignored;
-      else reader.skip(LogSkip::UnknownChannel, ev.offset, "channel '" + ev.channel + "'");
+      else reader.skip(formats::LogSkip::UnknownChannel, ev.offset, "channel '" + ev.channel + "'");
       continue;
     }
-    DecodeStatus st = is_frame      ? check_image_t(ev.data.data(), ev.data.size(), why)
-                      : is_velocity ? decode_checked(ev.data.data(), ev.data.size(), vel, why)
-                                    : decode_checked(ev.data.data(), ev.data.size(), pose, why);
-    if (is_frame && st == DecodeStatus::Ok) st = decode_checked(ev.data.data(), ev.data.size(), img, why);
-    if (is_frame && st == DecodeStatus::Ok && !parse_frame(img, frame, why)) st = DecodeStatus::Undecodable;
-    if (st != DecodeStatus::Ok) {
-      reader.skip(to_skip(st), ev.offset, "channel '" + ev.channel + "': " + why);
+    formats::DecodeStatus st = is_frame      ? formats::check_image_t(ev.data.data(), ev.data.size(), why)
+                      : is_velocity ? formats::decode_checked(ev.data.data(), ev.data.size(), vel, why)
+                                    : formats::decode_checked(ev.data.data(), ev.data.size(), pose, why);
+    if (is_frame && st == formats::DecodeStatus::Ok) st = formats::decode_checked(ev.data.data(), ev.data.size(), img, why);
+    if (is_frame && st == formats::DecodeStatus::Ok && !formats::parse_frame(img, frame, why)) st = formats::DecodeStatus::Undecodable;
+    if (st != formats::DecodeStatus::Ok) {
+      reader.skip(formats::to_skip(st), ev.offset, "channel '" + ev.channel + "': " + why);
       continue;
     }
     while (!g_stop && !pacer.wait(ev.timestamp_us, std::chrono::milliseconds(100))) {}

@@ -10,14 +10,15 @@
 #include <filesystem>
 #include <memory>
 
-#include "cli_util.hpp"
-#include "dsp/recording_simulation.hpp"
-#include "dsp/rs_renderer.hpp"
-#include "image_io.hpp"
-#include "recording_v1.hpp"
-#include "sim_lcm_log.hpp"
-#include "sim_scenario.hpp"
+#include "tools/common/cli_util.hpp"
+#include "dsp/sim/recording_simulation.hpp"
+#include "dsp/sim/rs_renderer.hpp"
+#include "formats/image_file.hpp"
+#include "formats/recording_v1.hpp"
+#include "tools/sim/sim_lcm_log.hpp"
+#include "formats/scenario_file.hpp"
 
+namespace formats = rsd::formats;
 using namespace rsd;
 namespace fs = std::filesystem;
 
@@ -34,10 +35,10 @@ struct FrameOptions {
 };
 
 int run_recording(const std::string& scenario, const std::string& out) {
-  const tools::Scenario sc = tools::load_scenario(scenario);
+  const formats::Scenario sc = formats::load_scenario(scenario);
   const auto t0 = std::chrono::steady_clock::now();
   const dsp::SimulatedRecording sim = dsp::simulate_recording(sc.sim);
-  tools::write_recording(out, sim.rec);
+  formats::write_recording(out, sim.rec);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const auto& r = sim.rec;
   std::printf("rsd-sim: wrote %s recording to %s in %.2f s\n", dsp::to_string(r.kind), out.c_str(), secs);
@@ -77,7 +78,7 @@ class TrueCameraMotion final : public dsp::CameraMotion {
 
 // Everything needed to render a scenario's frames as the real (true-model) camera sees them.
 struct FrameRig {
-  tools::Scenario sc;
+  formats::Scenario sc;
   dsp::SimulatedRecording sim;
   dsp::TrueModel truth;
   dsp::RowTiming timing;
@@ -89,7 +90,7 @@ struct FrameRig {
 
 FrameRig make_rig(const std::string& scenario, const FrameOptions& o) {
   FrameRig rig;
-  rig.sc = tools::load_scenario(scenario);
+  rig.sc = formats::load_scenario(scenario);
   if (rig.sc.sim.kind != dsp::ObservationKind::Landmarks)
     throw tools::UsageError(scenario + ": frames are rendered for landmarks scenarios (a target or point set)");
   rig.sc.sim.noise_px = 0;
@@ -124,7 +125,7 @@ int run_frames(const std::string& scenario, const std::string& out, const FrameO
     rig.renderer->render(rig.scene, *rig.motion, rig.sim.rec.frames[k].t, img.view());
     char name[64];
     std::snprintf(name, sizeof name, "frame_%06d.png", rig.sim.rec.frames[k].frame);
-    tools::write_png((fs::path(out) / name).string(), img.view());
+    formats::write_png((fs::path(out) / name).string(), img.view());
     progress(k, rig.frames);
   }
   std::printf("rsd-sim: wrote %zu frames (%dx%d, line delay %.3g s, %s) to %s\n", rig.frames, cam.width, cam.height,
@@ -174,7 +175,7 @@ int run_figure1(const std::string& out) {
     tw.w = Eigen::Vector3d(0, 0, 2 * M_PI * rev_per_s);
     renderer.render(scene, dsp::ScrewMotion(tw), 0.0, img.view());
     const std::string file = (fs::path(out) / (std::string("figure1-") + names[i] + "-rev-per-s.png")).string();
-    tools::write_png(file, img.view());
+    formats::write_png(file, img.view());
     std::printf("rsd-sim: %s (%.2f rev/s about the optical axis)\n", file.c_str(), rev_per_s);
   }
   return 0;
@@ -188,7 +189,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   std::string scenario, out;
   FrameOptions fo;
-  auto* rec = app.add_subcommand("recording", "write an observation recording (../shared/formats/recording-v1.md)");
+  auto* rec = app.add_subcommand("recording", "write an observation recording (docs/formats/recording-v1.md)");
   rec->add_option("scenario", scenario, "scenario YAML")->required()->check(CLI::ExistingFile);
   rec->add_option("outdir", out, "output directory (created)")->required();
   auto* frames = app.add_subcommand("frames", "render the scenario's target as PNG frames, each row at its read time");

@@ -1,0 +1,32 @@
+// What a camera source delivers with each frame: its format, its stamp and, for sources
+// that know it, the camera's own motion. Plain data shared by drivers, the recorded-frame
+// codec and the daemon.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "dsp/core/image.hpp"
+
+namespace rsd::dsp {
+
+struct FrameFormat {
+  int width = 0, height = 0;
+  PixelFormat format = PixelFormat::Mono8;
+  size_t bytes() const { return static_cast<size_t>(width) * height * bytes_per_pixel(format); }
+};
+
+struct FrameMeta {
+  int64_t first_row_ns = 0;  // CLOCK_MONOTONIC: start of exposure of the first row read
+  uint64_t sequence = 0;     // the source's own counter; gaps mean the source dropped frames
+  double exposure_s = 0;     // row exposure, if the source knows it
+};
+
+// The camera's own motion, as some sources know it (the simulator's truth, a replayed log).
+struct VelocitySample {
+  int64_t t_ns = 0;  // CLOCK_MONOTONIC (or the replayed clock)
+  double w[3] = {0, 0, 0};  // rad/s, camera axes
+  double v[3] = {0, 0, 0};  // m/s, camera axes
+  bool has_linear = false;
+};
+}  // namespace rsd::dsp

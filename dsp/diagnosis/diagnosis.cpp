@@ -1,0 +1,188 @@
+#include "dsp/diagnosis/diagnosis.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "dsp/diagnosis/select.hpp"
+
+namespace rsd::dsp {
+
+RobustStats robust_stats(const std::vector<Eigen::Vector2d>& residuals) {
+  RobustStats s;
+  s.observations = static_cast<int>(residuals.size());
+  std::vector<double> len;
+  for (const auto& r : residuals)
+    if (r.allFinite()) len.push_back(r.norm());
+  if (len.empty()) {
+    s.outliers = s.observations;
+    return s;
+  }
+  std::vector<double> sorted = len;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  // Median of a Rayleigh(sigma) length is sigma sqrt(2 ln 2); outliers push the median up
+  // (10% of them by 8%), so refine it by the RMS of the lengths within 3 scales, corrected for
+  // the truncation: E[l^2 | l < 3 sigma] = 2 sigma^2 g, g = (1 - 5.5 e^-4.5) / (1 - e^-4.5).
+  s.scale_px = sorted[sorted.size() / 2] / std::sqrt(2 * std::log(2.0));
+  const double g = (1 - 5.5 * std::exp(-4.5)) / (1 - std::exp(-4.5));
+  for (int it = 0; it < 5 && s.scale_px > 0; ++it) {
+    double sum2 = 0;
+    int n = 0;
+    for (double l : len)
+      if (l <= 3 * s.scale_px) sum2 += l * l, ++n;
+    if (n < 3) break;
+    s.scale_px = std::sqrt(sum2 / (2.0 * n * g));
+  }
+  const double limit = kOutlierSigmas * std::max(s.scale_px, 1e-12);
+  double sum = 0;
+  int n = 0;
+  for (double l : len)
+    if (l <= limit) sum += l * l, ++n;
+  s.outliers = s.observations - n;
+  s.rms_px = n > 0 ? std::sqrt(sum / (2.0 * n)) : 0.0;
+  return s;
+}
+
+namespace {
+
+NamedEffect describe(const SelectedEffect& st, const ModelParams& p, const NominalModel& n) {
+  NamedEffect out{effect_name(st.effect), {}, "", st.rms_px, st.bic_drop, st.heldout_drop};
+  std::ostringstream x;
+  auto param = [&](Param q) { return EffectParam{param_name(q), p[q], ""}; };
+  switch (st.effect) {
+    case Effect::RollingShutter: {
+      const double readout = p[Param::LineDelay] * n.cam.height;
+      out.params = {param(Param::LineDelay), {"frame_readout_s", readout, ""}};
+      x << "rows are read over " << readout * 1e3 << " ms, not " << n.time.line_delay_s * n.cam.height * 1e3 << " ms";
+      break;
+    }
+    case Effect::TimeOffset:
+      out.params = {param(Param::TimeOffset)};
+      x << "the motion clock is " << p[Param::TimeOffset] * 1e3 << " ms ahead of the camera clock";
+      break;
+    case Effect::ReadoutDirection: {
+      const bool down = (n.time.readout == Readout::TopToBottom) != p.flip_readout;
+      out.params = {{"direction", 0, down ? "top_to_bottom" : "bottom_to_top"}};
+      x << "rows are read " << (down ? "top to bottom" : "bottom to top") << ", not the nominal order";
+      break;
+    }
+    case Effect::ClockDrift:
+      out.params = {param(Param::Drift)};
+      x << "the camera clock runs " << p[Param::Drift] << " ppm slow against the motion clock";
+      break;
+    case Effect::LensDistortion:
+      out.params = {param(Param::K1), param(Param::K2)};
+      x << "radial distortion k1 = " << p[Param::K1] << ", k2 = " << p[Param::K2];
+      break;
+    case Effect::FocalLength:
+      out.params = {param(Param::Fx), param(Param::Fy)};
+      x << "focal length " << p[Param::Fx] << " x " << p[Param::Fy] << " px, not " << n.cam.fx << " x " << n.cam.fy;
+      break;
+    case Effect::GyroBias:
+      out.params = {param(Param::BiasX), param(Param::BiasY), param(Param::BiasZ)};
+      x << "the gyro reads (" << p[Param::BiasX] * 1e3 << ", " << p[Param::BiasY] * 1e3 << ", "
+        << p[Param::BiasZ] * 1e3 << ") mrad/s too much (IMU axes)";
+      break;
+    case Effect::LeverArm:
+      out.params = {param(Param::LeverX), param(Param::LeverY), param(Param::LeverZ)};
+      x << "the camera sits at (" << p[Param::LeverX] * 1e3 << ", " << p[Param::LeverY] * 1e3 << ", "
+        << p[Param::LeverZ] * 1e3 << ") mm in body axes";
+      break;
+    case Effect::Count: break;
+  }
+  out.explains = x.str();
+  return out;
+}
+
+// Fitting and held-out observations: whole frames are held out, every n-th in time order.
+void split(const DiagnosisModel& m, int every, std::vector<int>& fit, std::vector<int>& held) {
+  for (int i = 0; i < m.size(); ++i)
+    (every > 1 && m.frame_rank(i) % every == every - 1 ? held : fit).push_back(i);
+}
+
+// Without a stated noise: the robust scale once every applicable continuous effect is fitted
+// at once (from the gross start), on the screening subsample.
+double estimate_sigma(const DiagnosisModel& m, const std::vector<int>& screen, const ModelParams& gross, double guess) {
+  ParamMask all;
+  for (Effect e : applicable_effects(m)) all |= effect_params(e);
+  const ModelParams rich = fit_params(m, screen, gross, all, guess, 20);
+  return std::max(robust_stats(m.residuals(rich, screen)).scale_px, 1e-3);
+}
+
+// Where the residual lives. A gross error (a clock offset of a large fraction of a second, a
+// focal length several percent off) swamps every linear pattern, so when the global search
+// moved the offset or the focal length, that is reported first, with the share of the
+// residual energy it removes, and the patterns then describe what remains after it.
+std::vector<Located> locate_with_gross(const DiagnosisModel& m, const ModelParams& nominal, const ModelParams& gross,
+                                       const std::vector<int>& fit) {
+  const double offset = gross[Param::TimeOffset] - nominal[Param::TimeOffset];
+  const double scale = gross[Param::Fx] / nominal[Param::Fx] - 1;
+  // Gross: beyond a frame period (a rolling shutter alone shifts features by up to half of
+  // one, and the row pattern describes that) or 2% of the focal length.
+  const double gross_offset = 1.0 / m.recording().nominal.frame_rate_hz;
+  if (std::abs(offset) < gross_offset && std::abs(scale) < 0.02) return locate(m, nominal, fit);
+  const std::vector<int> sub = subsample(fit, 3000);
+  const double before = robust_stats(m.residuals(nominal, sub)).rms_px, after = robust_stats(m.residuals(gross, sub)).rms_px;
+  const double share = before > 0 ? std::clamp(1 - (after * after) / (before * before), 0.0, 1.0) : 0.0;
+  std::vector<Located> out;
+  std::ostringstream d;
+  if (std::abs(offset) >= gross_offset) {
+    d << "a global search for the clock offset moves the motion clock by " << offset * 1e3 << " ms and removes "
+      << std::lround(share * 100) << "% of the residual energy";
+    out.push_back({"image_velocity", share, d.str()});
+  }
+  if (std::abs(scale) >= 0.02) {
+    d.str("");
+    d << "a global search for the focal length scales it by " << scale * 100 << "%";
+    out.push_back({"image_scale", out.empty() ? share : 0.0, d.str()});
+  }
+  for (Located l : locate(m, gross, fit)) {
+    l.detail += " (what remains after the global search)";
+    out.push_back(std::move(l));
+  }
+  return out;
+}
+
+// The observations of idx that the gyro covers (no gap longer than max_gyro_gap).
+std::vector<int> usable(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx) {
+  std::vector<int> out;
+  for (int i : idx)
+    if (m.gyro_gap(p, i) <= m.max_gyro_gap()) out.push_back(i);
+  return out;
+}
+
+}  // namespace
+
+Diagnosis diagnose(const Recording& rec, const DiagnosisOptions& opt) {
+  const DiagnosisModel m(rec);
+  Diagnosis d;
+  std::vector<int> all(m.size()), fit, held;
+  for (int i = 0; i < m.size(); ++i) all[i] = i;
+  split(m, opt.heldout_every, fit, held);
+  const size_t n_screen = static_cast<size_t>(std::max(opt.screen_observations, 100));
+  const ModelParams nominal = nominal_params(rec.nominal);
+  d.baseline = robust_stats(m.residuals(nominal, all));
+  for (Effect e : applicable_effects(m)) d.candidates.push_back(effect_name(e));
+  d.noise_floor_px = rec.noise_px ? *rec.noise_px * m.noise_gain() : 0.0;
+  // Gross errors first, with the stated noise or a first guess of it (the baseline's scale).
+  const double guess = d.noise_floor_px > 0 ? d.noise_floor_px : std::max(d.baseline.scale_px, 1e-3);
+  d.gross = gross_start(m, subsample(fit, n_screen), nominal, guess);
+  d.located = locate_with_gross(m, nominal, d.gross, fit);
+  const std::vector<int> use_all = usable(m, d.gross, all), use_fit = usable(m, d.gross, fit),
+                         use_held = usable(m, d.gross, held);
+  d.unusable = m.size() - static_cast<int>(use_all.size());
+  const std::vector<int> screen = subsample(use_fit, n_screen);
+  d.sigma_px = d.noise_floor_px > 0 ? d.noise_floor_px : estimate_sigma(m, screen, d.gross, guess);
+  const SelectionOptions so{opt.min_bic_drop, opt.max_iterations};
+  const Selection sel = select_effects(m, use_fit, use_held, screen, nominal, d.gross, d.sigma_px, so);
+  for (const SelectedEffect& st : sel.effects) d.effects.push_back(describe(st, sel.params, rec.nominal));
+  d.fitted = sel.params;
+  d.final_rms_px = robust_stats(m.residuals(sel.params, use_all)).rms_px;
+  d.heldout_indices = use_held;
+  d.heldout_observations = static_cast<int>(use_held.size());
+  d.heldout_baseline_rms_px = robust_stats(m.residuals(nominal, use_held)).rms_px;
+  d.heldout_final_rms_px = robust_stats(m.residuals(sel.params, use_held)).rms_px;
+  return d;
+}
+
+}  // namespace rsd::dsp

@@ -1,0 +1,84 @@
+// Model-discrepancy diagnosis of an observation recording (docs/formats/recording-v1.md):
+// how badly the nominal model fits (robust baseline), where the mismatch lives (located
+// signals), and which named effects explain it (gross errors searched globally first, then
+// robust fits and BIC forward selection with a backward check), with a held-out comparison
+// on frames the fit did not see. Pure computation: the rsd-diagnose tool reads the files and
+// writes the JSON and report. Method and measured accuracy: docs/diagnosis.md.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "dsp/diagnosis/fit.hpp"
+#include "dsp/diagnosis/model.hpp"
+
+namespace rsd::dsp {
+
+// Robust summary of 2-D pixel residuals. The scale is the per-coordinate sigma estimated
+// from the median residual length (a 2-D Gaussian's length is Rayleigh distributed);
+// residuals longer than `kOutlierSigmas` scales, and failed predictions (NaN), are outliers.
+struct RobustStats {
+  double rms_px = 0;      // per-coordinate RMS of the inliers
+  double scale_px = 0;    // robust per-coordinate sigma
+  int observations = 0;   // all, inliers and outliers
+  int outliers = 0;
+};
+constexpr double kOutlierSigmas = 5.0;
+RobustStats robust_stats(const std::vector<Eigen::Vector2d>& residuals);
+
+// Where the residual lives: `strength` is the share (0..1) of the inlier residual energy a
+// signal's pattern explains. Signals: image_velocity, row, radius, image_scale, time_trend,
+// time, angular_rate (gyro recordings), depth (trajectory recordings); see
+// dsp/diagnosis/locate.cpp. Uses at most 3000 of `idx`.
+struct Located {
+  std::string signal;
+  double strength;
+  std::string detail;
+};
+std::vector<Located> locate(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx);
+
+struct EffectParam {
+  std::string name;
+  double value = 0;
+  std::string text;  // non-empty for a non-numeric value (readout direction)
+};
+struct NamedEffect {
+  std::string name;  // the spec's effect name
+  std::vector<EffectParam> params;
+  std::string explains;
+  double rms_px = 0;    // fitting-set RMS once this effect (and those before it) is in
+  double bic_drop = 0;  // how much BIC fell when it was added
+  double heldout_drop = 0;  // how much the held-out robust chi-square fell when it was added
+};
+
+struct Diagnosis {
+  RobustStats baseline;
+  std::vector<Located> located;
+  std::vector<NamedEffect> effects;  // in order of selection; empty = fits within noise
+  ModelParams fitted;
+  double sigma_px = 0;  // the residual sigma the fits and BIC used (noise_floor_px when known)
+  double final_rms_px = 0;  // over the usable observations
+  double heldout_baseline_rms_px = 0, heldout_final_rms_px = 0;
+  int heldout_observations = 0;
+  // The per-coordinate residual RMS that noise alone gives: noise_px for landmarks,
+  // sqrt(2) noise_px for matches (the transfer carries frame_a's noise); 0 when the recording
+  // states no noise.
+  double noise_floor_px = 0;
+  // Matches spanning a gyro gap longer than DiagnosisModel::max_gyro_gap (at the gross time
+  // offset) cannot be predicted: they are left out of fit, final and held-out RMS.
+  int unusable = 0;
+  std::vector<int> heldout_indices;    // observations (DiagnosisModel order) left out of the fit
+  std::vector<std::string> candidates;  // the effects considered for this recording's kinds
+  ModelParams gross;                    // where the global search put offset and focal length
+};
+
+struct DiagnosisOptions {
+  int heldout_every = 5;          // every n-th frame is held out of the fit (0: none)
+  double min_bic_drop = 10;       // "very strong" evidence on the usual BIC scale
+  int max_iterations = 30;        // final fits
+  int screen_observations = 5000;  // candidates are fitted on this many fitting observations
+};
+
+Diagnosis diagnose(const Recording& rec, const DiagnosisOptions& opt = {});
+
+}  // namespace rsd::dsp

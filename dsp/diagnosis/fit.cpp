@@ -1,0 +1,378 @@
+#include "dsp/diagnosis/fit.hpp"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace rsd::dsp {
+
+namespace {
+
+// The loss of a residual of squared length s2 (sigma units): Huber (quadratic to kHuberSigmas,
+// then linear), and beyond kTailSigmas logarithmic, so that the influence of a residual falls
+// as 1/length there. Gross outliers (a match to a random point lies hundreds of sigmas away)
+// then barely pull: with Huber's constant pull, 10% random matches, whose residuals point
+// on average against the image motion, biased the line delay by 4%. C1 at both joints.
+double huber(double s2) {
+  const double d = kHuberSigmas, R = kTailSigmas;
+  if (s2 <= d * d) return s2;
+  const double l = std::sqrt(s2);
+  return l <= R ? 2 * d * l - d * d : 2 * d * R * (1 + std::log(l / R)) - d * d;
+}
+
+}  // namespace
+
+double robust_chi2(const std::vector<Eigen::Vector2d>& r, double sigma) {
+  double c = 0;
+  for (const auto& e : r) c += huber(e.allFinite() ? e.squaredNorm() / (sigma * sigma) : 2 * kFailSigmas * kFailSigmas);
+  return c;
+}
+
+std::vector<int> subsample(const std::vector<int>& idx, size_t count) {
+  if (idx.size() <= count || count == 0) return idx;
+  std::vector<int> out;
+  out.reserve(count);
+  for (size_t k = 0; k < count; ++k) out.push_back(idx[k * idx.size() / count]);
+  return out;
+}
+
+double design_effect(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx, double sigma) {
+  const auto r = m.residuals(p, idx);
+  struct Group {
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    int n = 0;
+  };
+  std::vector<Group> g;
+  double var = 0;
+  int n = 0;
+  for (size_t k = 0; k < idx.size(); ++k) {
+    if (!r[k].allFinite() || r[k].norm() > 3 * sigma) continue;  // the Gaussian core
+    const int f = m.frame_rank(idx[k]);
+    if (f >= static_cast<int>(g.size())) g.resize(f + 1);
+    g[f].sum += r[k], g[f].n += 1;
+    var += 0.5 * r[k].squaredNorm(), ++n;
+  }
+  if (n < 10) return 1.0;
+  var /= n;
+  // Per coordinate: E[mean^2] = tau^2 + var / n_g for a common part of variance tau^2.
+  double tau2 = 0, groups = 0;
+  for (const Group& x : g)
+    if (x.n >= 2) tau2 += 0.5 * (x.sum / x.n).squaredNorm() - var / x.n, groups += 1;
+  if (groups < 2) return 1.0;
+  const double rho = std::max(0.0, tau2 / groups / var);
+  return 1.0 + (static_cast<double>(n) / groups - 1.0) * rho;
+}
+
+// ---------------------------------------------------------------- the fit, by Ceres
+
+namespace {
+
+// Physical limits of a parameter: a line delay between zero and a readout filling the frame
+// period; an offset inside the motion data; focal lengths within a factor two; generous
+// ranges elsewhere (they only keep a wild step from leaving the model's domain).
+std::pair<double, double> bounds(Param p, const DiagnosisModel& m) {
+  const NominalModel& n = m.recording().nominal;
+  switch (p) {
+    case Param::LineDelay: return {0.0, 1.0 / (n.frame_rate_hz * n.cam.height)};
+    case Param::TimeOffset: {
+      // Motion data shorter than the frames: no offset keeps them all inside; allow +-1 s.
+      const auto [lo, hi] = m.offset_range();
+      const double t = n.time.time_offset_s;
+      return lo < hi ? std::pair(lo, hi) : std::pair(t - 1.0, t + 1.0);
+    }
+    case Param::Fx: return {0.5 * n.cam.fx, 2.0 * n.cam.fx};
+    case Param::Fy: return {0.5 * n.cam.fy, 2.0 * n.cam.fy};
+    case Param::K1:
+    case Param::K2: return {-1.0, 1.0};
+    case Param::Drift: return {-1e4, 1e4};
+    case Param::BiasX:
+    case Param::BiasY:
+    case Param::BiasZ: return {-1.0, 1.0};
+    default: return {-2.0, 2.0};  // lever arm, metres
+  }
+}
+
+// The fit's coordinates: x_j = (p_j - start_j) / scale_j for the free parameters.
+struct Coordinates {
+  ModelParams start;
+  std::vector<Param> free;
+  Eigen::VectorXd scale, lo, hi;
+
+  Coordinates(const DiagnosisModel& m, ModelParams s, const ParamMask& mask) : start(s) {
+    for (int k = 0; k < kParamCount; ++k)
+      if (mask[k]) free.push_back(Param(k));
+    const int n = static_cast<int>(free.size());
+    scale.resize(n), lo.resize(n), hi.resize(n);
+    for (int j = 0; j < n; ++j) {
+      const auto [a, b] = bounds(free[j], m);
+      start[free[j]] = std::clamp(start[free[j]], a, std::max(a, b));
+      scale[j] = param_scale(free[j], m.recording().nominal);
+      lo[j] = (a - start[free[j]]) / scale[j];
+      hi[j] = (std::max(a, b) - start[free[j]]) / scale[j];
+    }
+  }
+  ModelParams at(const double* x) const {
+    ModelParams p = start;
+    for (size_t j = 0; j < free.size(); ++j) p[free[j]] += x[j] * scale[j];
+    return p;
+  }
+};
+
+// The robust loss for Ceres: rho(s) = huber(s) on the squared residual length s in sigmas, with
+// analytic derivatives (rho' is continuous at both joints). rho'' is negative beyond
+// kHuberSigmas (the loss is concave in s there); Ceres's corrector then scales a block's
+// residual and Jacobian by sqrt(rho'), i.e. iteratively reweighted least squares with weight
+// rho', as the hand-written solver this replaces did.
+class RobustLoss final : public ceres::LossFunction {
+ public:
+  void Evaluate(double s, double rho[3]) const override {
+    const double d = kHuberSigmas, R = kTailSigmas;
+    rho[0] = huber(s);
+    if (s <= d * d) {
+      rho[1] = 1.0, rho[2] = 0.0;
+    } else if (s <= R * R) {
+      const double l = std::sqrt(s);
+      rho[1] = d / l, rho[2] = -0.5 * d / (s * l);
+    } else {
+      rho[1] = d * R / s, rho[2] = -d * R / (s * s);
+    }
+  }
+};
+
+// All residuals (sigma units) and, on demand, their forward-difference Jacobian (param_scale
+// units) at one point x, computed in bulk. DiagnosisModel::residuals is far cheaper for all
+// observations at once (it caches the motion track per parameter value) than per observation,
+// while Ceres wants one residual block per observation (so that the loss applies to each
+// observation's residual length): every block's cost function is a view onto this evaluator,
+// which recomputes only when x changes. Ceres asks for residuals alone when it tries a step
+// and for Jacobians at accepted points, so the two are cached separately. Not thread safe:
+// the solver runs single-threaded.
+class BulkEvaluator {
+ public:
+  BulkEvaluator(const DiagnosisModel& m, const std::vector<int>& idx, const Coordinates& c, double sigma)
+      : m_(m), idx_(idx), c_(c), sigma_(sigma), k_(static_cast<int>(c.free.size())) {}
+
+  int size() const { return k_; }
+
+  // Residual of observation i at x, and its 2 x k row-major Jacobian when `jac` is non-null.
+  void get(const double* x, size_t i, double* r, double* jac) {
+    const Values& v = jac ? with_jacobian(x) : residuals_at(x);
+    r[0] = v.r[i].x(), r[1] = v.r[i].y();
+    if (jac) std::copy_n(v.J.data() + 2 * i * k_, 2 * k_, jac);  // rows 2i, 2i + 1 (row-major)
+  }
+
+ private:
+  struct Values {
+    Eigen::VectorXd x;  // the point these values are at (empty: none yet)
+    std::vector<Eigen::Vector2d> r;
+    std::vector<bool> ok;
+    // with_jacobian only: rows 2i, 2i + 1 are observation i's, laid out as Ceres wants them
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J;
+  };
+
+  bool same(const Values& v, const double* x) const {
+    return v.x.size() == k_ && std::equal(x, x + k_, v.x.data());
+  }
+
+  // Residuals in sigma units; a failed prediction becomes a constant kFailSigmas residual.
+  void evaluate(const double* x, Values& v) const {
+    v.x = Eigen::Map<const Eigen::VectorXd>(x, k_);
+    v.r = m_.residuals(c_.at(x), idx_);
+    v.ok.assign(v.r.size(), false);
+    for (size_t i = 0; i < v.r.size(); ++i) {
+      v.ok[i] = v.r[i].allFinite();
+      v.r[i] = v.ok[i] ? Eigen::Vector2d(v.r[i] / sigma_) : Eigen::Vector2d::Constant(kFailSigmas);
+    }
+  }
+
+  const Values& residuals_at(const double* x) {
+    if (!same(res_, x)) evaluate(x, res_);
+    return res_;
+  }
+
+  // Forward differences, stepping away from the nearer bound; a failed prediction (at x or at
+  // the step) gets a zero Jacobian row, so its constant residual pulls nowhere.
+  const Values& with_jacobian(const double* x) {
+    if (same(jac_, x)) return jac_;
+    if (same(res_, x)) jac_.x = res_.x, jac_.r = res_.r, jac_.ok = res_.ok;
+    else evaluate(x, jac_);
+    const size_t n = idx_.size();
+    jac_.J.setZero(2 * n, k_);
+    Values step;
+    for (int j = 0; j < k_; ++j) {
+      const double h = (x[j] + 1e-3 > c_.hi[j]) ? -1e-3 : 1e-3;
+      Eigen::VectorXd xh = jac_.x;
+      xh[j] += h;
+      evaluate(xh.data(), step);
+      for (size_t i = 0; i < n; ++i)
+        if (jac_.ok[i] && step.ok[i]) jac_.J.block<2, 1>(2 * i, j) = (step.r[i] - jac_.r[i]) / h;
+    }
+    return jac_;
+  }
+
+  const DiagnosisModel& m_;
+  const std::vector<int>& idx_;
+  const Coordinates& c_;
+  const double sigma_;
+  const int k_;
+  Values res_, jac_;
+};
+
+// One observation's residual block: two residuals, the k free parameters.
+class ObservationCost final : public ceres::CostFunction {
+ public:
+  ObservationCost(BulkEvaluator& e, size_t i) : e_(e), i_(i) {
+    set_num_residuals(2);
+    mutable_parameter_block_sizes()->push_back(e.size());
+  }
+  bool Evaluate(double const* const* x, double* r, double** jac) const override {
+    e_.get(x[0], i_, r, jac ? jac[0] : nullptr);
+    return true;
+  }
+
+ private:
+  BulkEvaluator& e_;
+  size_t i_;
+};
+
+}  // namespace
+
+ModelParams fit_params(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& start,
+                       const ParamMask& mask, double sigma, int max_iterations) {
+  const Coordinates c(m, start, mask);
+  if (c.free.empty() || idx.empty() || max_iterations <= 0) return c.start;
+  const int k = static_cast<int>(c.free.size());
+  std::vector<double> x(k, 0.0);
+  BulkEvaluator bulk(m, idx, c, sigma);
+  RobustLoss loss;
+  ceres::Problem::Options po;
+  po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  po.disable_all_safety_checks = true;  // thousands of identical blocks, built right here
+  ceres::Problem pb(po);
+  for (size_t i = 0; i < idx.size(); ++i) pb.AddResidualBlock(new ObservationCost(bulk, i), &loss, x.data());
+  std::vector<int> fixed;  // a degenerate range (Ceres rejects lower == upper): held at start
+  for (int j = 0; j < k; ++j) {
+    if (!(c.lo[j] < c.hi[j])) {
+      fixed.push_back(j);
+      continue;
+    }
+    pb.SetParameterLowerBound(x.data(), j, c.lo[j]);
+    pb.SetParameterUpperBound(x.data(), j, c.hi[j]);
+  }
+  if (static_cast<int>(fixed.size()) == k) return c.start;
+  if (!fixed.empty()) pb.SetManifold(x.data(), new ceres::SubsetManifold(k, fixed));
+  ceres::Solver::Options so;
+  so.minimizer_type = ceres::TRUST_REGION;
+  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  // k is small (at most kParamCount) and the blocks share the one parameter block: the dense
+  // normal equations are k x k.
+  so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  so.max_num_iterations = max_iterations;
+  // Comparable to the hand-written solver's test: a relative cost decrease or a step (in
+  // param_scale units, which are each parameter's natural resolution) below 1e-7.
+  so.function_tolerance = 1e-7;
+  so.parameter_tolerance = 1e-7;
+  so.gradient_tolerance = 1e-12;
+  // With bounds, Ceres follows every trust-region step by a projected Armijo line search. Its
+  // default cubic interpolation asks for the gradient, i.e. the whole finite-difference
+  // Jacobian (k + 1 bulk evaluations), at each trial point, and backtracking costs more bulk
+  // evaluations per rejected step. One trial of the full step, by bisection (costs alone), is
+  // plain Levenberg-Marquardt: the trial is the candidate Ceres then evaluates (cached), and a
+  // rejected step shrinks the trust region instead.
+  so.line_search_interpolation_type = ceres::BISECTION;
+  so.max_num_line_search_step_size_iterations = 1;
+  so.num_threads = 1;  // dsp runs on its caller's thread; the bulk evaluator's cache needs it
+  so.logging_type = ceres::SILENT;
+  so.minimizer_progress_to_stdout = false;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &pb, &summary);
+  return c.at(x.data());
+}
+
+// ---------------------------------------------------------------- global searches
+
+namespace {
+
+// Truncated quadratic cost: bounded per observation so that a wrong offset (residuals of
+// hundreds of pixels) costs the same wherever it is, and the valley is clear.
+double truncated_cost(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double width_px) {
+  double c = 0;
+  for (const auto& r : m.residuals(p, idx))
+    c += r.allFinite() ? std::min(r.squaredNorm() / (width_px * width_px), 1.0) : 1.0;
+  return c;
+}
+
+struct GridBest {
+  double offset, cost;
+};
+
+GridBest best_offset(const DiagnosisModel& m, const std::vector<int>& idx, ModelParams p, double lo, double hi,
+                     double step, double width_px) {
+  GridBest best{p[Param::TimeOffset], std::numeric_limits<double>::infinity()};
+  for (double t = lo; t <= hi + 1e-12; t += step) {
+    p[Param::TimeOffset] = t;
+    const double c = truncated_cost(m, idx, p, width_px);
+    if (c < best.cost) best = {t, c};
+  }
+  return best;
+}
+
+std::pair<double, double> search_range(const DiagnosisModel& m, double now) {
+  const auto [lo, hi] = m.offset_range();
+  return {std::max(lo, now - 1.0), std::min(hi, now + 1.0)};
+}
+
+// Coarse width: 20 sigma, or 2% of the image width when that is more, so that what the
+// coarse grid cannot resolve (half a 5 ms step of motion, a 2.5% focal error, an unmodelled
+// readout) still counts as "near".
+double coarse_width(const DiagnosisModel& m, double sigma) {
+  return std::max(20 * sigma, 0.02 * m.recording().nominal.cam.width);
+}
+
+}  // namespace
+
+double refine_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma,
+                          double half_width_s) {
+  const auto [lo, hi] = search_range(m, p[Param::TimeOffset]);
+  const double now = p[Param::TimeOffset];
+  if (!(lo < hi)) return now;
+  return best_offset(m, idx, p, std::max(lo, now - half_width_s), std::min(hi, now + half_width_s), 2.5e-4,
+                     5 * sigma).offset;
+}
+
+double scan_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma) {
+  const std::vector<int> sub = subsample(idx, 150);
+  const auto [lo, hi] = search_range(m, p[Param::TimeOffset]);
+  if (!(lo < hi)) return p[Param::TimeOffset];
+  ModelParams q = p;
+  q[Param::TimeOffset] = best_offset(m, sub, p, lo, hi, 5e-3, coarse_width(m, sigma)).offset;
+  return refine_time_offset(m, sub, q, sigma);
+}
+
+ModelParams gross_start(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma) {
+  const std::vector<int> sub = subsample(idx, 150);
+  const auto [lo, hi] = search_range(m, p[Param::TimeOffset]);
+  ModelParams best = p;
+  double best_cost = std::numeric_limits<double>::infinity();
+  // Nominal focal first, then outwards: a recording that does not see the focal length (a
+  // flat cost) keeps the nominal one.
+  for (int k : {0, -1, 1, -2, 2, -3, 3, -4, 4}) {
+    ModelParams q = p;
+    q[Param::Fx] *= 1 + 0.05 * k;
+    q[Param::Fy] *= 1 + 0.05 * k;
+    const GridBest g = lo < hi ? best_offset(m, sub, q, lo, hi, 5e-3, coarse_width(m, sigma))
+                               : GridBest{q[Param::TimeOffset], truncated_cost(m, sub, q, coarse_width(m, sigma))};
+    if (g.cost < best_cost) {
+      best_cost = g.cost;
+      best = q;
+      best[Param::TimeOffset] = g.offset;
+    }
+  }
+  if (lo < hi) best[Param::TimeOffset] = refine_time_offset(m, sub, best, sigma);
+  return best;
+}
+
+}  // namespace rsd::dsp

@@ -1,0 +1,57 @@
+// Fitting the effect parameters of a DiagnosisModel: a robust Levenberg-Marquardt fit (Ceres) and
+// the global searches that put the large parameters (time offset, focal length) near their
+// values first, so that the local fits start in the right valley.
+#pragma once
+
+#include <vector>
+
+#include "dsp/diagnosis/model.hpp"
+
+namespace rsd::dsp {
+
+// A failed prediction costs as much as a residual this many sigmas long, per coordinate:
+// far into the robust loss's linear part, so it neither dominates nor vanishes.
+constexpr double kFailSigmas = 20.0;
+// Huber threshold in sigmas: quadratic (Gaussian) within, linear (outlier-tolerant) beyond;
+// past kTailSigmas the loss grows logarithmically (a redescending influence).
+constexpr double kHuberSigmas = 2.0;
+constexpr double kTailSigmas = 20.0;
+
+// -2 log-likelihood (up to a constant) of 2-D residuals under the robust loss on their length,
+// in sigma units: the quantity the fit minimises, so that BIC compares fits on their own terms.
+double robust_chi2(const std::vector<Eigen::Vector2d>& residuals, double sigma_px);
+
+// How much the residuals of one frame move together, as the factor by which it shrinks the
+// information in a chi-square: D = 1 + (n - 1) rho, n the mean inliers per frame, rho the share
+// of the residual variance that is common to a frame (frame-mean residual variance beyond
+// what independent noise gives). Errors of the motion data (gyro timestamp jitter, a
+// trajectory's interpolation) are common to all of a frame's observations; BIC, which
+// assumes independent residuals, would otherwise name tiny spurious effects on long
+// recordings. 1 for independent residuals.
+double design_effect(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx, double sigma_px);
+
+// Fits the parameters in `free` (starting at `start`, clamped into their physical bounds) with
+// Ceres: Levenberg-Marquardt within those bounds on the robust cost (robust_chi2's loss, one
+// residual block per observation), with a forward-difference Jacobian in param_scale units.
+// Returns the fitted parameters.
+ModelParams fit_params(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& start,
+                       const ParamMask& free, double sigma_px, int max_iterations = 30);
+
+// Global search of the time offset (others held at `p`): a coarse scan over the offsets that
+// keep the frames inside the motion data (at most +-1 s around p's), then a fine one.
+double scan_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p,
+                        double sigma_px);
+// Fine scan only: 0.25 ms steps over +-`half_width_s` around p's offset.
+double refine_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p,
+                          double sigma_px, double half_width_s = 5e-3);
+
+// Gross errors first: a joint grid of the time offset (as scan_time_offset) and a common focal
+// scale (0.8 .. 1.2 of p's fx, fy in 5% steps) under a truncated cost that a wrong offset or a
+// focal length 20% off both saturate. Returns p with the best offset and focal lengths: start
+// values for the time_offset and focal_length hypotheses, not a claim that either is present.
+ModelParams gross_start(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma_px);
+
+// Every `n`-th of idx, at most `count` (spread over the whole recording).
+std::vector<int> subsample(const std::vector<int>& idx, size_t count);
+
+}  // namespace rsd::dsp

@@ -1,0 +1,94 @@
+#include "dsp/diagnosis/gyro.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "dsp/geometry/camera_motion.hpp"
+#include "dsp/diagnosis/pose_track.hpp"
+
+namespace rsd::dsp {
+
+std::vector<GyroSample> clean_gyro(std::vector<GyroSample> g) {
+  std::stable_sort(g.begin(), g.end(), [](const GyroSample& a, const GyroSample& b) { return a.t < b.t; });
+  std::vector<GyroSample> out;
+  for (const GyroSample& s : g)
+    if (out.empty() || s.t > out.back().t) out.push_back(s);
+  return out;
+}
+
+namespace {
+
+// Integral of the Hermite rate over the first share tau of an interval of length h, and the
+// rate at its end. Hermite basis integrated: H00 = tau^4/2 - tau^3 + tau, H10 = tau^4/4 -
+// 2 tau^3/3 + tau^2/2, H01 = -tau^4/2 + tau^3, H11 = tau^4/4 - tau^3/3.
+struct Partial {
+  Eigen::Vector3d integral, rate;
+};
+Partial hermite(const Eigen::Vector3d& w0, const Eigen::Vector3d& s0, const Eigen::Vector3d& w1,
+                const Eigen::Vector3d& s1, double h, double tau) {
+  const double t2 = tau * tau, t3 = t2 * tau, t4 = t3 * tau;
+  const double H00 = 0.5 * t4 - t3 + tau, H10 = 0.25 * t4 - 2.0 / 3.0 * t3 + 0.5 * t2;
+  const double H01 = -0.5 * t4 + t3, H11 = 0.25 * t4 - t3 / 3.0;
+  const double h00 = 2 * t3 - 3 * t2 + 1, h10 = t3 - 2 * t2 + tau, h01 = -2 * t3 + 3 * t2, h11 = t3 - t2;
+  return {h * (H00 * w0 + H10 * h * s0 + H01 * w1 + H11 * h * s1), h00 * w0 + h10 * h * s0 + h01 * w1 + h11 * h * s1};
+}
+
+// Rotation over the first share tau of interval k: the Hermite integral plus the second Magnus
+// term for dR/dt = R [w]x, (dt^2 / 12) w(0) x w(dt) (as integrate_gyro).
+Eigen::Vector3d step(const Eigen::Vector3d& w0, const Eigen::Vector3d& s0, const Eigen::Vector3d& w1,
+                     const Eigen::Vector3d& s1, double h, double tau) {
+  const Partial p = hermite(w0, s0, w1, s1, h, tau);
+  const double dt = tau * h;
+  return p.integral + dt * dt / 12.0 * w0.cross(p.rate);
+}
+
+}  // namespace
+
+GyroTrack::GyroTrack(const std::vector<GyroSample>& g, const Eigen::Vector3d& bias, const Eigen::Matrix3d& imu_to_camera,
+                     double max_interval)
+    : bias_(bias), imu_to_camera_t_(imu_to_camera.transpose()) {
+  if (g.empty()) throw std::invalid_argument("gyro track: no gyro samples");
+  const size_t n = g.size();
+  knots_.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    knots_[i].t = g[i].t;
+    knots_[i].w = g[i].w - bias;
+  }
+  // Slopes: the derivative of the parabola through each sample and its neighbours, second
+  // order on an irregular grid (the plain central difference is only first order there):
+  // f' = (h1^2 f+ - h2^2 f- + (h2^2 - h1^2) f) / (h1 h2 (h1 + h2)), h1, h2 the gaps before and
+  // after. One-sided at the ends and next to a gap; zero between two gaps.
+  auto one_sided = [&](size_t a, size_t b) { return Eigen::Vector3d((knots_[b].w - knots_[a].w) / (knots_[b].t - knots_[a].t)); };
+  for (size_t i = 0; i < n; ++i) {
+    Knot& k = knots_[i];
+    const bool before = i > 0 && k.t - knots_[i - 1].t <= max_interval;
+    const bool after = i + 1 < n && knots_[i + 1].t - k.t <= max_interval;
+    if (before && after) {
+      const Knot &a = knots_[i - 1], &b = knots_[i + 1];
+      const double h1 = k.t - a.t, h2 = b.t - k.t;
+      k.s = (h1 * h1 * b.w - h2 * h2 * a.w + (h2 * h2 - h1 * h1) * k.w) / (h1 * h2 * (h1 + h2));
+    } else if (before || after) {
+      k.s = before ? one_sided(i - 1, i) : one_sided(i, i + 1);
+    } else {
+      k.s.setZero();
+    }
+  }
+  knots_[0].R.setIdentity();
+  for (size_t i = 1; i < n; ++i) {
+    const Knot &a = knots_[i - 1];
+    const double h = knots_[i].t - a.t;
+    knots_[i].R = a.R * exp_so3(step(a.w, a.s, knots_[i].w, knots_[i].s, h, 1.0));
+  }
+}
+
+Eigen::Matrix3d GyroTrack::camera_at(double t) const {
+  auto hi = std::upper_bound(knots_.begin(), knots_.end(), t, [](double tt, const Knot& k) { return tt < k.t; });
+  if (hi == knots_.begin()) return knots_.front().R * imu_to_camera_t_;
+  if (hi == knots_.end()) return knots_.back().R * imu_to_camera_t_;
+  const Knot &a = *(hi - 1), &b = *hi;
+  const double h = b.t - a.t;
+  const Eigen::Vector3d phi = step(a.w, a.s, b.w, b.s, h, (t - a.t) / h);
+  return a.R * exp_so3_fast(phi) * imu_to_camera_t_;
+}
+
+}  // namespace rsd::dsp

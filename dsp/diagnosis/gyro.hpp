@@ -1,0 +1,50 @@
+// The camera orientation of a gyro recording (docs/formats/recording-v1.md, motion kind
+// gyro) for one value of the gyro bias: the diagnosis re-integrates it whenever the fitted
+// bias changes (a 20 s recording at 200 Hz integrates in well under a millisecond).
+//
+// Between samples the rate is the cubic Hermite curve through the neighbouring samples, and the
+// orientation inside an interval is the partial integral of that curve (plus the Magnus
+// commutator term), not a slerp between the sample orientations: at the 20 Hz end of an
+// irregular gyro a slerp would be off by milliradians while the cubic stays within microradians.
+// At the sample times the track equals integrate_gyro's (dsp/observation/observation_model.hpp).
+#pragma once
+
+#include <Eigen/Core>
+#include <limits>
+#include <vector>
+
+#include "dsp/observation/observation_model.hpp"
+
+namespace rsd::dsp {
+
+// Samples sorted by time; of samples sharing a timestamp only the first is kept: a repeated
+// stamp is a later sample stamped late (its rate belongs to another time), and averaging it
+// in would bend the rate curve. The rate is then a function of time, its slopes defined.
+std::vector<GyroSample> clean_gyro(std::vector<GyroSample> gyro);
+
+class GyroTrack {
+ public:
+  // `gyro` as clean_gyro returns it (at least one sample). w_true = w_measured - bias (spec
+  // "gyro_bias"); w_camera = imu_to_camera w_imu.
+  // Intervals longer than `max_interval` are gaps: a slope next to one comes from the
+  // other side only (a neighbour across a gap says nothing about the rate's slope here).
+  GyroTrack(const std::vector<GyroSample>& gyro, const Eigen::Vector3d& bias, const Eigen::Matrix3d& imu_to_camera,
+            double max_interval = std::numeric_limits<double>::infinity());
+  // World-from-camera rotation R_c(t) on the motion clock; held at the ends.
+  Eigen::Matrix3d camera_at(double t) const;
+  const Eigen::Vector3d& bias() const { return bias_; }
+  double t_begin() const { return knots_.front().t; }
+  double t_end() const { return knots_.back().t; }
+
+ private:
+  struct Knot {
+    double t;
+    Eigen::Matrix3d R;     // world-from-IMU at t
+    Eigen::Vector3d w, s;  // bias-free rate and its slope
+  };
+  std::vector<Knot> knots_;
+  Eigen::Vector3d bias_;
+  Eigen::Matrix3d imu_to_camera_t_;  // R_ic^T: R_c = R_imu R_ic^T
+};
+
+}  // namespace rsd::dsp

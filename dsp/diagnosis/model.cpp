@@ -1,0 +1,265 @@
+#include "dsp/diagnosis/model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <unordered_map>
+
+namespace rsd::dsp {
+
+const char* param_name(Param p) {
+  static constexpr const char* kNames[] = {"line_delay_s", "time_offset_s", "drift_ppm", "k1", "k2", "fx", "fy",
+                                           "x",            "y",             "z",         "bx", "by", "bz"};
+  return kNames[static_cast<int>(p)];
+}
+
+ModelParams nominal_params(const NominalModel& n) {
+  ModelParams p;
+  p[Param::LineDelay] = n.time.line_delay_s;
+  p[Param::TimeOffset] = n.time.time_offset_s;
+  p[Param::Drift] = n.time.drift_ppm;
+  p[Param::K1] = n.cam.dist.k1;
+  p[Param::K2] = n.cam.dist.k2;
+  p[Param::Fx] = n.cam.fx;
+  p[Param::Fy] = n.cam.fy;
+  for (int k = 0; k < 3; ++k) p.v[static_cast<int>(Param::LeverX) + k] = n.lever_arm[k];
+  return p;  // gyro bias: the nominal model has none
+}
+
+double param_scale(Param p, const NominalModel& n) {
+  switch (p) {
+    case Param::LineDelay: return 0.1 / (n.frame_rate_hz * n.cam.height);  // 10% of a full-frame readout
+    case Param::TimeOffset: return 1e-3;
+    case Param::Drift: return 10.0;
+    case Param::K1:
+    case Param::K2: return 0.01;
+    case Param::Fx:
+    case Param::Fy: return 1e-3 * n.cam.fx;
+    case Param::BiasX:
+    case Param::BiasY:
+    case Param::BiasZ: return 1e-3;  // rad/s
+    default: return 0.01;  // lever arm, metres
+  }
+}
+
+LandmarkSetup landmark_setup(const NominalModel& n, const ModelParams& p) {
+  LandmarkSetup s{n.cam, n.time, n.lever_arm};
+  s.time.line_delay_s = p[Param::LineDelay];
+  s.time.time_offset_s = p[Param::TimeOffset];
+  s.time.drift_ppm = p[Param::Drift];
+  if (p.flip_readout)
+    s.time.readout = n.time.readout == Readout::TopToBottom ? Readout::BottomToTop : Readout::TopToBottom;
+  s.cam.dist.k1 = p[Param::K1];
+  s.cam.dist.k2 = p[Param::K2];
+  s.cam.fx = p[Param::Fx];
+  s.cam.fy = p[Param::Fy];
+  s.lever_arm = Eigen::Vector3d(p[Param::LeverX], p[Param::LeverY], p[Param::LeverZ]);
+  return s;
+}
+
+// The few gyro tracks last asked for, newest first: a numeric Jacobian asks for the base bias
+// and one perturbation per bias axis, over and over.
+struct DiagnosisModel::TrackCache {
+  std::vector<std::unique_ptr<GyroTrack>> tracks;
+};
+
+DiagnosisModel::~DiagnosisModel() = default;
+
+namespace {
+
+void check_motion(const Recording& r) {
+  if (r.kind == ObservationKind::Landmarks && (r.motion != MotionKind::Trajectory || r.trajectory.empty()))
+    throw std::invalid_argument("diagnosis: a landmarks recording needs motion kind trajectory with poses");
+  if (r.kind == ObservationKind::Matches && (r.motion != MotionKind::Gyro || r.gyro.empty()))
+    throw std::invalid_argument("diagnosis: a matches recording needs motion kind gyro with samples");
+}
+
+SampledTrajectory sampled(const Recording& r) {
+  std::vector<SampledTrajectory::Sample> s;
+  s.reserve(r.trajectory.size());
+  for (const PoseSample& p : r.trajectory) s.push_back({p.t, p.q, p.p});
+  std::stable_sort(s.begin(), s.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+  return SampledTrajectory(std::move(s));
+}
+
+// The rolling-shutter fixed point (spec "Time model") by secant iteration on the row: `pixel_at(v)`
+// is the predicted pixel when the feature is read at row v; the solution has pixel_at(v).y == v.
+// Starting at the observed row, the map contracts by (image velocity x line delay), a few
+// percent, so three or four evaluations reach 1e-9 px. Returns nullopt when it does not settle
+// (the caller then falls back to the bracketing solver of dsp/geometry/rs_projection.hpp).
+template <class F>
+std::optional<Eigen::Vector2d> fixed_point_row(F&& pixel_at, double v_start) {
+  double v0 = v_start;
+  std::optional<Eigen::Vector2d> p0 = pixel_at(v0);
+  if (!p0) return std::nullopt;
+  double g0 = p0->y() - v0;
+  double v1 = p0->y();
+  for (int it = 0; it < 12; ++it) {
+    if (std::abs(g0) < 1e-9) return p0;
+    const std::optional<Eigen::Vector2d> p1 = pixel_at(v1);
+    if (!p1) return std::nullopt;
+    const double g1 = p1->y() - v1;
+    const double slope = (g1 - g0) / (v1 - v0);
+    const double v2 = (std::isfinite(slope) && std::abs(slope) > 1e-6) ? v1 - g1 / slope : p1->y();
+    v0 = v1, g0 = g1, p0 = p1, v1 = v2;
+  }
+  return std::abs(g0) < 1e-6 ? p0 : std::nullopt;
+}
+
+// The longest interval between gyro samples that is still sampling, not a gap: 1.5 x the 95th
+// percentile of the intervals, at least 20 ms.
+double gap_limit(const std::vector<GyroSample>& g) {
+  if (g.size() < 2) return std::numeric_limits<double>::infinity();
+  std::vector<double> dt;
+  for (size_t k = 1; k < g.size(); ++k) dt.push_back(g[k].t - g[k - 1].t);
+  std::nth_element(dt.begin(), dt.begin() + dt.size() * 95 / 100, dt.end());
+  return std::max(1.5 * dt[dt.size() * 95 / 100], 0.02);
+}
+
+}  // namespace
+
+DiagnosisModel::DiagnosisModel(const Recording& rec) : rec_(rec), tracks_(std::make_unique<TrackCache>()) {
+  check_motion(rec);
+  if (rec.kind == ObservationKind::Landmarks) body_.emplace(rec.trajectory), body_slow_.emplace(sampled(rec));
+  if (rec.frames.empty()) throw std::invalid_argument("diagnosis: the recording has no frames");
+  std::vector<FrameStamp> frames = rec.frames;
+  std::sort(frames.begin(), frames.end(), [](const FrameStamp& a, const FrameStamp& b) { return a.t < b.t; });
+  t0_ = frames.front().t;
+  std::unordered_map<int, std::pair<double, int>> frame;
+  for (size_t k = 0; k < frames.size(); ++k) frame[frames[k].frame] = {frames[k].t, static_cast<int>(k)};
+  if (rec.kind == ObservationKind::Landmarks) {
+    std::unordered_map<int, Eigen::Vector3d> point;
+    for (const Landmark& L : rec.points) point[L.id] = L.X;
+    obs_.reserve(rec.observations.size());
+    for (const LandmarkObservation& o : rec.observations) {
+      const auto f = frame.find(o.frame);
+      const auto X = point.find(o.id);
+      if (f == frame.end() || X == point.end())
+        throw std::invalid_argument("diagnosis: an observation names an unknown frame or point");
+      obs_.push_back({f->second.first, f->second.first, f->second.second, X->second, o.px, o.px});
+    }
+    return;
+  }
+  gyro_ = clean_gyro(rec.gyro);
+  max_gap_ = gap_limit(gyro_);
+  obs_.reserve(rec.matches.size());
+  for (const Match& mt : rec.matches) {
+    const auto a = frame.find(mt.frame_a), b = frame.find(mt.frame_b);
+    if (a == frame.end() || b == frame.end()) throw std::invalid_argument("diagnosis: a match names an unknown frame");
+    obs_.push_back({a->second.first, b->second.first, a->second.second, Eigen::Vector3d::Zero(), mt.b, mt.a});
+  }
+}
+
+const GyroTrack& DiagnosisModel::track(const Eigen::Vector3d& bias) const {
+  auto& v = tracks_->tracks;
+  for (size_t k = 0; k < v.size(); ++k)
+    if (v[k]->bias() == bias) {
+      std::rotate(v.begin(), v.begin() + k, v.begin() + k + 1);
+      return *v.front();
+    }
+  if (v.size() >= 6) v.pop_back();
+  v.insert(v.begin(), std::make_unique<GyroTrack>(gyro_, bias, rec_.nominal.imu_to_camera, max_gap_));
+  return *v.front();
+}
+
+namespace {
+
+Eigen::Vector3d bias_of(const ModelParams& p) { return {p[Param::BiasX], p[Param::BiasY], p[Param::BiasZ]}; }
+
+TimeModel with_t0(TimeModel tm, double t0) {
+  tm.t0 = t0;
+  return tm;
+}
+
+}  // namespace
+
+std::optional<Eigen::Vector2d> DiagnosisModel::landmark_residual(const ModelParams& p, const Obs& o) const {
+  LandmarkSetup s = landmark_setup(rec_.nominal, p);
+  s.time = with_t0(s.time, t0_);
+  const RowTiming rt = row_timing(s.time, s.cam.height);
+  auto pixel_at = [&](double v) -> std::optional<Eigen::Vector2d> {
+    // X_c = R^T (X_w - p - R l) = R^T (X_w - p) - l: the camera axes are the body axes.
+    Eigen::Matrix3d R;
+    Eigen::Vector3d p;
+    body_->at(s.time.motion_time(o.T + rt.row_time(v)), R, p);
+    return s.cam.project(R.transpose() * (o.X - p) - s.lever_arm);
+  };
+  auto px = fixed_point_row(pixel_at, o.px.y());
+  if (!px) {
+    const auto slow = predict_landmark(s, *body_slow_, o.T, o.X);
+    if (!slow) return std::nullopt;
+    px = slow->pixel;
+  }
+  return Eigen::Vector2d(o.px - *px);
+}
+
+std::optional<Eigen::Vector2d> DiagnosisModel::match_residual(const ModelParams& p, const GyroTrack& track,
+                                                              const Obs& o) const {
+  const LandmarkSetup s = landmark_setup(rec_.nominal, p);  // camera and time model only
+  const TimeModel tm = with_t0(s.time, t0_);
+  const RowTiming rt = row_timing(tm, s.cam.height);
+  const auto ray = s.cam.ray(o.px_a);
+  if (!ray) return std::nullopt;
+  // Spec "Matches": the direction seen at frame_a's pixel, in world axes, at its row's time.
+  const Eigen::Vector3d d = track.camera_at(tm.motion_time(o.T + rt.row_time(o.px_a.y()))) * *ray;
+  auto pixel_at = [&](double v) {
+    return s.cam.project(track.camera_at(tm.motion_time(o.T_b + rt.row_time(v))).transpose() * d);
+  };
+  const auto px = fixed_point_row(pixel_at, o.px.y());
+  if (!px) return std::nullopt;
+  return Eigen::Vector2d(o.px - *px);
+}
+
+std::optional<Eigen::Vector2d> DiagnosisModel::residual(const ModelParams& p, int i) const {
+  if (rec_.kind == ObservationKind::Landmarks) return landmark_residual(p, obs_[i]);
+  return match_residual(p, track(bias_of(p)), obs_[i]);
+}
+
+std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx) const {
+  std::vector<Eigen::Vector2d> out;
+  out.reserve(idx.size());
+  const Eigen::Vector2d nan = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  const GyroTrack* tr = rec_.kind == ObservationKind::Matches ? &track(bias_of(p)) : nullptr;
+  for (int i : idx) {
+    const auto r = tr ? match_residual(p, *tr, obs_[i]) : landmark_residual(p, obs_[i]);
+    out.push_back(r.value_or(nan));
+  }
+  return out;
+}
+
+double DiagnosisModel::gyro_gap(const ModelParams& p, int i) const {
+  if (rec_.kind != ObservationKind::Matches) return 0.0;
+  const TimeModel tm = with_t0(landmark_setup(rec_.nominal, p).time, t0_);
+  const Obs& o = obs_[i];
+  const double a = tm.motion_time(std::min(o.T, o.T_b)), b = tm.motion_time(std::max(o.T, o.T_b) + 1.0 / rec_.nominal.frame_rate_hz);
+  auto lt = [](const GyroSample& g, double t) { return g.t < t; };
+  // From the last sample at or before a to the first at or after b.
+  auto lo = std::lower_bound(gyro_.begin(), gyro_.end(), a, lt);
+  if (lo != gyro_.begin() && (lo == gyro_.end() || lo->t > a)) --lo;
+  auto hi = std::lower_bound(gyro_.begin(), gyro_.end(), b, lt);
+  if (hi == gyro_.end() || lo == gyro_.end()) return std::numeric_limits<double>::infinity();  // past the data
+  // One more interval either side: its Hermite slopes come from the samples at these ends.
+  if (lo != gyro_.begin()) --lo;
+  if (hi + 1 != gyro_.end()) ++hi;
+  double gap = 0;
+  for (auto it = lo; it != hi; ++it) gap = std::max(gap, (it + 1)->t - it->t);
+  return gap;
+}
+
+std::pair<double, double> DiagnosisModel::offset_range() const {
+  // A frame's rows span at most one frame period; keep that whole window inside the data.
+  double first = std::numeric_limits<double>::infinity(), last = -first;
+  for (const FrameStamp& f : rec_.frames) first = std::min(first, f.t), last = std::max(last, f.t);
+  const double period = 1.0 / rec_.nominal.frame_rate_hz;
+  double lo, hi;
+  if (rec_.kind == ObservationKind::Landmarks) {
+    lo = rec_.trajectory.front().t, hi = rec_.trajectory.back().t;
+    for (const PoseSample& s : rec_.trajectory) lo = std::min(lo, s.t), hi = std::max(hi, s.t);
+  } else {
+    lo = gyro_.front().t, hi = gyro_.back().t;
+  }
+  return {lo - first, hi - last - period};
+}
+
+}  // namespace rsd::dsp

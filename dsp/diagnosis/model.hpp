@@ -1,0 +1,117 @@
+// The recording's model with every effect parameter of docs/formats/recording-v1.md
+// ("Named effects") in one vector, so that the diagnosis can free any subset of them and
+// fit it. Residuals are observed minus predicted pixels through the spec's model; with
+// nothing changed they are the nominal model's own residuals (the baseline).
+//
+// Landmarks (motion kind trajectory): observed pixel minus the projection of the point at the
+// rolling-shutter fixed point (spec "Landmarks"). Matches (motion kind gyro): observed pixel in
+// frame_b minus the transfer of the frame_a pixel, d_b = R_c(t_b)^T R_c(t_a) d_a (spec
+// "Matches"), t_a from frame_a's observed row, t_b the fixed point of the predicted row in
+// frame_b. The transfer carries frame_a's pixel noise too, so a match residual has
+// sqrt(2) x the pixel noise per coordinate (`noise_gain`).
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cmath>
+#include <bitset>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "dsp/geometry/camera_motion.hpp"
+#include "dsp/diagnosis/gyro.hpp"
+#include "dsp/diagnosis/pose_track.hpp"
+#include "dsp/observation/recording.hpp"
+
+namespace rsd::dsp {
+
+// The continuous parameters. Order is fixed; names are the spec's.
+enum class Param : int {
+  LineDelay, TimeOffset, Drift, K1, K2, Fx, Fy, LeverX, LeverY, LeverZ, BiasX, BiasY, BiasZ, Count
+};
+constexpr int kParamCount = static_cast<int>(Param::Count);
+using ParamMask = std::bitset<kParamCount>;
+
+const char* param_name(Param p);
+
+struct ModelParams {
+  std::array<double, kParamCount> v{};
+  bool flip_readout = false;  // readout_direction: the opposite of the nominal order
+  double& operator[](Param p) { return v[static_cast<int>(p)]; }
+  double operator[](Param p) const { return v[static_cast<int>(p)]; }
+};
+
+// The nominal model's values of every parameter (no effect switched on; gyro bias zero).
+ModelParams nominal_params(const NominalModel& n);
+// A typical size of a change of each parameter: the fit works in these units so that one
+// step size suits all (a line delay of 1e-5 s and a focal length of 900 px alike).
+double param_scale(Param p, const NominalModel& n);
+
+// Landmarks recordings with a trajectory, matches recordings with a gyro. Not thread-safe:
+// the gyro track of the last few bias values is cached inside.
+class DiagnosisModel {
+ public:
+  // Throws std::invalid_argument for a recording it cannot model (landmarks without a
+  // trajectory, matches without a gyro, an observation naming an unknown frame or point).
+  explicit DiagnosisModel(const Recording& rec);
+  ~DiagnosisModel();
+
+  const Recording& recording() const { return rec_; }
+  ObservationKind kind() const { return rec_.kind; }
+  int size() const { return static_cast<int>(obs_.size()); }
+  // Observed minus predicted pixel of observation i; nullopt when the model has no image
+  // of the point (behind the camera, no rolling-shutter solution).
+  std::optional<Eigen::Vector2d> residual(const ModelParams& p, int i) const;
+  // Residuals of the observations `idx`; failed predictions are NaN.
+  std::vector<Eigen::Vector2d> residuals(const ModelParams& p, const std::vector<int>& idx) const;
+  // Position of observation i's frame (frame_a for a match) in time order (0 = first frame).
+  int frame_rank(int i) const { return obs_[i].rank; }
+  double frame_time(int i) const { return obs_[i].T; }
+  // The observed pixel the residual is taken at (frame_b's for a match).
+  Eigen::Vector2d observed(int i) const { return obs_[i].px; }
+  // Matches: the frame_a pixel and frame_b's timestamp (landmarks: observed(i), frame_time(i)).
+  Eigen::Vector2d observed_a(int i) const { return obs_[i].px_a; }
+  double frame_time_b(int i) const { return obs_[i].T_b; }
+  // Time offsets for which every frame stays inside the motion data.
+  std::pair<double, double> offset_range() const;
+  // Per-coordinate residual sigma over the pixel noise sigma: 1 (landmarks), sqrt(2) (matches).
+  double noise_gain() const { return rec_.kind == ObservationKind::Matches ? std::sqrt(2.0) : 1.0; }
+  // Matches: the longest gap between gyro samples over observation i's frames (frame_a's
+  // start to frame_b's end, on the motion clock of `p`); 0 for landmarks. Inside a long gap the
+  // rate is unknown and the transfer a guess.
+  double gyro_gap(const ModelParams& p, int i) const;
+  // The longest gyro gap a match may span and still be predicted: 1.5 x the 95th percentile
+  // of the sampling intervals, at least 20 ms (infinite for landmarks).
+  double max_gyro_gap() const { return max_gap_; }
+  // Whether effect parameters apply: gyro bias to gyro motion, lever arm to trajectories.
+  bool has_gyro() const { return rec_.motion == MotionKind::Gyro; }
+
+ private:
+  struct Obs {
+    double T, T_b;  // frame (frame_a) and frame_b timestamps
+    int rank;
+    Eigen::Vector3d X;          // landmarks: world point
+    Eigen::Vector2d px, px_a;   // observed pixel (frame_b's), frame_a's
+  };
+  struct TrackCache;
+  std::optional<Eigen::Vector2d> landmark_residual(const ModelParams& p, const Obs& o) const;
+  std::optional<Eigen::Vector2d> match_residual(const ModelParams& p, const GyroTrack& track, const Obs& o) const;
+  const GyroTrack& track(const Eigen::Vector3d& bias) const;
+
+  const Recording& rec_;
+  double t0_ = 0;  // T_0, the first frame's timestamp (spec "Time model")
+  std::optional<PoseTrack> body_;
+  std::optional<SampledTrajectory> body_slow_;  // the bracketing solver's fallback
+  std::vector<GyroSample> gyro_;
+  double max_gap_ = std::numeric_limits<double>::infinity();
+  std::vector<Obs> obs_;
+  std::unique_ptr<TrackCache> tracks_;
+};
+
+// The camera and time model that `p` describes.
+LandmarkSetup landmark_setup(const NominalModel& n, const ModelParams& p);
+
+}  // namespace rsd::dsp

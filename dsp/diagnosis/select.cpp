@@ -1,0 +1,237 @@
+#include "dsp/diagnosis/select.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "dsp/diagnosis/diagnosis.hpp"
+#include "dsp/diagnosis/fit.hpp"
+
+namespace rsd::dsp {
+
+const char* effect_name(Effect e) {
+  static constexpr const char* kNames[] = {"rolling_shutter", "time_offset",    "readout_direction", "clock_drift",
+                                           "lens_distortion", "focal_length", "gyro_bias",         "lever_arm"};
+  return kNames[static_cast<int>(e)];
+}
+
+ParamMask effect_params(Effect e) {
+  ParamMask m;
+  auto set = [&](Param p) { m.set(static_cast<int>(p)); };
+  switch (e) {
+    case Effect::RollingShutter: set(Param::LineDelay); break;
+    case Effect::TimeOffset: set(Param::TimeOffset); break;
+    case Effect::ReadoutDirection: break;  // discrete: the flip
+    case Effect::ClockDrift: set(Param::Drift); break;
+    case Effect::LensDistortion: set(Param::K1), set(Param::K2); break;
+    case Effect::FocalLength: set(Param::Fx), set(Param::Fy); break;
+    case Effect::GyroBias: set(Param::BiasX), set(Param::BiasY), set(Param::BiasZ); break;
+    case Effect::LeverArm: set(Param::LeverX), set(Param::LeverY), set(Param::LeverZ); break;
+    case Effect::Count: break;
+  }
+  return m;
+}
+
+std::vector<Effect> applicable_effects(const DiagnosisModel& m) {
+  std::vector<Effect> out;
+  for (int k = 0; k < static_cast<int>(Effect::Count); ++k) {
+    const Effect e = Effect(k);
+    if (e == Effect::GyroBias && !m.has_gyro()) continue;
+    if (e == Effect::LeverArm && m.has_gyro()) continue;
+    out.push_back(e);
+  }
+  return out;
+}
+
+namespace {
+
+struct State {
+  std::vector<Effect> effects;
+  ModelParams params;
+  double bic = 0;  // on the fitting set
+  bool has(Effect e) const { return std::find(effects.begin(), effects.end(), e) != effects.end(); }
+};
+
+ParamMask mask_of(const std::vector<Effect>& effects) {
+  ParamMask mask;
+  for (Effect e : effects) mask |= effect_params(e);
+  return mask;
+}
+
+class Selector {
+ public:
+  Selector(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
+           const std::vector<int>& screen, const ModelParams& nominal, const ModelParams& start, double sigma,
+           const SelectionOptions& opt)
+      : m_(m), fit_(fit), held_(held), screen_(screen), nominal_(nominal), start_(start), sigma_(sigma), opt_(opt) {}
+
+  // BIC = robust chi-square + k ln(2N): the flip counts as one parameter.
+  double bic(const ModelParams& p, const std::vector<Effect>& effects, const std::vector<int>& idx) const {
+    return robust_chi2(m_.residuals(p, idx), sigma_) + k_of({effects, p, 0}) * std::log(2.0 * idx.size());
+  }
+
+  State initial() const { return {{}, nominal_, bic(nominal_, {}, fit_)}; }
+
+  // The hypothesis "s plus e", fitted on the screening subsample.
+  State screen_add(const State& s, Effect e) const {
+    std::vector<Effect> effects = s.effects;
+    effects.push_back(e);
+    ModelParams p = s.params;
+    for (int k = 0; k < kParamCount; ++k)
+      if (effect_params(e)[k]) p.v[k] = start_.v[k];
+    if (e == Effect::ReadoutDirection) {
+      p.flip_readout = true;
+      // The order of rows read means nothing without a readout time: a nominal global
+      // shutter brings rolling_shutter along.
+      if (!s.has(Effect::RollingShutter) && nominal_[Param::LineDelay] == 0) effects.push_back(Effect::RollingShutter);
+    }
+    if (e == Effect::TimeOffset) p[Param::TimeOffset] = refine_time_offset(m_, screen_, p, sigma_);
+    p = fit_params(m_, screen_, p, mask_of(effects), sigma_, opt_.screen_iterations);
+    return {effects, p, bic(p, effects, screen_)};
+  }
+
+  // s without e, fitted on idx from s's values.
+  State remove(const State& s, Effect e, const std::vector<int>& idx, int iterations) const {
+    std::vector<Effect> effects;
+    for (Effect f : s.effects)
+      if (f != e) effects.push_back(f);
+    ModelParams p = s.params;
+    const ParamMask drop = effect_params(e);
+    for (int k = 0; k < kParamCount; ++k)
+      if (drop[k]) p.v[k] = nominal_.v[k];
+    if (e == Effect::ReadoutDirection) p.flip_readout = false;
+    p = fit_params(m_, idx, p, mask_of(effects), sigma_, iterations);
+    return {effects, p, bic(p, effects, idx)};
+  }
+
+  State refit_all(const State& screened) const {
+    const ModelParams p = fit_params(m_, fit_, screened.params, mask_of(screened.effects), sigma_, opt_.max_iterations);
+    return {screened.effects, p, bic(p, screened.effects, fit_)};
+  }
+
+  // BIC drop from `poorer` to `richer` (both on the fitting set), with the chi-square drop
+  // shrunk by the richer model's design effect (design_effect).
+  double drop(const State& poorer, const State& richer) const {
+    const double D = design_effect(m_, richer.params, fit_, sigma_);
+    const double pen = std::log(2.0 * fit_.size());
+    const double dk = (k_of(richer) - k_of(poorer));
+    return ((poorer.bic - k_of(poorer) * pen) - (richer.bic - k_of(richer) * pen)) / D - dk * pen;
+  }
+  static double k_of(const State& s) {
+    return static_cast<double>(mask_of(s.effects).count()) + (s.params.flip_readout ? 1 : 0);
+  }
+
+  double rms(const ModelParams& p) const { return robust_stats(m_.residuals(p, fit_)).rms_px; }
+
+  // Robust chi-square drop on the held-out observations from `poorer` to `richer` (0 when
+  // nothing is held out).
+  double heldout_drop(const State& poorer, const State& richer) const {
+    if (held_.empty()) return 0;
+    return robust_chi2(m_.residuals(poorer.params, held_), sigma_) - robust_chi2(m_.residuals(richer.params, held_), sigma_);
+  }
+
+  const DiagnosisModel& m_;
+  const std::vector<int>& fit_;
+  const std::vector<int>& held_;
+  const std::vector<int>& screen_;
+  ModelParams nominal_, start_;
+  double sigma_;
+  const SelectionOptions& opt_;
+};
+
+// The screening subsample's BIC drop projected onto the fitting set: the chi-square drop grows
+// with the number of observations, the penalty with its logarithm.
+double projected_drop(const Selector& sel, const State& from, const State& to) {
+  const double rho = static_cast<double>(sel.screen_.size()) / static_cast<double>(sel.fit_.size());
+  const double k_from = Selector::k_of(from), k_to = Selector::k_of(to);
+  const double chi2_drop = (from.bic - k_from * std::log(2.0 * sel.screen_.size())) -
+                           (to.bic - k_to * std::log(2.0 * sel.screen_.size()));
+  return chi2_drop / rho - (k_to - k_from) * std::log(2.0 * sel.fit_.size());
+}
+
+// One forward round: every candidate screened on the subsample; those whose projected drop is
+// near the best (near-degenerate hypotheses, e.g. a lever arm along the optical axis and a
+// focal length, which the subsample cannot tell apart) are refitted on all fitting
+// observations and the lowest BIC there wins. Returns false when nothing clears the
+// threshold.
+bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, State& s, double& drop,
+                   double& held_drop) {
+  State here = s;
+  here.bic = sel.bic(s.params, s.effects, sel.screen_);
+  std::vector<std::pair<double, State>> screened;
+  for (Effect e : candidates)
+    if (!s.has(e)) {
+      State c = sel.screen_add(s, e);
+      const double d = projected_drop(sel, here, c);
+      screened.push_back({d, std::move(c)});
+    }
+  if (screened.empty()) return false;
+  std::sort(screened.begin(), screened.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  const double best_projected = screened.front().first;
+  if (best_projected < sel.opt_.min_bic_drop) return false;
+  const double margin = 30 + 0.05 * best_projected;
+  State best;
+  bool any = false;
+  for (const auto& [d, c] : screened) {
+    if (d < best_projected - margin) break;
+    State full = sel.refit_all(c);
+    if (!any || full.bic < best.bic) best = std::move(full), any = true;
+  }
+  // The winner by BIC; accepted by the drop with the design effect (which is itself noisy
+  // by a few percent, too much to rank near-degenerate candidates by).
+  drop = sel.drop(s, best);
+  if (drop < sel.opt_.min_bic_drop) return false;
+  // The held-out observations must agree: the effect predicts frames the fit never saw better.
+  held_drop = sel.heldout_drop(s, best);
+  if (!sel.held_.empty() && held_drop <= 0) return false;
+  s = std::move(best);
+  return true;
+}
+
+std::vector<SelectedEffect> forward(const Selector& sel, const std::vector<Effect>& candidates, State& s) {
+  std::vector<SelectedEffect> steps;
+  double drop = 0, held_drop = 0;
+  while (true) {
+    const size_t before = s.effects.size();
+    if (!forward_round(sel, candidates, s, drop, held_drop)) return steps;
+    const double rms = sel.rms(s.params);
+    for (size_t k = before; k < s.effects.size(); ++k) steps.push_back({s.effects[k], rms, drop, held_drop});
+  }
+}
+
+// Drops any selected effect whose removal (with a refit of the rest) costs less BIC than
+// the selection threshold: an earlier pick that later ones made redundant. Screened on the
+// subsample, confirmed on the fitting set.
+void backward(const Selector& sel, State& s, std::vector<SelectedEffect>& steps) {
+  bool changed = true;
+  while (changed && s.effects.size() > 1) {
+    changed = false;
+    State here = s;
+    here.bic = sel.bic(s.params, s.effects, sel.screen_);
+    for (Effect e : s.effects) {
+      const double projected = projected_drop(sel, sel.remove(s, e, sel.screen_, sel.opt_.screen_iterations), here);
+      if (projected >= sel.opt_.min_bic_drop + 30 + 0.05 * std::abs(projected)) continue;
+      State c = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
+      if (sel.drop(c, s) >= sel.opt_.min_bic_drop) continue;
+      s = std::move(c);
+      steps.erase(std::remove_if(steps.begin(), steps.end(), [&](const SelectedEffect& st) { return st.effect == e; }),
+                  steps.end());
+      changed = true;
+      break;
+    }
+  }
+}
+
+}  // namespace
+
+Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
+                         const std::vector<int>& screen, const ModelParams& nominal, const ModelParams& start,
+                         double sigma_px, const SelectionOptions& opt) {
+  const Selector sel(m, fit, held, screen, nominal, start, sigma_px, opt);
+  State s = sel.initial();
+  std::vector<SelectedEffect> steps = forward(sel, applicable_effects(m), s);
+  backward(sel, s, steps);
+  return {steps, s.params};
+}
+
+}  // namespace rsd::dsp

@@ -1,0 +1,52 @@
+// Pinhole intrinsics K and Brown-Conrady lens distortion, with its inverse.
+//
+// Pixel convention (docs/formats/recording-v1.md): u to the right, v down,
+// origin at the centre of the top-left pixel. Camera axes: x right, y down, z forward.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+
+namespace rsd::dsp {
+
+// Brown-Conrady coefficients in OpenCV's order (k1, k2, p1, p2, k3).
+struct Distortion {
+  double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
+  bool is_zero() const { return k1 == 0 && k2 == 0 && p1 == 0 && p2 == 0 && k3 == 0; }
+};
+
+struct CameraModel {
+  int width = 640;
+  int height = 480;
+  double fx = 500, fy = 500;
+  double cx = 319.5, cy = 239.5;
+  Distortion dist;
+
+  // A distortion-free camera whose horizontal field of view is hfov_rad, principal point centred.
+  static CameraModel from_hfov(int width, int height, double hfov_rad);
+
+  // Normalised image-plane point (x/z, y/z) -> distorted normalised point.
+  Eigen::Vector2d distort(const Eigen::Vector2d& xn) const;
+  // d(distort)/d(xn), analytic: used by the inverse and by solvers.
+  Eigen::Matrix2d distort_jacobian(const Eigen::Vector2d& xn) const;
+  // Inverse of distort() by Newton's method; nullopt if it does not converge
+  // (far outside the region where the polynomial is monotonic).
+  std::optional<Eigen::Vector2d> undistort(const Eigen::Vector2d& xd) const;
+
+  // Normalised (undistorted) point -> pixel, applying distortion.
+  Eigen::Vector2d to_pixel(const Eigen::Vector2d& xn) const;
+  // Pixel -> normalised undistorted point; nullopt where distortion cannot be inverted.
+  std::optional<Eigen::Vector2d> from_pixel(const Eigen::Vector2d& px) const;
+
+  // Camera-frame point -> pixel; nullopt when the point is not in front of the camera.
+  std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& Xc) const;
+  // Pixel -> unit-z ray direction (x, y, 1) in camera axes.
+  std::optional<Eigen::Vector3d> ray(const Eigen::Vector2d& px) const;
+
+  bool contains(const Eigen::Vector2d& px, double margin = 0.5) const {
+    return px.x() >= -margin && px.y() >= -margin && px.x() <= width - 1 + margin &&
+           px.y() <= height - 1 + margin;
+  }
+};
+
+}  // namespace rsd::dsp

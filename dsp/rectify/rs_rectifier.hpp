@@ -1,0 +1,148 @@
+// Rolling-shutter rectification of whole frames: the global-shutter image at a reference time.
+//
+// For every output (global-shutter) pixel p at t_ref the rectifier needs the rolling-shutter
+// pixel that saw the same scene point: the inverse of rectify_pixel (rs_backprojection.hpp).
+// p's ray at t_ref meets the depth model in a point X; X's rolling-shutter image is the
+// solution of the paper's constraint eq. (3), pi_y(P(t_c) X) = r t_c - v0
+// (Meingast, Geyer, Sastry 2005, Sec. 2). That exact map is evaluated only at the nodes of a
+// coarse grid and interpolated bilinearly in between; the grid is refined until an error bound
+// (from the map's second differences, docs/rectification.md) is below the tolerance. The
+// image is then resampled bilinearly in fixed point (AVX2 when the CPU has it).
+//
+// Nothing is allocated after construction: the daemon's hot path calls rectify() per frame.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "dsp/geometry/camera_model.hpp"
+#include "dsp/geometry/camera_motion.hpp"
+#include "dsp/core/image.hpp"
+#include "dsp/geometry/row_timing.hpp"
+#include "dsp/geometry/rs_backprojection.hpp"
+
+namespace rsd::dsp {
+
+// Which instant the global-shutter output shows: the first row read (t = 0) or the middle
+// row, which halves the largest correction.
+enum class ReferenceRow { First, Middle };
+double reference_time(const RowTiming& timing, ReferenceRow ref);
+
+// The ground seen from a camera h metres above it: the plane y = h in the axes of the camera at
+// the frame start (y down). Rays above the horizon miss it; there the rectifier uses infinite
+// depth, which is where the plane's points tend as they approach the horizon.
+DepthModel ground_plane(double camera_height_m);
+
+struct RectifierConfig {
+  int initial_spacing = 32;     // node spacing tried first (output px, a power of two >= 2)
+  int min_spacing = 4;          // the refinement halves the spacing down to this
+  double tolerance_px = 0.05;   // wanted bound on |interpolated - exact source position|
+  int table_step_rows = 8;      // pose table step (rows); halved while its error share is large
+  bool use_simd = true;         // AVX2 kernels where the CPU has them (same output bit for bit)
+};
+
+struct RectifyReport {
+  bool rectified = false;       // false: the frame was copied unrectified
+  int spacing = 0;              // node spacing of the map used
+  double error_bound_px = 0;    // bound on the map error over every cell that is sampled
+  int invalid_nodes = 0;        // nodes without a solution in the capture window (cells black)
+  int unbounded_cells = 0;      // cells whose bound could not be estimated (invalid neighbours)
+  bool within_tolerance() const { return error_bound_px <= tolerance_px; }
+  double tolerance_px = 0.05;
+};
+
+class Rectifier {
+ public:
+  // Output with the source camera's geometry.
+  Rectifier(const CameraModel& cam, const RowTiming& timing, PixelFormat format,
+            const RectifierConfig& cfg = {});
+  // Output through another camera model (other size, or an undistorted pinhole).
+  Rectifier(const CameraModel& cam, const RowTiming& timing, const CameraModel& out_cam,
+            PixelFormat format, const RectifierConfig& cfg = {});
+
+  // The frame whose first row is read at its frame start, moving with the constant twist tw
+  // (camera-frame velocities, camera_motion.hpp); depth in the axes of the camera at the frame
+  // start; t_ref after the frame start. A twist with a non-finite component is no valid
+  // velocity: the frame goes out unrectified (pass_through).
+  RectifyReport rectify(const ImageView& src, const ImageView& dst, const Twist& tw,
+                        const DepthModel& depth, double t_ref);
+  // Any motion relative to the camera at the frame start (at(0) = identity).
+  RectifyReport rectify(const ImageView& src, const ImageView& dst, const CameraMotion& motion,
+                        const DepthModel& depth, double t_ref);
+  // Without a valid velocity: the frame unchanged (copied; through the output camera if any).
+  RectifyReport pass_through(const ImageView& src, const ImageView& dst);
+
+  // The two halves of rectify(): the map for a motion, then resampling with it.
+  RectifyReport build_map(const CameraMotion& motion, const DepthModel& depth, double t_ref);
+  void remap(const ImageView& src, const ImageView& dst);
+  // Diagnostics: the interpolated source position of every pixel of output row y (the
+  // positions the sampler uses, to 1/65536 px); NaN where the output is black by construction.
+  void map_row(int y, double* sx, double* sy);
+
+  bool uses_simd() const { return simd_; }
+  const CameraModel& output_camera() const { return out_; }
+
+  // Node arrays and per-frame state (public for the implementation's helpers only).
+  struct Level {
+    int spacing = 0, shift = 0, nx = 0, ny = 0;
+    std::vector<double> ray_x, ray_y;   // unit-z viewing ray of each node pixel, output camera
+    std::vector<std::uint8_t> ray_ok;
+  };
+  struct Branch {                        // source positions of the nodes for one depth choice
+    std::vector<double> x, y;
+    std::vector<std::uint8_t> ok;
+    std::vector<float> d2x, d2y;         // |second difference| along x / y, max over components
+  };
+  struct Pose {                          // X_c = R X + T at table row v_k, and its increment
+    double R[9], T[3], dR[9], dT[3];
+  };
+  struct Affine {                        // source positions along a cell of a row: a + k s, 16.16
+    std::int32_t ax, ay, sx, sy;
+  };
+
+ private:
+  void allocate_levels();
+  void build_pose_table(const CameraMotion& motion, int step_rows);
+  bool solve_node(const double* Y, double rho, double& v, double* px, double* gain) const;
+  void solve_branch(Branch& b, bool plane_branch);
+  void second_differences(Branch& b) const;
+  RectifyReport solve_level();
+  RectifyReport assess_level();
+  double cell_bound(const Branch& b, int i, int j) const;
+  int interpolate_row(int y);
+  Affine cell_affine(int i, std::uint8_t mode) const;
+  void generate_row(int y);
+  void kink_segment(int i, int x0, int count);
+  void check_views(const ImageView& src, const ImageView& dst) const;
+
+  CameraModel cam_, out_;
+  RowTiming timing_;
+  PixelFormat format_;
+  RectifierConfig cfg_;
+  bool simd_ = false;
+  void (*sample_row_)(const ImageView&, const std::int32_t*, const std::int32_t*, std::uint8_t*, int) = nullptr;
+  void (*sample_affine_)(const ImageView&, const Affine&, std::uint8_t*, int) = nullptr;
+
+  std::vector<Level> levels_;
+  std::size_t level_ = 0;
+  std::vector<Pose> table_;                // allocated for a step of one row
+  std::size_t table_n_ = 0;                // entries in use
+  double table_v0_ = 0, table_inv_step_ = 0;
+  double table_d2R_ = 0, table_d2T_ = 0;   // largest second differences of the table
+  double table_error_px_ = 0;              // its share of the bound
+  // Per frame: reference geometry and the node solutions of the current level.
+  double Rt_ref_[9] = {}, o_ref_[3] = {};  // R_ref^T and the camera centre at t_ref
+  bool plane_ = false, need_infinite_ = false;
+  double plane_n_[3] = {}, plane_den_ = 1;
+  std::vector<double> rho_;
+  Branch plane_b_, inf_b_;
+  std::vector<std::uint8_t> cell_mode_;
+  double gain_max_ = 0;                    // table-error sensitivity, max over nodes
+  std::vector<double> v_start_;            // Newton's start per node column (row solved last)
+  bool map_ready_ = false;
+  // Per row: node values interpolated to the row, and the source coordinates (16.16).
+  std::vector<double> row_px_, row_py_, row_ix_, row_iy_, row_rho_;
+  std::vector<std::int32_t> xs_, ys_;
+};
+
+}  // namespace rsd::dsp

@@ -1,0 +1,95 @@
+// Simulated observation recordings (docs/formats/recording-v1.md): the nominal model
+// that the recording's header states, and data generated from a "true" model that differs
+// from it by any of the spec's named effects. Pure computation, deterministic per seed; the
+// rsd-sim tool reads the scenario and writes the files.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dsp/geometry/camera_model.hpp"
+#include "dsp/observation/observation_model.hpp"
+#include "dsp/observation/recording.hpp"
+#include "dsp/geometry/row_timing.hpp"
+
+namespace rsd::dsp {
+
+// The spec's named effects, each with its true parameters; unset = as nominal.
+struct Effects {
+  std::optional<double> line_delay_s;     // rolling_shutter
+  bool flip_readout = false;              // readout_direction
+  std::optional<double> time_offset_s;    // time_offset
+  std::optional<double> drift_ppm;        // clock_drift
+  std::optional<Eigen::Vector2d> k1k2;    // lens_distortion
+  std::optional<Eigen::Vector2d> fxfy;    // focal_length
+  std::optional<Eigen::Vector3d> gyro_bias;  // gyro_bias (IMU axes)
+  std::optional<Eigen::Vector3d> lever_arm;  // lever_arm (body axes)
+  bool any() const;
+  std::vector<std::string> names() const;  // spec names of the effects switched on
+};
+
+struct GyroSampling {
+  double rate_min_hz = 200, rate_max_hz = 200;  // each interval drawn in between
+  double gap_probability = 0;     // chance that a sample starts a gap of 5-20 missing samples
+  double repeat_probability = 0;  // chance that a sample repeats the previous timestamp
+  double jitter_s = 0;            // timestamp noise (sorted afterwards)
+  double noise_rad_s = 0;
+};
+
+// Where the body's motion comes from.
+enum class MotionSource {
+  Smooth,    // sums of sinusoids about a rest pose (default)
+  Constant,  // constant velocity in body axes: a screw motion from the rest pose
+  Samples,   // given poses (e.g. a trajectory file), interpolated linearly and by slerp
+};
+
+struct SimConfig {
+  ObservationKind kind = ObservationKind::Landmarks;
+  NominalModel nominal;
+  Effects effects;
+  unsigned seed = 1;
+  double duration_s = 2.0;
+  double start_time_s = 100.0;     // camera clock of the first frame
+  double noise_px = 0.5;
+  // Motion: smooth random translation/rotation about a rest pose.
+  double translation_amplitude_m = 0.1;
+  double rotation_amplitude_rad = 0.15;
+  double motion_frequency_hz = 1.0;
+  double trajectory_rate_hz = 500;
+  MotionSource motion_source = MotionSource::Smooth;
+  Eigen::Vector3d constant_velocity = Eigen::Vector3d::Zero();      // m/s, body axes
+  Eigen::Vector3d constant_angular_rate = Eigen::Vector3d::Zero();  // rad/s, body axes
+  std::vector<PoseSample> pose_samples;  // MotionSource::Samples: world-from-body poses
+  GyroSampling gyro;
+  // Landmarks: the given points (world frame; the body rests at (0, 0, -target_distance_m)
+  // looking along +z), or if none are given a planar grid of rows x cols points at z = 0,
+  // `spacing_m` apart.
+  std::vector<Landmark> points;
+  int target_rows = 7, target_cols = 9;
+  double target_spacing_m = 0.1;
+  double target_distance_m = 1.2;
+  // Matches: features per consecutive frame pair, outlier share.
+  int matches_per_pair = 150;
+  double outlier_fraction = 0.0;
+};
+
+struct SimulatedRecording {
+  Recording rec;
+  Effects truth;                  // the effects that were switched on
+  std::vector<bool> match_outlier;  // ground truth per match
+};
+
+// The camera as it really is: the nominal model with every switched-on effect applied.
+struct TrueModel {
+  CameraModel cam;
+  TimeModel time;
+  Eigen::Vector3d lever_arm = Eigen::Vector3d::Zero(), gyro_bias = Eigen::Vector3d::Zero();
+};
+TrueModel true_model(const NominalModel& nominal, const Effects& effects);
+
+// Validates the config (throws std::invalid_argument naming the field) and simulates.
+SimulatedRecording simulate_recording(const SimConfig& cfg);
+
+}  // namespace rsd::dsp

@@ -1,0 +1,88 @@
+#include "dsp/sim/scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+namespace rsd::dsp {
+
+Eigen::Vector3f CheckerboardTexture::colour(double s, double t) const {
+  const double fs = std::floor(s / sq_), ft = std::floor(t / sq_);
+  if (fs < 0 || ft < 0 || fs >= cols_ || ft >= rows_) return Eigen::Vector3f::Ones();
+  const bool black = (static_cast<long>(fs) + static_cast<long>(ft)) % 2 == 0;
+  return black ? Eigen::Vector3f::Zero() : Eigen::Vector3f::Ones();
+}
+
+std::vector<Eigen::Vector2d> CheckerboardTexture::inner_corners() const {
+  std::vector<Eigen::Vector2d> c;
+  for (int j = 1; j < rows_; ++j)
+    for (int i = 1; i < cols_; ++i) c.emplace_back(i * sq_, j * sq_);
+  return c;
+}
+
+NoiseTexture::NoiseTexture(unsigned seed, double cell_m) : seed_(seed), cell_(cell_m) {}
+
+// Integer hash -> [0, 1): a deterministic lattice of random values.
+float NoiseTexture::lattice(long i, long j, int channel) const {
+  std::uint64_t h = static_cast<std::uint64_t>(i) * 0x9E3779B97F4A7C15ull ^
+                    (static_cast<std::uint64_t>(j) + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full ^
+                    (static_cast<std::uint64_t>(seed_) << 8 | static_cast<unsigned>(channel));
+  h ^= h >> 33;
+  h *= 0xFF51AFD7ED558CCDull;
+  h ^= h >> 33;
+  return static_cast<float>(h >> 40) / static_cast<float>(1ull << 24);
+}
+
+float NoiseTexture::octave(double s, double t, int channel) const {
+  const double fs = std::floor(s), ft = std::floor(t);
+  const double a = s - fs, b = t - ft;
+  // smoothstep weights: continuous gradient, so features are corners rather than seams
+  const double wa = a * a * (3 - 2 * a), wb = b * b * (3 - 2 * b);
+  const long i = static_cast<long>(fs), j = static_cast<long>(ft);
+  const double v = (1 - wa) * (1 - wb) * lattice(i, j, channel) + wa * (1 - wb) * lattice(i + 1, j, channel) +
+                   (1 - wa) * wb * lattice(i, j + 1, channel) + wa * wb * lattice(i + 1, j + 1, channel);
+  return static_cast<float>(v);
+}
+
+Eigen::Vector3f NoiseTexture::colour(double s, double t) const {
+  Eigen::Vector3f c;
+  for (int ch = 0; ch < 3; ++ch) {
+    float v = 0, amp = 0.5f, sum = 0;
+    double scale = 1.0 / cell_;
+    for (int o = 0; o < 4; ++o, amp *= 0.5f, scale *= 2.0) {
+      v += amp * octave(s * scale, t * scale, ch);
+      sum += amp;
+    }
+    // stretch contrast: value noise concentrates around 0.5
+    c[ch] = std::clamp(0.5f + 2.2f * (v / sum - 0.5f), 0.0f, 1.0f);
+  }
+  return c;
+}
+
+Eigen::Vector3f BitmapTexture::texel(int x, int y) const {
+  if (x < 0 || y < 0 || x >= img_.width || y >= img_.height) return Eigen::Vector3f::Ones();
+  const std::uint8_t* p = img_.data.data() + static_cast<size_t>(y) * img_.stride() + x * bytes_per_pixel(img_.format);
+  if (img_.format == PixelFormat::Rgb8) return Eigen::Vector3f(p[0], p[1], p[2]) / 255.0f;
+  const float g = img_.format == PixelFormat::Mono16 ? *reinterpret_cast<const std::uint16_t*>(p) / 65535.0f : p[0] / 255.0f;
+  return Eigen::Vector3f::Constant(g);
+}
+
+Eigen::Vector3f BitmapTexture::colour(double s, double t) const {
+  // Pixel centres sit at half-integer multiples of the pixel size.
+  const double x = s * ppm_ - 0.5, y = t * ppm_ - 0.5;
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  const float a = static_cast<float>(x - x0), b = static_cast<float>(y - y0);
+  return (1 - a) * (1 - b) * texel(x0, y0) + a * (1 - b) * texel(x0 + 1, y0) + (1 - a) * b * texel(x0, y0 + 1) +
+         a * b * texel(x0 + 1, y0 + 1);
+}
+
+Plane fronto_parallel_checkerboard(double z, int cols, int rows, double square_m) {
+  Plane p;
+  p.axis_s = Eigen::Vector3d::UnitX();
+  p.axis_t = Eigen::Vector3d::UnitY();
+  p.origin = Eigen::Vector3d(-0.5 * cols * square_m, -0.5 * rows * square_m, z);
+  p.texture = std::make_shared<CheckerboardTexture>(cols, rows, square_m);
+  return p;
+}
+
+}  // namespace rsd::dsp

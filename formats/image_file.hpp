@@ -1,0 +1,18 @@
+// Reading and writing frames as PNG (libpng) and PGM files. Errors throw
+// std::runtime_error naming the file and what is wrong with it.
+#pragma once
+
+#include <string>
+
+#include "dsp/core/image.hpp"
+
+namespace rsd::formats {
+
+// Writes Mono8, Mono16 (big-endian in the file, as PNG requires) or Rgb8.
+void write_png(const std::string& path, const dsp::ImageView& img);
+
+// Reads PNG (grey, grey+alpha, RGB, RGBA, palette; 8 or 16 bit) or binary PGM (P5, 8 or
+// 16 bit). Alpha is dropped; 16-bit data becomes Mono16 (grey) or is scaled to Rgb8.
+dsp::Image read_image(const std::string& path);
+
+}  // namespace rsd::formats

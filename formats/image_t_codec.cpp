@@ -1,0 +1,222 @@
+#include "formats/image_t_codec.hpp"
+
+#include <charconv>
+#include <cinttypes>
+#include <cstdio>
+#include <cstdlib>
+
+
+namespace rsd::formats {
+
+namespace {
+
+int32_t be32s(const uint8_t* p) {
+  return static_cast<int32_t>(static_cast<uint32_t>(p[0]) << 24 | static_cast<uint32_t>(p[1]) << 16 |
+                              static_cast<uint32_t>(p[2]) << 8 | p[3]);
+}
+
+const char* const kKeys[] = {"frame_utime", "line_delay_ns", "readout", "exposure_ns", "sequence", "rectified",
+                             "frame_ns",    "exposure_s",    "timing",  "intrinsics"};
+constexpr size_t kValueCapacity = 256;
+
+std::string value_of(const bot_core::image_t& img, const char* key) {
+  for (const auto& m : img.metadata)
+    if (m.key == key) return std::string(m.value.begin(), m.value.end());
+  return {};
+}
+
+template <class T>
+bool parse_number(const std::string& s, T& out) {
+  if (s.empty()) return false;
+  if constexpr (std::is_floating_point_v<T>) {
+    char* end = nullptr;
+    out = std::strtod(s.c_str(), &end);  // reads "%.17g" back exactly
+    return end && *end == '\0';
+  } else {
+    const auto r = std::from_chars(s.data(), s.data() + s.size(), out);
+    return r.ec == std::errc() && r.ptr == s.data() + s.size();
+  }
+}
+
+// "a b c ..." -> n doubles.
+bool parse_numbers(const std::string& s, double* out, int n) {
+  const char* p = s.c_str();
+  for (int i = 0; i < n; ++i) {
+    char* end = nullptr;
+    out[i] = std::strtod(p, &end);
+    if (end == p) return false;
+    p = end;
+  }
+  while (*p == ' ') ++p;
+  return *p == '\0';
+}
+
+}  // namespace
+
+LogSkip to_skip(DecodeStatus s) {
+  switch (s) {
+    case DecodeStatus::WrongFingerprint: return LogSkip::WrongFingerprint;
+    case DecodeStatus::AbsurdSize: return LogSkip::AbsurdSize;
+    default: return LogSkip::Undecodable;
+  }
+}
+
+DecodeStatus check_image_t(const uint8_t* data, size_t n, std::string& why) {
+  if (n < 8) {
+    why = "payload of " + std::to_string(n) + " bytes is shorter than a fingerprint";
+    return DecodeStatus::Undecodable;
+  }
+  int64_t hash = 0;
+  for (int i = 0; i < 8; ++i) hash = static_cast<int64_t>(static_cast<uint64_t>(hash) << 8 | data[i]);
+  if (hash != bot_core::image_t::getHash()) {
+    why = "not a bot_core.image_t";
+    return DecodeStatus::WrongFingerprint;
+  }
+  // hash, utime, width, height, row_stride, pixelformat, size
+  size_t pos = 8 + 8 + 4 * 4;
+  auto need = [&](size_t k) { return pos + k <= n; };
+  if (!need(4)) return why = "ends inside the image header", DecodeStatus::Undecodable;
+  const int32_t size = be32s(data + pos);
+  pos += 4;
+  if (size < 0 || !need(static_cast<size_t>(size)))
+    return why = "image size " + std::to_string(size) + " does not fit the " + std::to_string(n) + "-byte payload",
+           DecodeStatus::AbsurdSize;
+  pos += static_cast<size_t>(size);
+  if (!need(4)) return why = "ends before the metadata count", DecodeStatus::Undecodable;
+  const int32_t nmeta = be32s(data + pos);
+  pos += 4;
+  if (nmeta < 0 || nmeta > 4096) return why = "metadata count " + std::to_string(nmeta), DecodeStatus::AbsurdSize;
+  for (int32_t i = 0; i < nmeta; ++i) {
+    if (!need(4)) return why = "ends inside the metadata", DecodeStatus::Undecodable;
+    const int32_t key_len = be32s(data + pos);
+    pos += 4;
+    if (key_len < 1 || !need(static_cast<size_t>(key_len) + 4))
+      return why = "metadata key length " + std::to_string(key_len), DecodeStatus::AbsurdSize;
+    pos += static_cast<size_t>(key_len);
+    const int32_t value_len = be32s(data + pos);
+    pos += 4;
+    if (value_len < 0 || !need(static_cast<size_t>(value_len)))
+      return why = "metadata value length " + std::to_string(value_len), DecodeStatus::AbsurdSize;
+    pos += static_cast<size_t>(value_len);
+  }
+  return DecodeStatus::Ok;
+}
+
+bool parse_frame(const bot_core::image_t& img, RecordedFrame& out, std::string& why) {
+  const auto fmt = pixel_format(img.pixelformat);
+  if (!fmt) return why = "pixel format " + std::to_string(img.pixelformat) + " is not mono8, mono16 or rgb8", false;
+  if (img.width < 1 || img.height < 1 || img.width > 16384 || img.height > 16384)
+    return why = "size " + std::to_string(img.width) + "x" + std::to_string(img.height), false;
+  const int64_t row = static_cast<int64_t>(img.width) * dsp::bytes_per_pixel(*fmt);
+  if (img.row_stride < row || static_cast<int64_t>(img.data.size()) < static_cast<int64_t>(img.row_stride) * (img.height - 1) + row)
+    return why = "row stride " + std::to_string(img.row_stride) + " and " + std::to_string(img.data.size()) +
+                 " bytes do not hold " + std::to_string(img.width) + "x" + std::to_string(img.height) + " pixels", false;
+  out = {};
+  out.format = {img.width, img.height, *fmt};
+  int64_t ns = 0, us = img.utime;
+  if (parse_number(value_of(img, "frame_ns"), ns)) out.meta.first_row_ns = ns;
+  else if (parse_number(value_of(img, "frame_utime"), us)) out.meta.first_row_ns = us * 1000;
+  else out.meta.first_row_ns = img.utime * 1000;
+  uint64_t seq = 0;
+  if (parse_number(value_of(img, "sequence"), seq)) out.meta.sequence = seq;
+  double x = 0;
+  if (parse_number(value_of(img, "exposure_s"), x)) out.meta.exposure_s = x;
+  else if (parse_number(value_of(img, "exposure_ns"), x)) out.meta.exposure_s = x * 1e-9;
+  dsp::Readout r;
+  if (dsp::parse_readout(value_of(img, "readout"), r)) out.readout = r;
+  double t[4];
+  if (parse_numbers(value_of(img, "timing"), t, 4)) {
+    out.line_delay_s = t[0];
+    out.frame_rate_hz = t[1];
+    out.first_row = static_cast<int>(t[3]);
+  } else if (parse_number(value_of(img, "line_delay_ns"), x)) {
+    out.line_delay_s = x * 1e-9;
+  }
+  double k[9];
+  if (parse_numbers(value_of(img, "intrinsics"), k, 9)) {
+    dsp::CameraModel c;
+    c.width = img.width, c.height = img.height;
+    c.fx = k[0], c.fy = k[1], c.cx = k[2], c.cy = k[3];
+    c.dist = {k[4], k[5], k[6], k[7], k[8]};
+    out.camera = c;
+  }
+  return true;
+}
+
+void copy_pixels(const bot_core::image_t& img, const dsp::ImageView& dst) {
+  const size_t row = static_cast<size_t>(dst.width) * dsp::bytes_per_pixel(dst.format);
+  for (int y = 0; y < dst.height; ++y) std::memcpy(dst.row(y), img.data.data() + static_cast<size_t>(y) * img.row_stride, row);
+}
+
+dsp::RowTiming row_timing(const RecordedFrame& f, double fallback_fps) {
+  dsp::RowTiming t = dsp::RowTiming::full_frame(f.format.height, f.frame_rate_hz.value_or(fallback_fps),
+                                                f.readout.value_or(dsp::Readout::TopToBottom));
+  if (f.line_delay_s && *f.line_delay_s > 0) t.line_delay_s = *f.line_delay_s;
+  t.exposure_s = f.meta.exposure_s;
+  t.first_row = f.first_row;
+  return t;
+}
+
+RawFrameEncoder::RawFrameEncoder(const FrameFormat& fmt, const dsp::RowTiming& timing,
+                                 const std::optional<dsp::CameraModel>& camera)
+    : timing_(timing) {
+  msg_.width = fmt.width;
+  msg_.height = fmt.height;
+  msg_.row_stride = static_cast<int32_t>(fmt.width * dsp::bytes_per_pixel(fmt.format));
+  msg_.pixelformat = fourcc(fmt.format);
+  msg_.size = static_cast<int32_t>(fmt.bytes());
+  msg_.data.resize(fmt.bytes());
+  msg_.nmetadata = static_cast<int32_t>(std::size(kKeys));
+  msg_.metadata.resize(std::size(kKeys));
+  for (size_t i = 0; i < std::size(kKeys); ++i) {
+    msg_.metadata[i].key = kKeys[i];
+    msg_.metadata[i].value.reserve(kValueCapacity);
+  }
+  char text[kValueCapacity];
+  set(2, dsp::to_string(timing.readout).data());
+  set(5, "0");
+  std::snprintf(text, sizeof text, "%.17g", timing.line_delay_s * 1e9);
+  set(1, text);
+  std::snprintf(text, sizeof text, "%.17g %.17g %.17g %d", timing.line_delay_s, timing.frame_rate_hz, timing.exposure_s,
+                timing.first_row);
+  set(8, text);
+  if (camera) {
+    const dsp::CameraModel& c = *camera;
+    std::snprintf(text, sizeof text, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g", c.fx, c.fy, c.cx, c.cy,
+                  c.dist.k1, c.dist.k2, c.dist.p1, c.dist.p2, c.dist.k3);
+    set(9, text);
+  } else {  // no intrinsics known: leave the key out
+    msg_.metadata.pop_back();
+    msg_.nmetadata = static_cast<int32_t>(msg_.metadata.size());
+  }
+  buf_.resize(static_cast<size_t>(msg_.getEncodedSize()) + 16 * kValueCapacity);
+}
+
+void RawFrameEncoder::set(size_t index, const char* text) {
+  auto& v = msg_.metadata[index].value;
+  const size_t n = std::min(std::strlen(text), kValueCapacity);
+  v.assign(text, text + n);  // within the reserved capacity: no allocation
+  msg_.metadata[index].n = static_cast<int32_t>(n);
+}
+
+size_t RawFrameEncoder::encode(const dsp::ImageView& img, const FrameMeta& meta) {
+  msg_.utime = meta.first_row_ns / 1000;
+  const size_t row = static_cast<size_t>(img.width) * dsp::bytes_per_pixel(img.format);
+  for (int y = 0; y < img.height; ++y) std::memcpy(msg_.data.data() + y * row, img.row(y), row);
+  char text[64];
+  std::snprintf(text, sizeof text, "%" PRId64, msg_.utime);
+  set(0, text);
+  std::snprintf(text, sizeof text, "%.17g", meta.exposure_s * 1e9);
+  set(3, text);
+  std::snprintf(text, sizeof text, "%" PRIu64, meta.sequence);
+  set(4, text);
+  std::snprintf(text, sizeof text, "%" PRId64, meta.first_row_ns);
+  set(6, text);
+  std::snprintf(text, sizeof text, "%.17g", meta.exposure_s);
+  set(7, text);
+  const int len = msg_.encode(buf_.data(), 0, static_cast<int>(buf_.size()));
+  size_ = len > 0 ? static_cast<size_t>(len) : 0;
+  return size_;
+}
+
+}  // namespace rsd::formats

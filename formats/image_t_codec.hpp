@@ -1,0 +1,120 @@
+// Raw frames as recorded in LCM logs (bot_core.image_t on RSD_RAW), both ways, and checked
+// decoding of the LCM messages rsd reads from logs or the network.
+//
+// Metadata keys of a raw frame. The documented ones (lcmtypes/bot_core_image_t.lcm), which
+// rsd-sim logs and rsd's RSD_RAW also carry:
+//   frame_utime, line_delay_ns, readout, exposure_ns, sequence, rectified
+// and the exact ones rsd --record adds so that a replay reproduces the live run bit for bit
+// (every double printed with 17 significant digits, which reads back to the same double):
+//   frame_ns     first row's capture time, ns (the documented frame_utime rounds to us)
+//   exposure_s   the frame's row exposure, s
+//   timing       "line_delay_s frame_rate_hz exposure_s first_row" of the sensor
+//   intrinsics   "fx fy cx cy k1 k2 p1 p2 k3" of the camera
+// A reader prefers the exact keys and falls back to the documented ones.
+#pragma once
+
+#include <bot_core/image_t.hpp>
+
+#include <cstdint>
+#include <cstring>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dsp/core/frame.hpp"
+#include "dsp/geometry/row_timing.hpp"
+#include "formats/lcm_log.hpp"
+#include "dsp/geometry/camera_model.hpp"
+
+namespace rsd::formats {
+
+using dsp::FrameFormat;
+using dsp::FrameMeta;
+
+// bot_core.image_t pixel formats of the frames rsd reads and writes.
+inline int32_t fourcc(dsp::PixelFormat f) {
+  switch (f) {
+    case dsp::PixelFormat::Mono8: return bot_core::image_t::PIXEL_FORMAT_GRAY;
+    case dsp::PixelFormat::Mono16: return bot_core::image_t::PIXEL_FORMAT_LE_GRAY16;
+    case dsp::PixelFormat::Rgb8: return bot_core::image_t::PIXEL_FORMAT_RGB;
+  }
+  return bot_core::image_t::PIXEL_FORMAT_INVALID;
+}
+
+inline std::optional<dsp::PixelFormat> pixel_format(int32_t fourcc_code) {
+  if (fourcc_code == bot_core::image_t::PIXEL_FORMAT_GRAY) return dsp::PixelFormat::Mono8;
+  if (fourcc_code == bot_core::image_t::PIXEL_FORMAT_LE_GRAY16) return dsp::PixelFormat::Mono16;
+  if (fourcc_code == bot_core::image_t::PIXEL_FORMAT_RGB) return dsp::PixelFormat::Rgb8;
+  return std::nullopt;
+}
+
+
+// What a raw frame's header and metadata say.
+struct RecordedFrame {
+  FrameFormat format;
+  FrameMeta meta;                 // first_row_ns, sequence, exposure_s
+  std::optional<dsp::Readout> readout;
+  std::optional<double> line_delay_s;
+  std::optional<double> frame_rate_hz;  // only in rsd's own recordings
+  int first_row = -1;
+  std::optional<dsp::CameraModel> camera;  // only in rsd's own recordings
+};
+
+enum class DecodeStatus { Ok, WrongFingerprint, AbsurdSize, Undecodable };
+LogSkip to_skip(DecodeStatus s);
+
+// Checks a bot_core.image_t payload before decoding it: fingerprint, and every length field
+// against the payload (lcm-gen's decoder would otherwise allocate whatever a corrupt `size`
+// says). `why` explains a failure.
+DecodeStatus check_image_t(const uint8_t* data, size_t n, std::string& why);
+
+// Fingerprint check, then decode. For fixed-size types (rsd.velocity_t, pose_t) and, after
+// check_image_t, image_t.
+template <class Msg>
+DecodeStatus decode_checked(const uint8_t* data, size_t n, Msg& msg, std::string& why) {
+  if (n < 8) {
+    why = "payload of " + std::to_string(n) + " bytes is shorter than a fingerprint";
+    return DecodeStatus::Undecodable;
+  }
+  int64_t hash = 0;
+  for (int i = 0; i < 8; ++i) hash = static_cast<int64_t>(static_cast<uint64_t>(hash) << 8 | data[i]);
+  if (hash != Msg::getHash()) {
+    why = std::string("not a ") + Msg::getTypeName();
+    return DecodeStatus::WrongFingerprint;
+  }
+  if (msg.decode(data, 0, static_cast<int>(n)) < 0) {
+    why = std::string("does not decode as ") + Msg::getTypeName();
+    return DecodeStatus::Undecodable;
+  }
+  return DecodeStatus::Ok;
+}
+
+// A decoded image_t's size, format and metadata; false (with `why`) when inconsistent.
+bool parse_frame(const bot_core::image_t& img, RecordedFrame& out, std::string& why);
+
+// Copies the pixels into dst (same size and format as the frame).
+void copy_pixels(const bot_core::image_t& img, const dsp::ImageView& dst);
+
+// The sensor timing a recorded frame describes; fields it does not carry come from
+// `fallback_fps` (frame rate) and the documented defaults.
+dsp::RowTiming row_timing(const RecordedFrame& f, double fallback_fps);
+
+// Encodes raw frames as rsd --record writes them, from a message and a buffer sized once:
+// no heap allocation per frame.
+class RawFrameEncoder {
+ public:
+  RawFrameEncoder(const FrameFormat& fmt, const dsp::RowTiming& timing, const std::optional<dsp::CameraModel>& camera);
+  // Encodes the frame; returns its size (0 on failure). data() is valid until the next call.
+  size_t encode(const dsp::ImageView& img, const FrameMeta& meta);
+  const uint8_t* data() const { return buf_.data(); }
+  size_t size() const { return size_; }
+
+ private:
+  void set(size_t index, const char* text);
+  bot_core::image_t msg_;
+  std::vector<uint8_t> buf_;
+  size_t size_ = 0;
+  dsp::RowTiming timing_;
+};
+
+}  // namespace rsd::formats

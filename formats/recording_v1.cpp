@@ -1,0 +1,394 @@
+#include "formats/recording_v1.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <vector>
+
+namespace rsd::formats {
+
+namespace fs = std::filesystem;
+using dsp::Recording;
+
+namespace {
+
+// ---------- writing ----------
+
+std::string num(double v) {  // shortest text that reads back to the same double
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+class CsvWriter {
+ public:
+  CsvWriter(const fs::path& path, const char* header) : path_(path), out_(path) {
+    if (!out_) throw RecordingError(path.string() + ": cannot open for writing");
+    out_ << header << '\n';
+  }
+  template <class... V>
+  void row(const V&... v) {
+    bool first = true;
+    ((out_ << (first ? "" : ",") << field(v), first = false), ...);
+    out_ << '\n';
+  }
+  ~CsvWriter() noexcept(false) {
+    out_.flush();
+    if (!out_) throw RecordingError(path_.string() + ": write failed (disk full?)");
+  }
+
+ private:
+  static std::string field(double v) { return num(v); }
+  static std::string field(int v) { return std::to_string(v); }
+  fs::path path_;
+  std::ofstream out_;
+};
+
+YAML::Node camera_node(const dsp::NominalModel& n) {
+  YAML::Node c;
+  c["width"] = n.cam.width;
+  c["height"] = n.cam.height;
+  c["fx"] = num(n.cam.fx);
+  c["fy"] = num(n.cam.fy);
+  c["cx"] = num(n.cam.cx);
+  c["cy"] = num(n.cam.cy);
+  YAML::Node d;
+  for (double v : {n.cam.dist.k1, n.cam.dist.k2, n.cam.dist.p1, n.cam.dist.p2}) d.push_back(num(v));
+  d.SetStyle(YAML::EmitterStyle::Flow);
+  c["distortion"] = d;
+  return c;
+}
+
+YAML::Node flow_list(std::initializer_list<double> v) {
+  YAML::Node n;
+  for (double x : v) n.push_back(num(x));
+  n.SetStyle(YAML::EmitterStyle::Flow);
+  return n;
+}
+
+void write_header(const fs::path& dir, const Recording& r) {
+  const auto& n = r.nominal;
+  YAML::Node y;
+  y["format"] = "rsd-recording/1";
+  y["camera"] = camera_node(n);
+  y["timing"]["frame_rate_hz"] = num(n.frame_rate_hz);
+  y["timing"]["line_delay_s"] = num(n.time.line_delay_s);
+  y["timing"]["readout"] = std::string(dsp::to_string(n.time.readout));
+  y["timing"]["time_offset_s"] = num(n.time.time_offset_s);
+  y["timing"]["drift_ppm"] = num(n.time.drift_ppm);
+  const bool traj = r.motion == dsp::MotionKind::Trajectory;
+  y["motion"]["kind"] = dsp::to_string(r.motion);
+  y["motion"]["file"] = traj ? "trajectory.csv" : "gyro.csv";
+  const auto& R = n.imu_to_camera;
+  y["motion"]["imu_to_camera"] = flow_list({R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1), R(2, 2)});
+  y["motion"]["lever_arm_m"] = flow_list({n.lever_arm.x(), n.lever_arm.y(), n.lever_arm.z()});
+  const bool lm = r.kind == dsp::ObservationKind::Landmarks;
+  y["observations"]["kind"] = dsp::to_string(r.kind);
+  y["observations"]["file"] = lm ? "observations.csv" : "matches.csv";
+  if (lm) y["observations"]["points"] = "points.csv";
+  y["frames"] = "frames.csv";
+  if (r.noise_px) y["noise_px"] = num(*r.noise_px);
+  std::ofstream out(dir / "recording.yaml");
+  out << y << '\n';
+  if (!out) throw RecordingError((dir / "recording.yaml").string() + ": write failed");
+}
+
+// ---------- reading ----------
+
+class CsvReader {
+ public:
+  CsvReader(const fs::path& path, const std::vector<std::string>& columns) : path_(path.string()), in_(path) {
+    if (!in_) throw RecordingError(path_ + ": cannot open (the recording needs this file)");
+    std::string header;
+    std::getline(in_, header);
+    strip_cr(header);
+    std::string expected;
+    for (size_t i = 0; i < columns.size(); ++i) expected += (i ? "," : "") + columns[i];
+    if (header != expected)
+      throw RecordingError(path_ + ":1:1: header is '" + header + "', the spec requires '" + expected + "'");
+    columns_ = columns;
+  }
+  // Next data row, split into fields with their 1-based columns; false at end of file.
+  bool next() {
+    std::string line;
+    while (std::getline(in_, line)) {
+      ++line_no_;
+      strip_cr(line);
+      if (line.empty()) continue;  // tolerate blank lines (e.g. a trailing newline)
+      split(line);
+      return true;
+    }
+    return false;
+  }
+  double number(size_t i) const {
+    double v;
+    const std::string& s = fields_[i];
+    const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (r.ec != std::errc() || r.ptr != s.data() + s.size() || !std::isfinite(v)) fail(i, "'" + s + "' is not a finite number");
+    return v;
+  }
+  int integer(size_t i) const {
+    int v;
+    const std::string& s = fields_[i];
+    const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (r.ec != std::errc() || r.ptr != s.data() + s.size()) fail(i, "'" + s + "' is not an integer");
+    return v;
+  }
+  [[noreturn]] void fail(size_t i, const std::string& why) const {
+    throw RecordingError(path_ + ":" + std::to_string(line_no_) + ":" + std::to_string(starts_[i]) + ": field '" +
+                         columns_[i] + "': " + why);
+  }
+  [[noreturn]] void fail_line(const std::string& why) const {
+    throw RecordingError(path_ + ":" + std::to_string(line_no_) + ":1: " + why);
+  }
+
+ private:
+  static void strip_cr(std::string& s) {
+    if (!s.empty() && s.back() == '\r') s.pop_back();
+  }
+  void split(const std::string& line) {
+    fields_.clear();
+    starts_.clear();
+    size_t start = 0;
+    for (;;) {
+      const size_t comma = line.find(',', start);
+      fields_.push_back(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+      starts_.push_back(start + 1);
+      if (comma == std::string::npos) break;
+      start = comma + 1;
+    }
+    if (fields_.size() != columns_.size())
+      fail_line("expected " + std::to_string(columns_.size()) + " fields, found " + std::to_string(fields_.size()));
+  }
+  std::string path_;
+  std::ifstream in_;
+  std::vector<std::string> columns_, fields_;
+  std::vector<size_t> starts_;
+  int line_no_ = 1;
+};
+
+std::string where(const std::string& file, const YAML::Node& n) {
+  const auto m = n.Mark();
+  return file + ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1);
+}
+
+template <class T>
+T get(const std::string& file, const YAML::Node& parent, const char* key, const char* path) {
+  const YAML::Node n = parent[key];
+  if (!n) throw RecordingError(where(file, parent) + ": missing key '" + path + "'");
+  try {
+    return n.as<T>();
+  } catch (const YAML::Exception&) {
+    throw RecordingError(where(file, n) + ": key '" + path + "' has the wrong type ('" + YAML::Dump(n) + "')");
+  }
+}
+
+template <class T>
+T get_or(const std::string& file, const YAML::Node& parent, const char* key, const char* path, T fallback) {
+  return parent[key] ? get<T>(file, parent, key, path) : fallback;
+}
+
+std::vector<double> get_list(const std::string& file, const YAML::Node& parent, const char* key, const char* path,
+                             size_t n, bool required) {
+  if (!parent[key]) {
+    if (required) throw RecordingError(where(file, parent) + ": missing key '" + path + "'");
+    return {};
+  }
+  const auto v = get<std::vector<double>>(file, parent, key, path);
+  if (v.size() != n)
+    throw RecordingError(where(file, parent[key]) + ": key '" + path + "' needs " + std::to_string(n) + " numbers, has " +
+                         std::to_string(v.size()));
+  return v;
+}
+
+YAML::Node section(const std::string& file, const YAML::Node& root, const char* key) {
+  const YAML::Node n = root[key];
+  if (!n || !n.IsMap()) throw RecordingError(where(file, root) + ": missing section '" + key + "'");
+  return n;
+}
+
+void read_camera(const std::string& f, const YAML::Node& c, dsp::NominalModel& n) {
+  n.cam.width = get<int>(f, c, "width", "camera.width");
+  n.cam.height = get<int>(f, c, "height", "camera.height");
+  n.cam.fx = get<double>(f, c, "fx", "camera.fx");
+  n.cam.fy = get<double>(f, c, "fy", "camera.fy");
+  n.cam.cx = get<double>(f, c, "cx", "camera.cx");
+  n.cam.cy = get<double>(f, c, "cy", "camera.cy");
+  const auto d = get_list(f, c, "distortion", "camera.distortion", 4, false);
+  if (!d.empty()) n.cam.dist = {d[0], d[1], d[2], d[3], 0.0};
+  if (n.cam.width <= 1 || n.cam.height <= 1) throw RecordingError(where(f, c) + ": camera width and height must be > 1");
+  if (!(n.cam.fx > 0 && n.cam.fy > 0)) throw RecordingError(where(f, c) + ": camera fx and fy must be positive");
+}
+
+void read_timing(const std::string& f, const YAML::Node& t, dsp::NominalModel& n) {
+  n.frame_rate_hz = get<double>(f, t, "frame_rate_hz", "timing.frame_rate_hz");
+  if (!(n.frame_rate_hz > 0)) throw RecordingError(where(f, t["frame_rate_hz"]) + ": timing.frame_rate_hz must be positive");
+  n.time.line_delay_s = get_or<double>(f, t, "line_delay_s", "timing.line_delay_s", 0.0);
+  if (n.time.line_delay_s < 0) throw RecordingError(where(f, t["line_delay_s"]) + ": timing.line_delay_s must not be negative");
+  const auto ro = get_or<std::string>(f, t, "readout", "timing.readout", "top_to_bottom");
+  if (!dsp::parse_readout(ro, n.time.readout))
+    throw RecordingError(where(f, t["readout"]) + ": timing.readout is '" + ro + "', expected top_to_bottom or bottom_to_top");
+  n.time.time_offset_s = get_or<double>(f, t, "time_offset_s", "timing.time_offset_s", 0.0);
+  n.time.drift_ppm = get_or<double>(f, t, "drift_ppm", "timing.drift_ppm", 0.0);
+}
+
+struct Files {
+  std::string motion, observations, points, frames;
+};
+
+Files read_header(const fs::path& dir, Recording& r) {
+  const std::string f = (dir / "recording.yaml").string();
+  YAML::Node y;
+  try {
+    y = YAML::LoadFile(f);
+  } catch (const YAML::BadFile&) {
+    throw RecordingError(f + ": cannot open (is " + dir.string() + " an rsd-recording/1 directory?)");
+  } catch (const YAML::ParserException& e) {
+    throw RecordingError(f + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) + ": " + e.msg);
+  }
+  if (!y.IsMap()) throw RecordingError(f + ": not a YAML mapping");
+  const auto format = get<std::string>(f, y, "format", "format");
+  if (format != "rsd-recording/1") throw RecordingError(where(f, y["format"]) + ": format is '" + format + "', expected rsd-recording/1");
+  read_camera(f, section(f, y, "camera"), r.nominal);
+  read_timing(f, section(f, y, "timing"), r.nominal);
+  const YAML::Node m = section(f, y, "motion"), o = section(f, y, "observations");
+  Files files;
+  const auto mk = get<std::string>(f, m, "kind", "motion.kind");
+  if (mk != "trajectory" && mk != "gyro") throw RecordingError(where(f, m["kind"]) + ": motion.kind is '" + mk + "', expected trajectory or gyro");
+  r.motion = mk == "trajectory" ? dsp::MotionKind::Trajectory : dsp::MotionKind::Gyro;
+  files.motion = get<std::string>(f, m, "file", "motion.file");
+  const auto R = get_list(f, m, "imu_to_camera", "motion.imu_to_camera", 9, false);
+  if (!R.empty()) r.nominal.imu_to_camera = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(R.data());
+  const auto L = get_list(f, m, "lever_arm_m", "motion.lever_arm_m", 3, false);
+  if (!L.empty()) r.nominal.lever_arm = Eigen::Vector3d(L[0], L[1], L[2]);
+  const auto ok = get<std::string>(f, o, "kind", "observations.kind");
+  if (ok != "landmarks" && ok != "matches") throw RecordingError(where(f, o["kind"]) + ": observations.kind is '" + ok + "', expected landmarks or matches");
+  r.kind = ok == "landmarks" ? dsp::ObservationKind::Landmarks : dsp::ObservationKind::Matches;
+  files.observations = get<std::string>(f, o, "file", "observations.file");
+  if (r.kind == dsp::ObservationKind::Landmarks) files.points = get<std::string>(f, o, "points", "observations.points");
+  files.frames = get<std::string>(f, y, "frames", "frames");
+  if (y["noise_px"]) r.noise_px = get<double>(f, y, "noise_px", "noise_px");
+  return files;
+}
+
+void read_frames(const fs::path& path, Recording& r, std::map<int, double>& by_id) {
+  CsvReader csv(path, {"frame", "t"});
+  while (csv.next()) {
+    const int id = csv.integer(0);
+    const double t = csv.number(1);
+    if (!by_id.emplace(id, t).second) csv.fail(0, "frame " + std::to_string(id) + " appears twice");
+    r.frames.push_back({id, t});
+  }
+  if (r.frames.empty()) throw RecordingError(path.string() + ": no frames");
+  std::sort(r.frames.begin(), r.frames.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+  r.nominal.time.t0 = r.frames.front().t;
+}
+
+std::vector<dsp::PoseSample> read_poses(const fs::path& path) {
+  std::vector<dsp::PoseSample> out;
+  CsvReader csv(path, {"t", "x", "y", "z", "qw", "qx", "qy", "qz"});
+  while (csv.next()) {
+    Eigen::Quaterniond q(csv.number(4), csv.number(5), csv.number(6), csv.number(7));
+    if (std::abs(q.norm() - 1) > 1e-3) csv.fail(4, "quaternion is not unit length (norm " + num(q.norm()) + ")");
+    const double t = csv.number(0);
+    if (!out.empty() && t < out.back().t) csv.fail(0, "time goes backwards");
+    out.push_back({t, {csv.number(1), csv.number(2), csv.number(3)}, q.normalized()});
+  }
+  if (out.size() < 2) throw RecordingError(path.string() + ": needs at least two poses");
+  return out;
+}
+
+void read_motion(const fs::path& path, Recording& r) {
+  if (r.motion == dsp::MotionKind::Trajectory) {
+    r.trajectory = read_poses(path);
+  } else {
+    CsvReader csv(path, {"t", "wx", "wy", "wz"});
+    while (csv.next()) r.gyro.push_back({csv.number(0), {csv.number(1), csv.number(2), csv.number(3)}});
+    if (r.gyro.size() < 2) throw RecordingError(path.string() + ": needs at least two gyro samples");
+    // The spec allows irregular, repeated samples: order them, keep repeats.
+    std::stable_sort(r.gyro.begin(), r.gyro.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+  }
+}
+
+void read_landmarks(const fs::path& points, const fs::path& obs, Recording& r, const std::map<int, double>& frames) {
+  std::map<int, size_t> ids;
+  CsvReader p(points, {"id", "x", "y", "z"});
+  while (p.next()) {
+    const int id = p.integer(0);
+    if (!ids.emplace(id, r.points.size()).second) p.fail(0, "point " + std::to_string(id) + " appears twice");
+    r.points.push_back({id, {p.number(1), p.number(2), p.number(3)}});
+  }
+  CsvReader o(obs, {"frame", "id", "u", "v"});
+  while (o.next()) {
+    const int f = o.integer(0), id = o.integer(1);
+    if (!frames.count(f)) o.fail(0, "frame " + std::to_string(f) + " is not in frames.csv");
+    if (!ids.count(id)) o.fail(1, "point " + std::to_string(id) + " is not in points.csv");
+    r.observations.push_back({f, id, {o.number(2), o.number(3)}});
+  }
+}
+
+void read_matches(const fs::path& path, Recording& r, const std::map<int, double>& frames) {
+  CsvReader m(path, {"frame_a", "ua", "va", "frame_b", "ub", "vb"});
+  while (m.next()) {
+    const int a = m.integer(0), b = m.integer(3);
+    if (!frames.count(a)) m.fail(0, "frame " + std::to_string(a) + " is not in frames.csv");
+    if (!frames.count(b)) m.fail(3, "frame " + std::to_string(b) + " is not in frames.csv");
+    r.matches.push_back({a, {m.number(1), m.number(2)}, b, {m.number(4), m.number(5)}});
+  }
+}
+
+}  // namespace
+
+std::vector<dsp::PoseSample> read_trajectory_csv(const std::string& path) { return read_poses(path); }
+
+void write_recording(const std::string& dir_name, const Recording& r) {
+  const fs::path dir(dir_name);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw RecordingError(dir_name + ": cannot create directory: " + ec.message());
+  write_header(dir, r);
+  {
+    CsvWriter w(dir / "frames.csv", "frame,t");
+    for (const auto& f : r.frames) w.row(f.frame, f.t);
+  }
+  if (r.motion == dsp::MotionKind::Trajectory) {
+    CsvWriter w(dir / "trajectory.csv", "t,x,y,z,qw,qx,qy,qz");
+    for (const auto& p : r.trajectory) w.row(p.t, p.p.x(), p.p.y(), p.p.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z());
+  } else {
+    CsvWriter w(dir / "gyro.csv", "t,wx,wy,wz");
+    for (const auto& g : r.gyro) w.row(g.t, g.w.x(), g.w.y(), g.w.z());
+  }
+  if (r.kind == dsp::ObservationKind::Landmarks) {
+    CsvWriter p(dir / "points.csv", "id,x,y,z");
+    for (const auto& L : r.points) p.row(L.id, L.X.x(), L.X.y(), L.X.z());
+    CsvWriter o(dir / "observations.csv", "frame,id,u,v");
+    for (const auto& ob : r.observations) o.row(ob.frame, ob.id, ob.px.x(), ob.px.y());
+  } else {
+    CsvWriter m(dir / "matches.csv", "frame_a,ua,va,frame_b,ub,vb");
+    for (const auto& mt : r.matches) m.row(mt.frame_a, mt.a.x(), mt.a.y(), mt.frame_b, mt.b.x(), mt.b.y());
+  }
+}
+
+Recording read_recording(const std::string& dir_name) {
+  const fs::path dir(dir_name);
+  if (!fs::is_directory(dir)) throw RecordingError(dir_name + ": not a directory");
+  Recording r;
+  const Files files = read_header(dir, r);
+  std::map<int, double> frames;
+  read_frames(dir / files.frames, r, frames);
+  read_motion(dir / files.motion, r);
+  if (r.kind == dsp::ObservationKind::Landmarks)
+    read_landmarks(dir / files.points, dir / files.observations, r, frames);
+  else
+    read_matches(dir / files.observations, r, frames);
+  return r;
+}
+
+}  // namespace rsd::formats

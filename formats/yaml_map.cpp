@@ -1,0 +1,111 @@
+#include "formats/yaml_map.hpp"
+
+#include <cmath>
+
+namespace rsd::formats {
+
+YamlMap::YamlMap(std::string file, YAML::Node node, std::string path)
+    : file_(std::move(file)), node_(std::move(node)), path_(std::move(path)) {
+  if (!node_.IsMap()) throw ConfigError(where(node_) + ": '" + (path_.empty() ? "document" : path_) + "' must be a mapping");
+}
+
+YamlMap YamlMap::load(const std::string& file) {
+  try {
+    return YamlMap(file, YAML::LoadFile(file), "");
+  } catch (const YAML::BadFile&) {
+    throw ConfigError(file + ": cannot open");
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError(file + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) + ": " + e.msg);
+  }
+}
+
+std::string YamlMap::where(const YAML::Node& n) const {
+  const auto m = n.Mark();
+  if (m.line < 0) return file_;
+  return file_ + ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1);
+}
+
+void YamlMap::fail(const std::string& key, const std::string& why) const {
+  const YAML::Node n = node_[key];
+  throw ConfigError(where(n ? n : node_) + ": '" + path(key) + "' " + why);
+}
+
+YAML::Node YamlMap::child(const std::string& key) {
+  used_.insert(key);
+  return node_[key];
+}
+
+double YamlMap::number(const std::string& key) {
+  const YAML::Node n = child(key);
+  if (!n) fail(key, "is missing");
+  try {
+    const double v = n.as<double>();
+    if (!std::isfinite(v)) fail(key, "must be a finite number");
+    return v;
+  } catch (const YAML::Exception&) {
+    fail(key, "must be a number, not '" + YAML::Dump(n) + "'");
+  }
+}
+
+double YamlMap::number(const std::string& key, double fallback) { return has(key) ? number(key) : (used_.insert(key), fallback); }
+
+int YamlMap::integer(const std::string& key, int fallback) {
+  const YAML::Node n = child(key);
+  if (!n) return fallback;
+  try {
+    return n.as<int>();
+  } catch (const YAML::Exception&) {
+    fail(key, "must be an integer, not '" + YAML::Dump(n) + "'");
+  }
+}
+
+bool YamlMap::boolean(const std::string& key, bool fallback) {
+  const YAML::Node n = child(key);
+  if (!n) return fallback;
+  try {
+    return n.as<bool>();
+  } catch (const YAML::Exception&) {
+    fail(key, "must be true or false, not '" + YAML::Dump(n) + "'");
+  }
+}
+
+std::string YamlMap::text(const std::string& key, const std::string& fallback) {
+  const YAML::Node n = child(key);
+  if (!n) return fallback;
+  if (!n.IsScalar()) fail(key, "must be a single value");
+  return n.as<std::string>();
+}
+
+std::vector<double> YamlMap::numbers(const std::string& key, size_t count) {
+  const YAML::Node n = child(key);
+  if (!n) fail(key, "is missing");
+  std::vector<double> v;
+  try {
+    v = n.as<std::vector<double>>();
+  } catch (const YAML::Exception&) {
+    fail(key, "must be a list of " + std::to_string(count) + " numbers");
+  }
+  if (v.size() != count) fail(key, "must have " + std::to_string(count) + " numbers, has " + std::to_string(v.size()));
+  return v;
+}
+
+YamlMap YamlMap::map(const std::string& key) {
+  const YAML::Node n = child(key);
+  if (!n) fail(key, "is missing");
+  return YamlMap(file_, n, path(key));
+}
+
+std::vector<std::string> YamlMap::keys() const {
+  std::vector<std::string> k;
+  for (const auto& kv : node_) k.push_back(kv.first.as<std::string>());
+  return k;
+}
+
+void YamlMap::finish() const {
+  for (const auto& kv : node_) {
+    const std::string k = kv.first.as<std::string>();
+    if (!used_.count(k)) throw ConfigError(where(kv.first) + ": unknown key '" + path(k) + "'");
+  }
+}
+
+}  // namespace rsd::formats

@@ -1,0 +1,65 @@
+// A camera lost mid-stream is retried with backoff and the service resumes when it returns:
+// the simulated camera behind a wrapper that unplugs it after 20 frames and refuses the
+// next two opens.
+#include <gtest/gtest.h>
+
+#include <chrono>
+
+#include "daemon/service.hpp"
+
+using namespace rsd;
+
+namespace {
+
+class UnpluggedOnce final : public drivers::CameraSource {
+ public:
+  explicit UnpluggedOnce(const drivers::SimSourceConfig& c) : sim_(c) {}
+  std::string name() const override { return "flaky-sim"; }
+  void open() override {
+    if (refusals_left_ > 0) {
+      --refusals_left_;
+      throw drivers::CameraError("camera not answering (test)");
+    }
+    sim_.open();
+  }
+  drivers::FrameFormat format() const override { return sim_.format(); }
+  dsp::RowTiming timing() const override { return sim_.timing(); }
+  void start() override { sim_.start(); }
+  drivers::CaptureStatus capture(const dsp::ImageView& dst, drivers::FrameMeta& meta,
+                                 std::chrono::milliseconds timeout) override {
+    if (++captured_ == 20) {  // unplugged: this and the next two opens fail
+      refusals_left_ = 2;
+      throw drivers::CameraError("camera unplugged (test)");
+    }
+    return sim_.capture(dst, meta, timeout);
+  }
+  void stop() override { sim_.stop(); }
+  void set_velocity_sink(drivers::VelocitySink s) override { sim_.set_velocity_sink(std::move(s)); }
+
+ private:
+  drivers::SimSource sim_;
+  int captured_ = 0, refusals_left_ = 0;
+};
+
+}  // namespace
+
+TEST(ServiceReconnect, LostCameraIsRetriedWithBackoffAndResumes) {
+  daemon::Config cfg;
+  cfg.source.sim.camera = dsp::CameraModel::from_hfov(160, 120, 1.0);
+  cfg.source.sim.fps = 60;
+  daemon::StopFlags flags;
+  daemon::RunLimits limits;
+  limits.max_frames = 60;
+  limits.max_seconds = 30;  // a hang fails the test rather than the suite
+  limits.status_line = false;
+  daemon::RunSummary summary;
+  const auto t0 = std::chrono::steady_clock::now();
+  daemon::run_service(
+      cfg, flags, limits, [](const daemon::Config& c) { return std::make_unique<UnpluggedOnce>(c.source.sim); },
+      &summary);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(summary.reconnects, 1);
+  EXPECT_GE(summary.frames_out, 60u);          // it came back and went on
+  EXPECT_GE(secs, 0.5 + 1.0);                  // two refused opens: backoff 0.5 s, then 1 s
+  EXPECT_LT(secs, 20.0);
+}

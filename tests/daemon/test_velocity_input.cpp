@@ -1,0 +1,285 @@
+// Velocity over LCM (in-process memq://): rsd.velocity_t in camera and IMU axes, bot_core.pose_t
+// in body axes, gyro-only, and malformed messages, checked in the VelocityBuffer.
+#include <gtest/gtest.h>
+#include <lcm/lcm.h>
+
+#include <bot_core/pose_t.hpp>
+#include <rsd/velocity_t.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <thread>
+#include <unistd.h>
+#include <vector>
+
+#include "daemon/config.hpp"
+#include "daemon/velocity_input.hpp"
+#include "formats/yaml_map.hpp"
+
+using namespace rsd::daemon;
+
+namespace {
+
+class VelocityInputTest : public ::testing::Test {
+ protected:
+  void SetUp() override { ASSERT_NE(lcm_, nullptr); }
+  void TearDown() override {
+    if (lcm_) lcm_destroy(lcm_);
+  }
+
+  template <class Msg>
+  void publish(const char* channel, const Msg& m) {
+    std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
+    ASSERT_EQ(m.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+    publish_raw(channel, buf.data(), buf.size());
+  }
+  void publish_raw(const char* channel, const void* data, size_t n) {
+    ASSERT_EQ(lcm_publish(lcm_, channel, data, static_cast<unsigned>(n)), 0);
+  }
+  // Dispatches everything queued on the memq provider (no thread).
+  void drain() {
+    while (lcm_handle_timeout(lcm_, 20) > 0) {
+    }
+  }
+  // The sample the buffer holds at utime (us).
+  rsd::drivers::VelocitySample at(int64_t utime) {
+    VelocityEstimate e;
+    EXPECT_EQ(buffer_.at(utime * 1000, e), VelocityStatus::Ok);
+    return e.sample;
+  }
+
+  lcm_t* lcm_ = lcm_create("memq://");
+  VelocityBuffer buffer_;
+};
+
+rsd::velocity_t velocity(int64_t utime, int8_t frame, double wx, double wy, double wz, double vx, double vy, double vz,
+                         bool has_linear = true) {
+  rsd::velocity_t m{};
+  m.utime = utime;
+  m.frame = frame;
+  m.angular_velocity[0] = wx, m.angular_velocity[1] = wy, m.angular_velocity[2] = wz;
+  m.linear_velocity[0] = vx, m.linear_velocity[1] = vy, m.linear_velocity[2] = vz;
+  m.has_linear = has_linear;
+  return m;
+}
+
+// 90 degrees about z: x -> y, y -> -x (row-major [0 -1 0; 1 0 0; 0 0 1]).
+Eigen::Matrix3d rot_z90() {
+  Eigen::Matrix3d r;
+  r << 0, -1, 0, 1, 0, 0, 0, 0, 1;
+  return r;
+}
+
+}  // namespace
+
+TEST_F(VelocityInputTest, CameraFrameIsTakenAsIs) {
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_);
+  publish("RSD_VELOCITY", velocity(1000, rsd::velocity_t::FRAME_CAMERA, 0.1, 0.2, 0.3, 1.0, 2.0, 3.0));
+  publish("RSD_VELOCITY", velocity(2000, rsd::velocity_t::FRAME_CAMERA, 0.3, 0.4, 0.5, 3.0, 4.0, 5.0));
+  drain();
+  EXPECT_EQ(buffer_.count(), 2u);
+  EXPECT_EQ(in.malformed(), 0u);
+  const auto s = at(1000);
+  EXPECT_EQ(s.w[0], 0.1);
+  EXPECT_EQ(s.w[1], 0.2);
+  EXPECT_EQ(s.w[2], 0.3);
+  EXPECT_EQ(s.v[0], 1.0);
+  EXPECT_EQ(s.v[2], 3.0);
+  EXPECT_TRUE(s.has_linear);
+  const auto mid = at(1500);  // interpolated to the query time
+  EXPECT_NEAR(mid.w[0], 0.2, 1e-12);
+  EXPECT_NEAR(mid.v[1], 3.0, 1e-12);
+}
+
+TEST_F(VelocityInputTest, ImuFrameIsRotatedIntoCameraAxes) {
+  VelocityInputConfig cfg;
+  cfg.imu_to_camera = rot_z90();
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_, cfg);
+  publish("RSD_VELOCITY", velocity(1000, rsd::velocity_t::FRAME_IMU, 0.1, 0.2, 0.3, 1.0, 2.0, 3.0));
+  drain();
+  ASSERT_EQ(buffer_.count(), 1u);
+  EXPECT_EQ(in.malformed(), 0u);
+  const auto s = at(1000);
+  EXPECT_EQ(s.w[0], -0.2);  // exact: the rotation's entries are 0 and +-1
+  EXPECT_EQ(s.w[1], 0.1);
+  EXPECT_EQ(s.w[2], 0.3);
+  EXPECT_EQ(s.v[0], -2.0);
+  EXPECT_EQ(s.v[1], 1.0);
+  EXPECT_EQ(s.v[2], 3.0);
+  EXPECT_TRUE(s.has_linear);
+}
+
+TEST_F(VelocityInputTest, CameraFrameIgnoresImuRotation) {
+  VelocityInputConfig cfg;
+  cfg.imu_to_camera = rot_z90();
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_, cfg);
+  publish("RSD_VELOCITY", velocity(1000, rsd::velocity_t::FRAME_CAMERA, 0.1, 0.2, 0.3, 1.0, 2.0, 3.0));
+  drain();
+  const auto s = at(1000);
+  EXPECT_EQ(s.w[0], 0.1);
+  EXPECT_EQ(s.v[1], 2.0);
+}
+
+TEST_F(VelocityInputTest, UnknownFrameIsMalformed) {
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_);
+  publish("RSD_VELOCITY", velocity(1000, 7, 0.1, 0.2, 0.3, 0, 0, 0));
+  publish("RSD_VELOCITY", velocity(2000, -1, 0.1, 0.2, 0.3, 0, 0, 0));
+  drain();
+  EXPECT_EQ(in.malformed(), 2u);
+  EXPECT_EQ(buffer_.count(), 0u);
+  EXPECT_EQ(buffer_.rejected(), 0u);
+}
+
+TEST_F(VelocityInputTest, TruncatedAndGarbageMessagesAreMalformed) {
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_);
+  const auto m = velocity(1000, rsd::velocity_t::FRAME_CAMERA, 0.1, 0.2, 0.3, 0, 0, 0);
+  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  publish_raw("RSD_VELOCITY", buf.data(), buf.size() / 2);  // truncated
+  const uint8_t garbage[] = {0xde, 0xad, 0xbe, 0xef, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16};
+  publish_raw("RSD_VELOCITY", garbage, sizeof garbage);  // wrong fingerprint
+  publish_raw("RSD_VELOCITY", garbage, 0);               // empty
+  publish("RSD_VELOCITY", m);                             // and a good one still gets through
+  drain();
+  EXPECT_EQ(in.malformed(), 3u);
+  EXPECT_EQ(buffer_.count(), 1u);
+  EXPECT_EQ(at(1000).w[2], 0.3);
+}
+
+TEST_F(VelocityInputTest, PoseIsRotatedFromBodyToCameraAxes) {
+  VelocityInputConfig cfg;
+  cfg.pose_channel = "POSE";
+  cfg.body_to_camera = rot_z90();
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_, cfg);
+  bot_core::pose_t p{};
+  p.utime = 5000;
+  p.orientation[0] = 1;
+  p.rotation_rate[0] = 0.5, p.rotation_rate[1] = -0.25, p.rotation_rate[2] = 1.0;
+  p.vel[0] = 4.0, p.vel[1] = 0.5, p.vel[2] = -1.0;
+  p.pos[0] = 100, p.accel[2] = 9.81;  // ignored
+  publish("POSE", p);
+  publish_raw("POSE", "nonsense", 8);  // malformed on the pose channel too
+  drain();
+  EXPECT_EQ(in.malformed(), 1u);
+  ASSERT_EQ(buffer_.count(), 1u);
+  const auto s = at(5000);
+  EXPECT_EQ(s.w[0], 0.25);
+  EXPECT_EQ(s.w[1], 0.5);
+  EXPECT_EQ(s.w[2], 1.0);
+  EXPECT_EQ(s.v[0], -0.5);
+  EXPECT_EQ(s.v[1], 4.0);
+  EXPECT_EQ(s.v[2], -1.0);
+  EXPECT_TRUE(s.has_linear);
+  EXPECT_EQ(s.t_ns, 5000 * 1000);
+}
+
+TEST_F(VelocityInputTest, PoseChannelIsOffByDefault) {
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_);
+  bot_core::pose_t p{};
+  p.utime = 5000;
+  publish("POSE", p);
+  drain();
+  EXPECT_EQ(buffer_.count(), 0u);
+  EXPECT_EQ(in.malformed(), 0u);
+}
+
+TEST_F(VelocityInputTest, GyroOnlyDropsLinearVelocity) {
+  VelocityInputConfig cfg;
+  cfg.pose_channel = "POSE";
+  cfg.gyro_only = true;
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_, cfg);
+  // Linear velocity beyond the sanity limit: not rejected, since it is not used.
+  publish("RSD_VELOCITY", velocity(1000, rsd::velocity_t::FRAME_CAMERA, 0.1, 0.2, 0.3, 500, 0, 0));
+  bot_core::pose_t p{};
+  p.utime = 2000;
+  p.rotation_rate[2] = 0.7;
+  p.vel[0] = 3.0;
+  publish("POSE", p);
+  drain();
+  ASSERT_EQ(buffer_.count(), 2u);
+  EXPECT_EQ(buffer_.rejected(), 0u);
+  for (int64_t t : {1000, 2000}) {
+    const auto s = at(t);
+    EXPECT_FALSE(s.has_linear);
+    EXPECT_EQ(s.v[0], 0.0);
+  }
+  EXPECT_EQ(at(2000).w[2], 0.7);
+}
+
+TEST_F(VelocityInputTest, InsaneSamplesAreRejectedByTheBuffer) {
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_);
+  publish("RSD_VELOCITY", velocity(1000, rsd::velocity_t::FRAME_CAMERA, 0, 0, 50, 0, 0, 0));  // > 20 rad/s
+  publish("RSD_VELOCITY", velocity(2000, rsd::velocity_t::FRAME_CAMERA, 0, 0, 1, 0, 0, 0));
+  publish("RSD_VELOCITY", velocity(1500, rsd::velocity_t::FRAME_CAMERA, 0, 0, 1, 0, 0, 0));  // back in time
+  drain();
+  EXPECT_EQ(in.malformed(), 0u);
+  EXPECT_EQ(buffer_.count(), 1u);
+  EXPECT_EQ(buffer_.rejected(), 2u);
+}
+
+TEST_F(VelocityInputTest, ThreadReceivesUntilStopped) {
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_);
+  in.start();
+  publish("RSD_VELOCITY", velocity(1000, rsd::velocity_t::FRAME_CAMERA, 0, 0, 1, 0, 0, 0));
+  for (int i = 0; i < 200 && buffer_.count() == 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  in.stop();
+  EXPECT_EQ(buffer_.count(), 1u);
+}
+
+TEST(VelocityInputRotation, Validation) {
+  EXPECT_TRUE(is_rotation(Eigen::Matrix3d::Identity()));
+  EXPECT_TRUE(is_rotation(rot_z90()));
+  Eigen::Matrix3d reflection = Eigen::Matrix3d::Identity();
+  reflection(2, 2) = -1;
+  EXPECT_FALSE(is_rotation(reflection));
+  EXPECT_FALSE(is_rotation(2.0 * Eigen::Matrix3d::Identity()));
+  Eigen::Matrix3d nan = Eigen::Matrix3d::Identity();
+  nan(0, 1) = std::nan("");
+  EXPECT_FALSE(is_rotation(nan));
+}
+
+namespace {
+Config load_text(const std::string& yaml) {
+  char name[] = "/tmp/rsd-velocity-config-XXXXXX";
+  const int fd = mkstemp(name);
+  EXPECT_GE(fd, 0);
+  if (fd >= 0) close(fd);
+  std::ofstream(name) << yaml;
+  try {
+    Config c = load_config(name);
+    std::remove(name);
+    return c;
+  } catch (...) {
+    std::remove(name);
+    throw;
+  }
+}
+}  // namespace
+
+TEST(VelocityInputConfig, KeysAreReadRowMajor) {
+  const Config c = load_text(
+      "velocity:\n  pose_channel: POSE\n  imu_to_camera: [0, -1, 0, 1, 0, 0, 0, 0, 1]\n"
+      "  body_to_camera: [0, 1, 0, 0, 0, 1, 1, 0, 0]\n  gyro_only: true\n");
+  EXPECT_EQ(c.velocity_input.pose_channel, "POSE");
+  EXPECT_EQ(c.velocity_input.imu_to_camera, rot_z90());
+  EXPECT_EQ(c.velocity_input.body_to_camera(0, 1), 1.0);
+  EXPECT_EQ(c.velocity_input.body_to_camera(1, 2), 1.0);
+  EXPECT_EQ(c.velocity_input.body_to_camera(2, 0), 1.0);
+  EXPECT_TRUE(c.velocity_input.gyro_only);
+  const Config d = load_text("{}\n");
+  EXPECT_TRUE(d.velocity_input.pose_channel.empty());
+  EXPECT_EQ(d.velocity_input.imu_to_camera, Eigen::Matrix3d::Identity());
+  EXPECT_FALSE(d.velocity_input.gyro_only);
+}
+
+TEST(VelocityInputConfig, NonRotationIsAnErrorNamingTheKey) {
+  try {
+    load_text("velocity:\n  imu_to_camera: [1, 0, 0, 0, 1, 0, 0, 0, -1]\n");
+    FAIL() << "a reflection was accepted";
+  } catch (const rsd::formats::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("'velocity.imu_to_camera' must be a rotation"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(load_text("velocity:\n  body_to_camera: [1, 0, 0]\n"), rsd::formats::ConfigError);
+  EXPECT_THROW(load_text("velocity:\n  pose_channel: RSD_VELOCITY\n"), rsd::formats::ConfigError);
+}

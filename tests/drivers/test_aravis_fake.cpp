@@ -1,0 +1,432 @@
+// AravisSource end to end.
+//  AravisFake.*  Aravis' in-process fake camera (no network): our own images injected
+//                through the fake's fill pattern arrive pixel for pixel.
+//  AravisGigE.*  The real GigE Vision fake camera, arv-fake-gv-camera-0.8, on 127.0.0.1 —
+//                only inside a private network namespace (tests/drivers/run_in_netns.sh; they skip
+//                elsewhere): streaming by address, a camera lost mid-stream, no camera.
+// Ground truth: the pixels each camera writes for a frame id (ours; the GigE fake's
+// documented diagonal ramp) and its frame period; the stamp mapping's own accuracy is
+// measured against exact truth in test_aravis_timestamps.
+#include <arv.h>
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "drivers/aravis_source.hpp"
+#include "tests/support/fake_gv_camera.hpp"
+
+extern char** environ;
+
+using namespace rsd::drivers;
+using rsd::dsp::ImageView;
+using rsd::dsp::PixelFormat;
+using namespace std::chrono_literals;
+using rsd::test::FakeGvCamera;
+using rsd::test::only_loopback;
+using rsd::test::gvcp_port_bound;
+
+namespace {
+
+using Pixel = std::function<int(int x, int y, int channel, uint64_t frame_id)>;
+
+int64_t monotonic_now() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
+}
+
+// The camera's frame id for the driver's counter: GigE Vision ids wrap from 65535 to 1.
+uint64_t camera_frame_id(uint64_t sequence) { return sequence <= 65535 ? sequence : (sequence - 1) % 65535 + 1; }
+
+// Our injected images: every pixel a function of position, channel and frame id.
+int our_pixel(int x, int y, int c, uint64_t id, PixelFormat f) {
+  if (f == PixelFormat::Mono16) return static_cast<int>((x * 257 + y * 911 + id * 4099) & 0xFFFF);
+  return static_cast<int>((x * 3 + y * 7 + id * 11 + c * 85) & 0xFF);
+}
+
+// The GigE fake's Mono8 diagonal ramp at 10 ms exposure and gain 0: (x + y + id) mod 255.
+int gv_fake_pixel(int x, int y, int, uint64_t id) { return static_cast<int>((x + y + id) % 255); }
+
+int read_pixel(const ImageView& v, int x, int y, int c) {
+  if (v.format == PixelFormat::Mono16) {
+    uint16_t p;
+    std::memcpy(&p, v.row(y) + 2 * x, 2);
+    return p;
+  }
+  return v.row(y)[x * rsd::dsp::channels(v.format) + c];
+}
+
+void write_pixel(const ImageView& v, int x, int y, int c, int value) {
+  if (v.format == PixelFormat::Mono16) {
+    const auto p = static_cast<uint16_t>(value);
+    std::memcpy(v.row(y) + 2 * x, &p, 2);
+  } else {
+    v.row(y)[x * rsd::dsp::channels(v.format) + c] = static_cast<uint8_t>(value);
+  }
+}
+
+void fill_ours(const ImageView& v, uint64_t id) {
+  for (int y = 0; y < v.height; ++y)
+    for (int x = 0; x < v.width; ++x)
+      for (int c = 0; c < rsd::dsp::channels(v.format); ++c) write_pixel(v, x, y, c, our_pixel(x, y, c, id, v.format));
+}
+
+size_t count_mismatches(const ImageView& v, uint64_t id, const Pixel& expected) {
+  size_t bad = 0;
+  for (int y = 0; y < v.height; ++y)
+    for (int x = 0; x < v.width; ++x)
+      for (int c = 0; c < rsd::dsp::channels(v.format); ++c) bad += read_pixel(v, x, y, c) != expected(x, y, c, id);
+  return bad;
+}
+
+struct Captured {
+  std::vector<uint64_t> sequence;
+  std::vector<int64_t> first_row, arrival;
+  size_t bad_pixels = 0, timeouts = 0, id_skews = 0;
+};
+
+Captured capture_frames(AravisSource& src, int n, const Pixel& expected) {
+  rsd::dsp::Image slot(src.format().width, src.format().height, src.format().format);
+  Captured run;
+  while (static_cast<int>(run.sequence.size()) < n && run.timeouts < 5) {
+    FrameMeta meta;
+    if (src.capture(slot.view(), meta, 1000ms) != CaptureStatus::Frame) {
+      ++run.timeouts;
+      continue;
+    }
+    run.arrival.push_back(monotonic_now());
+    run.sequence.push_back(meta.sequence);
+    run.first_row.push_back(meta.first_row_ns);
+    // Exact pixels for the frame's own id. Under heavy load Aravis' in-process fake has been
+    // seen to label a frame with its neighbour's id (the pixels were intact); that is the
+    // fake's bookkeeping, not ours: accept it, count it, and allow it rarely.
+    const uint64_t id = camera_frame_id(meta.sequence);
+    size_t bad = count_mismatches(slot.view(), id, expected);
+    if (bad != 0)
+      for (uint64_t other : {id - 1, id + 1})
+        if (count_mismatches(slot.view(), other, expected) == 0) {
+          bad = 0;
+          ++run.id_skews;
+          break;
+        }
+    run.bad_pixels += bad;
+  }
+  return run;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[v.size() / 2];
+}
+
+// Frames consecutive; stamps rising on the camera's grid of frame periods (the fakes wake at
+// multiples of the period and stamp then; a late wake-up past the next multiple skips a slot
+// without counting a frame, so a step can be two periods); each first row at least the
+// receipt delay and at most 50 ms before we had the frame.
+void expect_timing(const Captured& run, double period_s, double receipt_delay_s) {
+  ASSERT_GE(run.sequence.size(), 2u);
+  const double period_ms = period_s * 1e3;
+  std::vector<double> step_ms, lag_ms;
+  size_t gaps = 0, on_grid = 0, skipped = 0;
+  for (size_t i = 1; i < run.sequence.size(); ++i) {
+    gaps += run.sequence[i] != run.sequence[i - 1] + 1;
+    const double step = (run.first_row[i] - run.first_row[i - 1]) * 1e-6;
+    const double slots = std::max(1.0, std::round(step / period_ms));
+    step_ms.push_back(step);
+    on_grid += std::abs(step - slots * period_ms) <= std::max(1.0, 0.25 * period_ms);
+    skipped += slots > 1;
+    EXPECT_GT(step, 0) << "frame " << i;
+  }
+  for (size_t i = 0; i < run.arrival.size(); ++i) lag_ms.push_back((run.arrival[i] - run.first_row[i]) * 1e-6);
+  std::printf("%zu frames: median step %.4f ms, %zu of %zu steps within a quarter period of the grid (%zu skipped "
+              "a slot); arrival - first row median %.3f ms, min %.3f, max %.3f\n",
+              run.sequence.size(), median(step_ms), on_grid, step_ms.size(), skipped, median(lag_ms),
+              *std::min_element(lag_ms.begin(), lag_ms.end()), *std::max_element(lag_ms.begin(), lag_ms.end()));
+  EXPECT_EQ(gaps, 0u);
+  EXPECT_NEAR(median(step_ms), period_ms, 0.01 * period_ms);
+  // The fakes stamp in software when they wake: on a busy host (CI building in parallel) a
+  // late wake-up puts a stamp, and so two steps, off the grid by a few ms. Half the steps
+  // within a quarter period, and the median exact to 1%, is robust to that.
+  EXPECT_GE(on_grid, step_ms.size() / 2);
+  EXPECT_GE(*std::min_element(lag_ms.begin(), lag_ms.end()), receipt_delay_s * 1e3 - 1e-6);
+  EXPECT_LE(*std::max_element(lag_ms.begin(), lag_ms.end()), receipt_delay_s * 1e3 + 50.0);
+}
+
+AravisConfig fake_config(const std::string& format) {
+  AravisConfig c;
+  c.camera = "Fake_1";
+  c.pixel_format = format;
+  c.width = 64;
+  c.height = 48;
+  c.frame_rate_hz = 100;
+  c.exposure_s = 100e-6;
+  c.line_delay_s = 10e-6;
+  c.fake_fill = fill_ours;
+  return c;
+}
+
+class AravisFake : public ::testing::Test {
+ protected:
+  // Belt and braces: the driver never uses Aravis' interfaces (no discovery), and with these
+  // off nothing in this process could broadcast through them.
+  void SetUp() override {
+    arv_disable_interface("GigEVision");
+    arv_disable_interface("USB3Vision");
+  }
+};
+
+void stream_exactly(const std::string& format, int frames) {
+  AravisSource src(fake_config(format));
+  src.open();
+  const FrameFormat f = src.format();
+  EXPECT_EQ(f.width, 64);
+  EXPECT_EQ(f.height, 48);
+  src.start();
+  const PixelFormat pf = f.format;
+  const Captured run = capture_frames(src, frames, [pf](int x, int y, int c, uint64_t id) { return our_pixel(x, y, c, id, pf); });
+  src.stop();
+  ASSERT_EQ(run.sequence.size(), static_cast<size_t>(frames));
+  EXPECT_EQ(run.bad_pixels, 0u);
+  EXPECT_LE(run.id_skews, 2u);
+  expect_timing(run, 0.01, src.timing().exposure_s);
+  const AravisStats s = src.stats();
+  EXPECT_EQ(s.frames, static_cast<uint64_t>(frames));
+  EXPECT_EQ(s.incomplete + s.mismatched, 0u);
+}
+
+}  // namespace
+
+TEST_F(AravisFake, Mono8ArrivesExactlyAcrossTheFrameIdWrap) {
+  AravisSource src(fake_config("Mono8"));
+  src.open();
+  const rsd::dsp::RowTiming t = src.timing();
+  EXPECT_EQ(src.format().format, PixelFormat::Mono8);
+  EXPECT_DOUBLE_EQ(t.frame_rate_hz, 100);
+  EXPECT_NEAR(t.exposure_s, 100e-6, 1e-9);
+  EXPECT_DOUBLE_EQ(t.line_delay_s, 10e-6);
+  src.start();
+  const Captured run = capture_frames(src, 200, [](int x, int y, int c, uint64_t id) {
+    return our_pixel(x, y, c, id, PixelFormat::Mono8);
+  });
+  ASSERT_EQ(run.sequence.size(), 200u);
+  EXPECT_EQ(run.bad_pixels, 0u);
+  EXPECT_LE(run.id_skews, 2u);
+  // The fake's ids start near 65400 to bring out wrap bugs: 200 frames cross 65535 -> 1.
+  EXPECT_LT(run.sequence.front(), 65535u);
+  EXPECT_GT(run.sequence.back(), 65535u);
+  expect_timing(run, 0.01, t.exposure_s);
+  const AravisStats s = src.stats();
+  EXPECT_EQ(s.clock_resets, 0u);
+  EXPECT_EQ(s.incomplete + s.mismatched + s.underruns, 0u);
+}
+
+TEST_F(AravisFake, Mono16ArrivesExactly) { stream_exactly("Mono16", 100); }
+
+TEST_F(AravisFake, Rgb8ArrivesExactly) { stream_exactly("RGB8", 100); }
+
+TEST_F(AravisFake, RestartsAfterStop) {
+  AravisSource src(fake_config("Mono8"));
+  src.open();
+  src.start();
+  const Pixel ours = [](int x, int y, int c, uint64_t id) { return our_pixel(x, y, c, id, PixelFormat::Mono8); };
+  const Captured first = capture_frames(src, 5, ours);
+  src.stop();
+  src.start();
+  const Captured second = capture_frames(src, 5, ours);
+  ASSERT_EQ(second.sequence.size(), 5u);
+  EXPECT_GT(second.sequence.front(), first.sequence.back());
+  EXPECT_GT(second.first_row.front(), first.first_row.back());
+  EXPECT_EQ(first.bad_pixels + second.bad_pixels, 0u);
+}
+
+TEST_F(AravisFake, TimesOutWithoutHanging) {
+  AravisConfig c = fake_config("Mono8");
+  c.frame_rate_hz = 1;  // one frame a second, and we wait 50 ms
+  AravisSource src(c);
+  src.open();
+  src.start();
+  rsd::dsp::Image slot(64, 48, PixelFormat::Mono8);
+  FrameMeta meta;
+  int timeouts = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < 3; ++i) timeouts += src.capture(slot.view(), meta, 50ms) == CaptureStatus::Timeout;
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_GE(timeouts, 2);
+  EXPECT_LT(s, 1.2);
+}
+
+TEST_F(AravisFake, ConfigurationErrorsSayWhat) {
+  auto message = [](const std::function<void()>& f) -> std::string {
+    try {
+      f();
+    } catch (const CameraError& e) {
+      return std::string("CameraError: ") + e.what();
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  AravisConfig c = fake_config("YUV422Packed");
+  EXPECT_NE(message([&] { AravisSource s(c); }).find("rsd takes Mono8, Mono16 or RGB8"), std::string::npos);
+  c = fake_config("Mono8");
+  c.camera = "Basler-12345";
+  EXPECT_NE(message([&] { AravisSource s(c); }).find("expected an IPv4 address"), std::string::npos);
+  c.camera = "255.255.255.255";
+  EXPECT_NE(message([&] { AravisSource s(c); }).find("not the address of one camera"), std::string::npos);
+  c = fake_config("Mono8");
+  c.width = 4096;  // the fake's sensor is 2048 wide
+  const std::string wide = message([&] { AravisSource s(c); s.open(); });
+  EXPECT_EQ(wide.find("CameraError"), std::string::npos) << wide;  // the camera is there
+  EXPECT_NE(wide.find("4096"), std::string::npos) << wide;
+  {
+    AravisSource twice(c);  // a failed open() leaves the source as new: open() again says the same
+    const std::string first = message([&] { twice.open(); }), second = message([&] { twice.open(); });
+    EXPECT_EQ(first, second);
+  }
+  c = fake_config("Mono8");
+  c.frame_rate_hz = 5000;  // the fake goes to 1000
+  const std::string fast = message([&] { AravisSource s(c); s.open(); });
+  EXPECT_NE(fast.find("5000"), std::string::npos) << fast;
+  c = fake_config("Mono8");
+  c.line_delay_s = 1e-3;  // 48 ms of readout in a 10 ms frame
+  EXPECT_NE(message([&] { AravisSource s(c); s.open(); }).find("exceeds the frame period"), std::string::npos);
+}
+
+namespace {
+
+AravisConfig gige_config() {
+  AravisConfig c;
+  c.camera = "127.0.0.1";
+  c.pixel_format = "Mono8";
+  c.width = 64;
+  c.height = 48;
+  c.frame_rate_hz = 100;
+  c.exposure_s = 0.01;  // the fake's ramp is unscaled at 10 ms
+  c.line_delay_s = 10e-6;
+  c.lost_after = 1000ms;
+  return c;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+class AravisGigE : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!only_loopback()) GTEST_SKIP() << "not in a private network namespace: run through tests/drivers/run_in_netns.sh";
+  }
+};
+
+TEST_F(AravisGigE, StreamsByAddress) {
+  std::unique_ptr<FakeGvCamera> camera;
+  try {
+    camera = std::make_unique<FakeGvCamera>();
+  } catch (const std::exception& e) {
+    FAIL() << e.what();
+  }
+  AravisSource src(gige_config());
+  const auto t0 = std::chrono::steady_clock::now();
+  src.open();
+  std::printf("open took %.3f s\n", seconds_since(t0));
+  EXPECT_EQ(src.format().width, 64);
+  EXPECT_EQ(src.format().height, 48);
+  EXPECT_EQ(src.format().format, PixelFormat::Mono8);
+  EXPECT_NEAR(src.timing().exposure_s, 0.01, 1e-6);
+  src.start();
+  const Captured run = capture_frames(src, 200, gv_fake_pixel);
+  ASSERT_EQ(run.sequence.size(), 200u);
+  EXPECT_EQ(run.bad_pixels, 0u);
+  EXPECT_LE(run.id_skews, 2u);
+  EXPECT_LT(run.sequence.front(), 65535u);  // the GigE fake's block ids also cross the wrap
+  EXPECT_GT(run.sequence.back(), 65535u);
+  expect_timing(run, 0.01, src.timing().exposure_s);
+  const AravisStats s = src.stats();
+  std::printf("incomplete %llu, mismatched %llu, underruns %llu, clock resets %llu\n",
+              static_cast<unsigned long long>(s.incomplete), static_cast<unsigned long long>(s.mismatched),
+              static_cast<unsigned long long>(s.underruns), static_cast<unsigned long long>(s.clock_resets));
+  EXPECT_EQ(s.mismatched, 0u);
+}
+
+TEST_F(AravisGigE, NoCameraIsACameraErrorNamingTheAddress) {
+  ASSERT_FALSE(gvcp_port_bound()) << "something answers GVCP on 127.0.0.1 already";
+  AravisSource src(gige_config());
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    src.open();
+    FAIL() << "open() found a camera";
+  } catch (const CameraError& e) {
+    const double s = seconds_since(t0);
+    std::printf("no camera: CameraError after %.3f s: %s\n", s, e.what());
+    EXPECT_NE(std::string(e.what()).find("no GigE Vision camera answered at 127.0.0.1"), std::string::npos);
+    EXPECT_LT(s, 5.0);
+  }
+}
+
+TEST_F(AravisGigE, LostCameraThrowsThenANewSourceStreams) {
+  std::unique_ptr<FakeGvCamera> camera;
+  try {
+    camera = std::make_unique<FakeGvCamera>();
+  } catch (const std::exception& e) {
+    FAIL() << e.what();
+  }
+  auto src = std::make_unique<AravisSource>(gige_config());
+  src->open();
+  src->start();
+  ASSERT_EQ(capture_frames(*src, 10, gv_fake_pixel).sequence.size(), 10u);
+  camera->kill();
+  const auto t0 = std::chrono::steady_clock::now();
+  rsd::dsp::Image slot(64, 48, PixelFormat::Mono8);
+  FrameMeta meta;
+  std::string error;
+  int timeouts = 0;
+  while (error.empty() && seconds_since(t0) < 30) {
+    try {
+      timeouts += src->capture(slot.view(), meta, 100ms) == CaptureStatus::Timeout;
+    } catch (const CameraError& e) {
+      error = e.what();
+    }
+  }
+  const double lost_s = seconds_since(t0);
+  std::printf("killed: CameraError after %.3f s (%d timeouts before): %s\n", lost_s, timeouts, error.c_str());
+  ASSERT_FALSE(error.empty());
+  EXPECT_NE(error.find("127.0.0.1"), std::string::npos);
+  EXPECT_NE(error.find("lost"), std::string::npos);
+  EXPECT_LT(lost_s, 10.0);  // lost_after 1 s + one register read's retries (2.5..5 s)
+  const auto t1 = std::chrono::steady_clock::now();
+  EXPECT_THROW(src->capture(slot.view(), meta, 100ms), CameraError);  // and stays lost, at once
+  EXPECT_LT(seconds_since(t1), 0.05);
+  const auto t2 = std::chrono::steady_clock::now();
+  src.reset();  // closing a lost camera: Aravis' leave-control write times out, once
+  std::printf("closing the lost source took %.3f s\n", seconds_since(t2));
+  EXPECT_LT(seconds_since(t2), 10.0);
+
+  // What the daemon's retry does: a camera is back at the address, a new source streams.
+  camera.reset();
+  camera = std::make_unique<FakeGvCamera>();
+  AravisSource again(gige_config());
+  again.open();
+  again.start();
+  const Captured run = capture_frames(again, 20, gv_fake_pixel);
+  ASSERT_EQ(run.sequence.size(), 20u);
+  EXPECT_EQ(run.bad_pixels, 0u);
+  EXPECT_LE(run.id_skews, 2u);
+  expect_timing(run, 0.01, again.timing().exposure_s);
+}

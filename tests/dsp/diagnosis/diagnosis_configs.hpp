@@ -1,0 +1,20 @@
+// Building blocks of the diagnosis tests' simulated recordings: a 640x480 camera at 30 fps
+// (f = 500 px) and a 5x6 target 1 m away, shaken by hand.
+#pragma once
+
+#include "dsp/sim/recording_simulation.hpp"
+
+namespace rsd::test {
+
+inline void vga_camera(dsp::NominalModel& n) {
+  n.cam.width = 640, n.cam.height = 480;
+  n.cam.fx = n.cam.fy = 500, n.cam.cx = 319.5, n.cam.cy = 239.5;
+  n.frame_rate_hz = 30;
+}
+
+inline void small_target(dsp::SimConfig& c) {
+  c.target_rows = 5, c.target_cols = 6, c.target_spacing_m = 0.12, c.target_distance_m = 1.0;
+  c.translation_amplitude_m = 0.1, c.rotation_amplitude_rad = 0.15;
+}
+
+}  // namespace rsd::test

@@ -1,0 +1,40 @@
+// Looking up what a diagnosis named, for the diagnosis tests: an effect by its spec name, one
+// of its parameters, and the sorted list of names (for exact comparisons and messages).
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "dsp/diagnosis/diagnosis.hpp"
+
+namespace rsd::test {
+
+inline const dsp::NamedEffect* find(const dsp::Diagnosis& d, const std::string& name) {
+  const auto it = std::find_if(d.effects.begin(), d.effects.end(), [&](const dsp::NamedEffect& e) { return e.name == name; });
+  return it == d.effects.end() ? nullptr : &*it;
+}
+
+// NaN (and a test failure when the effect is there but lacks the parameter) if absent.
+inline double param(const dsp::NamedEffect* e, const std::string& name) {
+  if (!e) return NAN;
+  for (const auto& p : e->params)
+    if (p.name == name) return p.value;
+  ADD_FAILURE() << e->name << " has no parameter " << name;
+  return NAN;
+}
+
+// The named effects, sorted, each followed by a space: "rolling_shutter time_offset ".
+inline std::string names(const dsp::Diagnosis& d) {
+  std::vector<std::string> n;
+  for (const auto& e : d.effects) n.push_back(e.name);
+  std::sort(n.begin(), n.end());
+  std::string s;
+  for (const auto& x : n) s += x + " ";
+  return s;
+}
+
+}  // namespace rsd::test

@@ -1,0 +1,301 @@
+// Rectification cost per frame: map rebuilt every frame + remap, single-threaded, in ns per
+// output pixel (the "ns/px" counter), at the daemon's sizes, for Mono8 and RGB24, at infinite
+// depth (rotation only) and before a plane; against, in the same run, a memcpy of the frame (the
+// memory floor) and OpenCV's cv::remap with precomputed CV_16SC2 maps built once from the same
+// exact map (what a user would otherwise write; cv::setNumThreads(1)). Also the grid-spacing
+// sweep (cost against node spacing, with the report's error bound). At the end a summary prints
+// the ratios (rectify / cv::remap, rectify / memcpy) from the medians of the repetitions.
+//
+//   cmake --build build-perf --target bench_rs_rectifier && build-perf/tests/bench_rs_rectifier
+//   cmake --build build-perf --target benchmarks     # this and bench_pipeline_latency, 3 repetitions
+//
+// The performance goal (rectification at most 1.0x, aiming for 0.33x, the time of cv::remap
+// with precomputed CV_16SC2 maps) is judged from the summary; docs/performance.md keeps the
+// latest numbers.
+#include <benchmark/benchmark.h>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "dsp/rectify/rs_rectifier.hpp"
+
+using namespace rsd::dsp;
+
+namespace {
+
+struct Size {
+  int w, h;
+};
+constexpr Size kSizes[] = {{640, 480}, {1280, 720}, {1920, 1080}};
+
+Image noise_image(int w, int h, PixelFormat f) {
+  Image img(w, h, f);
+  std::mt19937 rng(1);
+  for (auto& b : img.data) b = static_cast<std::uint8_t>(rng());
+  return img;
+}
+
+// A brisk hand-held motion: 1.5 rad/s pan, some tilt and roll, walking speed.
+Twist motion() {
+  Twist tw;
+  tw.v = {0.5, 0.1, 1.0};
+  tw.w = {0.3, 1.5, 0.4};
+  return tw;
+}
+
+// args: size index, format (0 Mono8, 1 Rgb8), depth (0 infinite, 1 plane at 3 m), simd (0/1).
+void BM_Rectify(benchmark::State& state) {
+  const Size sz = kSizes[state.range(0)];
+  const PixelFormat f = state.range(1) ? PixelFormat::Rgb8 : PixelFormat::Mono8;
+  const DepthModel depth = state.range(2) ? DepthModel::fronto_parallel(3.0) : DepthModel::at_infinity();
+  const CameraModel cam = CameraModel::from_hfov(sz.w, sz.h, 1.0);
+  const RowTiming timing = RowTiming::full_frame(sz.h, 30);
+  RectifierConfig cfg;
+  cfg.use_simd = state.range(3) != 0;
+  Rectifier rect(cam, timing, f, cfg);
+  Image src = noise_image(sz.w, sz.h, f), dst(sz.w, sz.h, f);
+  const double t_ref = reference_time(timing, ReferenceRow::Middle);
+  RectifyReport rep;
+  Twist tw = motion();
+  for (auto _ : state) {
+    tw.w.y() += 1e-9;  // a new velocity every frame: the map is rebuilt, never cached
+    rep = rect.rectify(src.view(), dst.view(), tw, depth, t_ref);
+    benchmark::DoNotOptimize(dst.data.data());
+    benchmark::ClobberMemory();
+  }
+  const double pixels = static_cast<double>(sz.w) * sz.h;
+  state.counters["ns/px"] = benchmark::Counter(pixels * state.iterations(),
+                                               benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["spacing"] = rep.spacing;
+  state.counters["bound_px"] = rep.error_bound_px;
+  state.counters["simd"] = rect.uses_simd();
+  state.SetLabel(std::to_string(sz.w) + "x" + std::to_string(sz.h) + (state.range(1) ? " rgb24 " : " mono8 ") +
+                 (state.range(2) ? "plane" : "infinite"));
+}
+
+// The map alone (nodes, bound, refinement): what the remap adds to is the rest.
+void BM_BuildMap(benchmark::State& state) {
+  const Size sz = kSizes[state.range(0)];
+  const CameraModel cam = CameraModel::from_hfov(sz.w, sz.h, 1.0);
+  const RowTiming timing = RowTiming::full_frame(sz.h, 30);
+  Rectifier rect(cam, timing, PixelFormat::Mono8);
+  const DepthModel depth = state.range(1) ? DepthModel::fronto_parallel(3.0) : DepthModel::at_infinity();
+  Twist tw = motion();
+  for (auto _ : state) {
+    tw.w.y() += 1e-9;
+    benchmark::DoNotOptimize(rect.build_map(ScrewMotion(tw), depth, reference_time(timing, ReferenceRow::Middle)));
+  }
+  state.counters["ns/px"] = benchmark::Counter(static_cast<double>(sz.w) * sz.h * state.iterations(),
+                                               benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+// Memory floor: copying the frame.
+void BM_Memcpy(benchmark::State& state) {
+  const Size sz = kSizes[state.range(0)];
+  const PixelFormat f = state.range(1) ? PixelFormat::Rgb8 : PixelFormat::Mono8;
+  Image src = noise_image(sz.w, sz.h, f), dst(sz.w, sz.h, f);
+  for (auto _ : state) {
+    std::memcpy(dst.data.data(), src.data.data(), src.data.size());
+    benchmark::ClobberMemory();
+  }
+  state.counters["ns/px"] = benchmark::Counter(static_cast<double>(sz.w) * sz.h * state.iterations(),
+                                               benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+DepthModel depth_arg(int64_t plane) {
+  return plane ? DepthModel::fronto_parallel(3.0) : DepthModel::at_infinity();
+}
+
+const char* format_name(int64_t rgb) { return rgb ? "rgb24" : "mono8"; }
+
+// The rectifier's map for motion(), as cv::remap wants it: CV_32FC2 source positions (the ones
+// the sampler uses, from map_row), converted once to CV_16SC2 + CV_16UC1 (fixed point, 1/32 px
+// interpolation table). Pixels black by construction (NaN) point far outside the image.
+void opencv_maps(Rectifier& rect, const RowTiming& timing, int w, int h, const DepthModel& depth, cv::Mat& map1,
+                 cv::Mat& map2) {
+  rect.build_map(ScrewMotion(motion()), depth, reference_time(timing, ReferenceRow::Middle));
+  cv::Mat fmap(h, w, CV_32FC2);
+  std::vector<double> sx(w), sy(w);
+  for (int y = 0; y < h; ++y) {
+    rect.map_row(y, sx.data(), sy.data());
+    auto* row = fmap.ptr<cv::Vec2f>(y);
+    for (int x = 0; x < w; ++x) {
+      const bool ok = std::isfinite(sx[x]) && std::isfinite(sy[x]);
+      row[x] = ok ? cv::Vec2f(static_cast<float>(sx[x]), static_cast<float>(sy[x])) : cv::Vec2f(-100.f, -100.f);
+    }
+  }
+  cv::convertMaps(fmap, cv::noArray(), map1, map2, CV_16SC2, false);
+}
+
+// What a user would otherwise write: cv::remap with maps precomputed once (the same exact map),
+// bilinear, black border, single-threaded.
+void BM_CvRemap(benchmark::State& state) {
+  cv::setNumThreads(1);
+  const Size sz = kSizes[state.range(0)];
+  const PixelFormat f = state.range(1) ? PixelFormat::Rgb8 : PixelFormat::Mono8;
+  const CameraModel cam = CameraModel::from_hfov(sz.w, sz.h, 1.0);
+  const RowTiming timing = RowTiming::full_frame(sz.h, 30);
+  Rectifier rect(cam, timing, f);
+  cv::Mat map1, map2;
+  opencv_maps(rect, timing, sz.w, sz.h, depth_arg(state.range(2)), map1, map2);
+  Image src_img = noise_image(sz.w, sz.h, f), dst_img(sz.w, sz.h, f);
+  const int type = state.range(1) ? CV_8UC3 : CV_8UC1;
+  const cv::Mat src(sz.h, sz.w, type, src_img.data.data());
+  cv::Mat dst(sz.h, sz.w, type, dst_img.data.data());  // preallocated: remap writes in place
+  for (auto _ : state) {
+    cv::remap(src, dst, map1, map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar());
+    benchmark::DoNotOptimize(dst.data);
+    benchmark::ClobberMemory();
+  }
+  state.counters["ns/px"] = benchmark::Counter(static_cast<double>(sz.w) * sz.h * state.iterations(),
+                                               benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.SetLabel(std::to_string(sz.w) + "x" + std::to_string(sz.h) + " " + format_name(state.range(1)) +
+                 (state.range(2) ? " plane" : " infinite"));
+}
+
+// The rectifier's resampling alone with a map built once (the like-for-like of BM_CvRemap).
+void BM_RemapOnly(benchmark::State& state) {
+  const Size sz = kSizes[state.range(0)];
+  const PixelFormat f = state.range(1) ? PixelFormat::Rgb8 : PixelFormat::Mono8;
+  const CameraModel cam = CameraModel::from_hfov(sz.w, sz.h, 1.0);
+  const RowTiming timing = RowTiming::full_frame(sz.h, 30);
+  Rectifier rect(cam, timing, f);
+  rect.build_map(ScrewMotion(motion()), depth_arg(state.range(2)), reference_time(timing, ReferenceRow::Middle));
+  Image src = noise_image(sz.w, sz.h, f), dst(sz.w, sz.h, f);
+  for (auto _ : state) {
+    rect.remap(src.view(), dst.view());
+    benchmark::DoNotOptimize(dst.data.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["ns/px"] = benchmark::Counter(static_cast<double>(sz.w) * sz.h * state.iterations(),
+                                               benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+// Speed/accuracy: the grid held at one node spacing (initial = min), map rebuilt every frame,
+// 1280x720 Mono8, same motion; bound_px is the report's error bound (the daemon's tolerance is
+// 0.05 px). args: spacing, depth (0 infinite, 1 plane).
+void BM_GridSpacing(benchmark::State& state) {
+  const Size sz = kSizes[1];
+  const CameraModel cam = CameraModel::from_hfov(sz.w, sz.h, 1.0);
+  const RowTiming timing = RowTiming::full_frame(sz.h, 30);
+  RectifierConfig cfg;
+  cfg.initial_spacing = cfg.min_spacing = static_cast<int>(state.range(0));
+  Rectifier rect(cam, timing, PixelFormat::Mono8, cfg);
+  Image src = noise_image(sz.w, sz.h, PixelFormat::Mono8), dst(sz.w, sz.h, PixelFormat::Mono8);
+  const DepthModel depth = depth_arg(state.range(1));
+  const double t_ref = reference_time(timing, ReferenceRow::Middle);
+  RectifyReport rep;
+  Twist tw = motion();
+  for (auto _ : state) {
+    tw.w.y() += 1e-9;
+    rep = rect.rectify(src.view(), dst.view(), tw, depth, t_ref);
+    benchmark::DoNotOptimize(dst.data.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["ns/px"] = benchmark::Counter(static_cast<double>(sz.w) * sz.h * state.iterations(),
+                                               benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["spacing"] = rep.spacing;
+  state.counters["bound_px"] = rep.error_bound_px;
+}
+
+// The console output as usual, and the iteration runs' counters kept for the summary.
+class SummaryReporter : public benchmark::ConsoleReporter {
+ public:
+  struct Sample {
+    double ns_px = 0, bound_px = 0, spacing = 0;
+  };
+  void ReportRuns(const std::vector<Run>& runs) override {
+    ConsoleReporter::ReportRuns(runs);
+    for (const auto& r : runs) {
+      if (r.run_type != Run::RT_Iteration || r.error_occurred) continue;
+      Sample s;
+      const auto get = [&](const char* k) {
+        const auto it = r.counters.find(k);
+        return it == r.counters.end() ? 0.0 : static_cast<double>(it->second);
+      };
+      s.ns_px = get("ns/px") * 1e9;  // the inverted rate is in seconds per pixel
+      s.bound_px = get("bound_px");
+      s.spacing = get("spacing");
+      samples_[r.run_name.function_name + "/" + r.run_name.args].push_back(s);
+    }
+  }
+  // Median over the repetitions of a counter; NaN if the benchmark did not run (filtered out).
+  double median(const std::string& key, double Sample::*field = &Sample::ns_px) const {
+    const auto it = samples_.find(key);
+    if (it == samples_.end() || it->second.empty()) return std::nan("");
+    std::vector<double> v;
+    for (const auto& s : it->second) v.push_back(s.*field);
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+  }
+
+ private:
+  std::map<std::string, std::vector<Sample>> samples_;
+};
+
+void print_summary(const SummaryReporter& rep) {
+  std::printf("\nSummary (medians, ns per output pixel, single-threaded; rectify = map rebuilt every frame + remap)\n");
+  std::printf("%-10s %-6s %-9s %8s %8s %8s %8s %9s %9s %6s\n", "size", "format", "depth", "rectify", "remap",
+              "cv16SC2", "memcpy", "rect/cv", "rect/mcpy", "goal");
+  int met = 0, total = 0;
+  for (int s = 0; s < 3; ++s)
+    for (int rgb = 0; rgb < 2; ++rgb)
+      for (int plane = 0; plane < 2; ++plane) {
+        const std::string a = std::to_string(s) + "/" + std::to_string(rgb) + "/" + std::to_string(plane);
+        const double rect = rep.median("BM_Rectify/" + a + "/1");
+        const double remap = rep.median("BM_RemapOnly/" + a);
+        const double cv = rep.median("BM_CvRemap/" + a);
+        const double mc = rep.median("BM_Memcpy/" + std::to_string(s) + "/" + std::to_string(rgb));
+        if (std::isnan(rect)) continue;
+        const double r_cv = rect / cv;
+        const char* goal = std::isnan(r_cv) ? "-" : (r_cv <= 0.33 ? "AIM" : (r_cv <= 1.0 ? "PASS" : "MISS"));
+        if (!std::isnan(r_cv)) total++, met += r_cv <= 1.0;
+        std::printf("%4dx%-5d %-6s %-9s %8.3f %8.3f %8.3f %8.3f %8.2fx %8.1fx %6s\n", kSizes[s].w, kSizes[s].h,
+                    format_name(rgb), plane ? "plane" : "infinite", rect, remap, cv, mc, r_cv, rect / mc, goal);
+      }
+  std::printf("goal rectify <= 1.0x cv::remap (aim 0.33x): %s (%d of %d cases)\n",
+              total && met == total ? "PASS" : "MISS", met, total);
+  std::printf("\nGrid spacing (1280x720 mono8, map rebuilt every frame; tolerance 0.05 px)\n");
+  std::printf("%-8s %-9s %8s %10s %s\n", "spacing", "depth", "ns/px", "bound_px", "within 0.05 px");
+  for (int sp : {4, 8, 16, 32, 64})
+    for (int plane = 0; plane < 2; ++plane) {
+      const std::string k = "BM_GridSpacing/" + std::to_string(sp) + "/" + std::to_string(plane);
+      const double ns = rep.median(k);
+      if (std::isnan(ns)) continue;
+      const double b = rep.median(k, &SummaryReporter::Sample::bound_px);
+      std::printf("%-8d %-9s %8.3f %10.4f %s\n", sp, plane ? "plane" : "infinite", ns, b, b <= 0.05 ? "yes" : "no");
+    }
+}
+
+}  // namespace
+
+BENCHMARK(BM_Rectify)
+    ->ArgsProduct({{0, 1, 2}, {0, 1}, {0, 1}, {1}})
+    ->ArgsProduct({{0, 1, 2}, {0, 1}, {0}, {0}})  // scalar kernels, for comparison
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_BuildMap)->ArgsProduct({{0, 1, 2}, {0, 1}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Memcpy)->ArgsProduct({{0, 1, 2}, {0, 1}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CvRemap)->ArgsProduct({{0, 1, 2}, {0, 1}, {0, 1}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RemapOnly)->ArgsProduct({{0, 1, 2}, {0, 1}, {0, 1}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_GridSpacing)->ArgsProduct({{4, 8, 16, 32, 64}, {0, 1}})->Unit(benchmark::kMicrosecond);
+
+int main(int argc, char** argv) {
+  cv::setNumThreads(1);
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  SummaryReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  benchmark::Shutdown();
+  print_summary(reporter);
+  return 0;
+}

@@ -1,0 +1,126 @@
+// Simulated recordings: without effects they follow the nominal model exactly; each effect
+// makes the nominal model wrong while the true parameters still explain the data.
+#include <gtest/gtest.h>
+
+#include "dsp/sim/recording_simulation.hpp"
+
+using namespace rsd::dsp;
+using Eigen::Vector3d;
+
+namespace {
+
+SimConfig base(ObservationKind kind) {
+  SimConfig c;
+  c.kind = kind;
+  c.nominal.cam.width = 640, c.nominal.cam.height = 480;
+  c.nominal.cam.fx = c.nominal.cam.fy = 500, c.nominal.cam.cx = 319.5, c.nominal.cam.cy = 239.5;
+  c.nominal.time.line_delay_s = 1.0 / (480 * 30);
+  c.duration_s = 1.0;
+  c.noise_px = 0.0;
+  return c;
+}
+
+// Nominal-model residual RMS of a landmarks recording.
+double landmark_rms(const Recording& r, const LandmarkSetup& s) {
+  std::vector<SampledTrajectory::Sample> samples;
+  for (const auto& p : r.trajectory) samples.push_back({p.t, p.q, p.p});
+  const SampledTrajectory traj(samples);
+  double sum = 0;
+  int n = 0;
+  for (const auto& o : r.observations) {
+    const auto p = predict_landmark(s, traj, r.frames[o.frame].t, r.points[o.id].X);
+    if (!p) continue;
+    sum += (p->pixel - o.px).squaredNorm();
+    ++n;
+  }
+  return std::sqrt(sum / n);
+}
+
+}  // namespace
+
+TEST(RecordingSimulation, LandmarksFollowTheNominalModelWithoutEffects) {
+  const SimulatedRecording s = simulate_recording(base(ObservationKind::Landmarks));
+  ASSERT_GT(s.rec.observations.size(), 1000u);
+  EXPECT_EQ(s.rec.frames.size(), 30u);
+  EXPECT_NEAR(s.rec.nominal.time.t0, 100.0, 1e-12);
+  EXPECT_LT(landmark_rms(s.rec, {s.rec.nominal.cam, s.rec.nominal.time, s.rec.nominal.lever_arm}), 1e-6);
+}
+
+TEST(RecordingSimulation, EachEffectBreaksTheNominalModelButNotTheTrueOne) {
+  SimConfig c = base(ObservationKind::Landmarks);
+  c.effects.time_offset_s = 0.004;
+  c.effects.k1k2 = Eigen::Vector2d(-0.05, 0.01);
+  c.effects.lever_arm = Vector3d(0.02, 0, 0.01);
+  const SimulatedRecording s = simulate_recording(c);
+  const NominalModel& n = s.rec.nominal;
+  EXPECT_GT(landmark_rms(s.rec, {n.cam, n.time, n.lever_arm}), 0.5);
+  LandmarkSetup truth{n.cam, n.time, Vector3d(0.02, 0, 0.01)};
+  truth.time.time_offset_s = 0.004;
+  truth.cam.dist.k1 = -0.05, truth.cam.dist.k2 = 0.01;
+  EXPECT_LT(landmark_rms(s.rec, truth), 1e-6);
+  const auto names = s.truth.names();
+  EXPECT_EQ(names, (std::vector<std::string>{"time_offset", "lens_distortion", "lever_arm"}));
+}
+
+TEST(RecordingSimulation, MatchesHaveOutliersAndIrregularGyro) {
+  SimConfig c = base(ObservationKind::Matches);
+  c.outlier_fraction = 0.1;
+  c.gyro.rate_min_hz = 20, c.gyro.rate_max_hz = 200;
+  c.gyro.repeat_probability = 0.05;
+  c.gyro.gap_probability = 0.02;
+  c.effects.gyro_bias = Vector3d(0.002, -0.001, 0.0015);
+  const SimulatedRecording s = simulate_recording(c);
+  ASSERT_GT(s.rec.matches.size(), 2000u);
+  size_t outliers = 0;
+  for (bool o : s.match_outlier) outliers += o;
+  EXPECT_NEAR(double(outliers) / s.match_outlier.size(), 0.1, 0.02);
+  int repeats = 0;
+  double longest = 0;
+  for (size_t i = 1; i < s.rec.gyro.size(); ++i) {
+    const double dt = s.rec.gyro[i].t - s.rec.gyro[i - 1].t;
+    repeats += dt == 0;
+    longest = std::max(longest, dt);
+    ASSERT_GE(dt, 0);
+  }
+  EXPECT_GT(repeats, 5);
+  EXPECT_GT(longest, 5.0 / 200);
+}
+
+TEST(RecordingSimulation, InlierMatchesFollowTheTrueModel) {
+  // A regular 200 Hz gyro, integrated after removing the true bias, explains every inlier.
+  SimConfig c = base(ObservationKind::Matches);
+  c.outlier_fraction = 0.1;
+  c.effects.gyro_bias = Vector3d(0.002, -0.001, 0.0015);
+  c.effects.time_offset_s = 0.02;
+  const SimulatedRecording s = simulate_recording(c);
+  const OrientationTrack imu = integrate_gyro(s.rec.gyro, *c.effects.gyro_bias);
+  std::vector<OrientationTrack::Sample> cam;
+  for (double t = imu.t_begin(); t <= imu.t_end(); t += 1e-3)
+    cam.push_back({t, camera_orientation(imu.at(t), s.rec.nominal.imu_to_camera)});
+  const OrientationTrack track(cam);
+  MatchSetup m{s.rec.nominal.cam, s.rec.nominal.time};
+  m.time.time_offset_s = 0.02;
+  double worst = 0;
+  int n = 0;
+  for (size_t i = 0; i < s.rec.matches.size(); ++i) {
+    if (s.match_outlier[i]) continue;
+    const Match& mt = s.rec.matches[i];
+    const auto b = predict_match(m, track, s.rec.frames[mt.frame_a].t, mt.a, s.rec.frames[mt.frame_b].t);
+    ASSERT_TRUE(b.has_value());
+    worst = std::max(worst, (b->pixel - mt.b).norm());
+    ++n;
+  }
+  EXPECT_GT(n, 2000);
+  EXPECT_LT(worst, 0.03);  // 200 Hz samples of a 1-3 Hz motion: integration, not the model
+}
+
+TEST(RecordingSimulation, RejectsBadConfigNamingTheField) {
+  SimConfig c = base(ObservationKind::Landmarks);
+  c.nominal.frame_rate_hz = 0;
+  try {
+    simulate_recording(c);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("frame_rate_hz"), std::string::npos);
+  }
+}

@@ -1,0 +1,39 @@
+# rsd-diagnose end to end: rsd-sim writes a small rolling-shutter recording
+# (config/scenarios/suite/landmarks-small-rolling-shutter.yaml, line delay 5e-5 s); rsd-diagnose
+# names exactly rolling_shutter in the JSON (line delay within 3%) and writes the report
+# (index.md with the verdict and uncertainties, four non-trivial PNG figures). Bad recordings
+# fail with exit status 1 naming file:line:col. Then the reduced benchmark suite
+# (docs/diagnosis-benchmark.md): every goal of the diagnosis on the cases it runs.
+set(DIAG ${CMAKE_BINARY_DIR}/diagnose-e2e)
+set(diagnose $<TARGET_FILE:rsd-diagnose>)
+add_test(NAME cli_diagnose_e2e_simulate
+         COMMAND rsd-sim recording ${PROJECT_SOURCE_DIR}/config/scenarios/suite/landmarks-small-rolling-shutter.yaml ${DIAG}/rec)
+set_tests_properties(cli_diagnose_e2e_simulate PROPERTIES FIXTURES_SETUP diagnose_e2e_rec LABELS e2e)
+rsd_cli_test(cli_diagnose_e2e_run STATUS 0 LABELS e2e MESSAGES "effects: rolling_shutter; final RMS 0."
+             COMMAND ${diagnose} ${DIAG}/rec --json ${DIAG}/diagnosis.json --report ${DIAG}/report)
+set_tests_properties(cli_diagnose_e2e_run PROPERTIES FIXTURES_REQUIRED diagnose_e2e_rec FIXTURES_SETUP diagnose_e2e_out
+                     TIMEOUT 120)
+add_test(NAME cli_diagnose_e2e_json
+         COMMAND sh -c "j=\"$0/diagnosis.json\"; cat \"$j\"; grep -q '\"format\": \"rsd-diagnosis/1\"' \"$j\" && grep -q '\"baseline\": {\"rms_px\": [0-9.]*, \"observations\": 900}' \"$j\" && grep -q '\"final\": {\"rms_px\": 0\.[45]' \"$j\" && grep -q '\"heldout\": {\"baseline_rms_px\": [0-9.]*, \"final_rms_px\": 0\.[45]' \"$j\" && test $(grep -c '\"name\": ' \"$j\") -eq 1 && grep -q '\"name\": \"rolling_shutter\"' \"$j\" && grep -o '\"line_delay_s\": [-0-9.e+]*' \"$j\" | awk '{d = $2 + 0} END {exit !(d > 0.97 * 5e-5 && d < 1.03 * 5e-5)}'"
+                 ${DIAG})
+set_tests_properties(cli_diagnose_e2e_json PROPERTIES FIXTURES_REQUIRED diagnose_e2e_out LABELS e2e)
+add_test(NAME cli_diagnose_e2e_report
+         COMMAND sh -c "r=\"$0/report\"; grep -q 'Verdict: the nominal model does not fit' \"$r/index.md\" && grep -q '| `rolling_shutter` | `line_delay_s` | [0-9.e-]* | [0-9.e-]* | 0 |' \"$r/index.md\" || exit 1; for p in residual-vs-row residual-vs-radius residual-vs-time residual-map; do grep -q \"($p.png)\" \"$r/index.md\" && sh \"$1\" \"$r/$p.png\" 30000 || { echo \"bad $p.png\"; exit 1; }; done"
+                 ${DIAG} ${CMAKE_CURRENT_SOURCE_DIR}/check_png.sh)
+set_tests_properties(cli_diagnose_e2e_report PROPERTIES FIXTURES_REQUIRED diagnose_e2e_out LABELS e2e)
+
+file(MAKE_DIRECTORY ${CMAKE_BINARY_DIR}/diag-bad)
+file(WRITE ${CMAKE_BINARY_DIR}/diag-bad/recording.yaml "format: rsd-recording/1\ncamera: {width: abc}\n")
+rsd_cli_test(cli_diagnose_bad_recording STATUS 1 MESSAGES "diag-bad/recording.yaml:2:17: key 'camera.width'"
+             COMMAND ${diagnose} ${CMAKE_BINARY_DIR}/diag-bad --json ${CMAKE_BINARY_DIR}/diag-bad.json)
+add_test(NAME cli_diagnose_e2e_bad_number_prepare
+         COMMAND sh -c "rm -rf \"$0/bad\" && cp -r \"$0/rec\" \"$0/bad\" && sed -i '3s/^\\([^,]*,[^,]*\\),[^,]*/\\1,abc/' \"$0/bad/observations.csv\"" ${DIAG})
+set_tests_properties(cli_diagnose_e2e_bad_number_prepare PROPERTIES FIXTURES_REQUIRED diagnose_e2e_rec
+                     FIXTURES_SETUP diagnose_bad_number LABELS cli)
+rsd_cli_test(cli_diagnose_e2e_bad_number STATUS 1 MESSAGES "bad/observations.csv:3:5: field 'u': 'abc' is not a finite number"
+             COMMAND ${diagnose} ${DIAG}/bad --json ${DIAG}/bad.json)
+set_tests_properties(cli_diagnose_e2e_bad_number PROPERTIES FIXTURES_REQUIRED diagnose_bad_number)
+
+add_test(NAME diagnosis_benchmark_reduced
+         COMMAND rsd-diagnose-suite --reduced --out ${CMAKE_BINARY_DIR}/diagnosis-benchmark-reduced.md)
+set_tests_properties(diagnosis_benchmark_reduced PROPERTIES TIMEOUT 400 LABELS "e2e;slow")

@@ -1,0 +1,555 @@
+#include "tools/report/diagnosis_suite.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "tools/common/cli_util.hpp"
+#include "tools/report/diagnosis_report.hpp"
+#include "dsp/diagnosis/diagnosis.hpp"
+
+namespace rsd::tools {
+
+using namespace rsd::dsp;
+
+namespace {
+
+constexpr int kHeldoutEvery = 5;  // diagnose()'s default split, which the floor must share
+
+const char* kind_name(ObservationKind k) { return to_string(k); }
+
+bool applies(const std::string& effect, ObservationKind k) {
+  if (effect == "gyro_bias") return k == ObservationKind::Matches;
+  if (effect == "lever_arm") return k == ObservationKind::Landmarks;
+  return true;
+}
+
+}  // namespace
+
+std::string SuiteCase::name() const {
+  if (effects.empty()) return "none";
+  std::string s;
+  for (const auto& e : effects) s += (s.empty() ? "" : " + ") + e;
+  return speed ? "speed (" + format_number(duration_s) + " s): " + s : s;
+}
+
+namespace {
+
+// FNV-1a of "kind: effects".
+unsigned case_seed(const SuiteCase& c) {
+  uint32_t h = 2166136261u;
+  for (char ch : std::string(kind_name(c.kind)) + ": " + c.name()) h = (h ^ static_cast<uint8_t>(ch)) * 16777619u;
+  return 1 + h % 1000000;
+}
+
+}  // namespace
+
+std::vector<SuiteCase> suite_cases(bool reduced, const std::vector<ObservationKind>& kinds) {
+  std::vector<SuiteCase> out;
+  for (ObservationKind k : kinds) {
+    const bool lm = k == ObservationKind::Landmarks;
+    const std::string third = lm ? "lever_arm" : "gyro_bias";
+    std::vector<std::vector<std::string>> sets;
+    if (reduced) {
+      // CI: no effect, the two pairs (rolling shutter against a time shift and against the
+      // lens), and the kind's own effect in the triple. Matches leave the first pair to the
+      // triple: on a short recording the gyro's shared per-frame errors put a one-sigma line
+      // delay's 3% goal near its statistical limit (the full suite runs it).
+      sets = {{}, {"rolling_shutter", "lens_distortion"}, {"rolling_shutter", "time_offset", third}};
+      if (lm) sets.insert(sets.begin() + 1, {"rolling_shutter", "time_offset"});
+      if (!lm) sets.erase(sets.begin() + 1);
+    } else {
+      sets = {{}};
+      for (const char* e : {"rolling_shutter", "readout_direction", "time_offset", "clock_drift", "lens_distortion",
+                            "focal_length", "gyro_bias", "lever_arm"})
+        if (applies(e, k)) sets.push_back({e});
+      sets.push_back({"rolling_shutter", "time_offset"});
+      sets.push_back({"rolling_shutter", "lens_distortion"});
+      sets.push_back({"rolling_shutter", "time_offset", third});
+    }
+    // The seed follows from the case alone, so a reduced run reproduces the full table's rows.
+    for (const auto& set : sets) {
+      SuiteCase c{k, set};
+      c.seed = case_seed(c);
+      out.push_back(c);
+    }
+  }
+  for (ObservationKind k : kinds)
+    if (!reduced) {
+      SuiteCase c{k, {"rolling_shutter", "time_offset", k == ObservationKind::Landmarks ? "lever_arm" : "gyro_bias"}};
+      c.seed = case_seed(c) + 1;  // another recording than the triple's row
+      c.duration_s = kSpeedDurationS, c.speed = true;
+      out.push_back(c);
+    }
+  return out;
+}
+
+double default_duration_s(bool) { return 20.0; }
+
+SimConfig base_config(ObservationKind kind, double duration_s, unsigned seed) {
+  SimConfig c;
+  c.kind = kind;
+  c.seed = seed;
+  c.nominal.cam.width = 1920, c.nominal.cam.height = 1080;
+  c.nominal.cam.cx = 959.5, c.nominal.cam.cy = 539.5;
+  c.nominal.frame_rate_hz = 30;
+  if (kind == ObservationKind::Landmarks) {
+    // Like config/scenarios/landmarks-rolling-shutter.yaml: a 7x9 target, hand-held.
+    c.nominal.cam.fx = c.nominal.cam.fy = 1329.75;
+    c.duration_s = duration_s;
+    c.start_time_s = 100;
+    c.noise_px = 0.5;
+    c.translation_amplitude_m = 0.08, c.rotation_amplitude_rad = 0.12, c.motion_frequency_hz = 1.0;
+    c.trajectory_rate_hz = 500;
+    c.target_rows = 7, c.target_cols = 9, c.target_spacing_m = 0.1, c.target_distance_m = 1.2;
+  } else {
+    // Like config/scenarios/matches-phone.yaml: an irregular gyro on its own axes, outliers.
+    c.nominal.cam.fx = c.nominal.cam.fy = 1450;
+    c.duration_s = duration_s;
+    c.start_time_s = 1000;
+    c.noise_px = 0.7;
+    c.rotation_amplitude_rad = 0.25, c.motion_frequency_hz = 1.2;
+    c.nominal.imu_to_camera << 0, -1, 0, -1, 0, 0, 0, 0, -1;
+    c.gyro = {20, 200, 0.01, 0.03, 0.0005, 0.002};
+    c.matches_per_pair = 120;
+    c.outlier_fraction = 0.1;
+  }
+  return c;
+}
+
+// ---------------------------------------------------------------- calibration
+
+namespace {
+
+// Effect `e` at size `a` (dimensionless; 1 = the unit below) applied to `c`. The directions
+// are fixed; the size is what calibration scales.
+void apply(SimConfig& c, const std::string& e, double a) {
+  const NominalModel& n = c.nominal;
+  const double full_readout_line_delay = 1.0 / (n.frame_rate_hz * n.cam.height);
+  const Eigen::Vector3d dir = Eigen::Vector3d(0.6, -0.48, 0.64).normalized();
+  if (e == "rolling_shutter") {
+    c.effects.line_delay_s = a * full_readout_line_delay;  // a = readout / frame period
+  } else if (e == "readout_direction") {
+    // The nominal model has the sensor's true line delay, but the wrong order of rows.
+    c.nominal.time.line_delay_s = a * full_readout_line_delay;
+    c.effects.flip_readout = true;
+  } else if (e == "time_offset") {
+    c.effects.time_offset_s = a * 1e-3;
+  } else if (e == "clock_drift") {
+    c.effects.drift_ppm = a * 100.0;
+  } else if (e == "lens_distortion") {
+    c.effects.k1k2 = Eigen::Vector2d(-0.01 * a, 0.0);  // barrel; k2 stays nominal (0)
+  } else if (e == "focal_length") {
+    c.effects.fxfy = Eigen::Vector2d(n.cam.fx, n.cam.fy) * (1 + 1e-3 * a);
+  } else if (e == "gyro_bias") {
+    c.effects.gyro_bias = 1e-3 * a * dir;  // rad/s
+  } else if (e == "lever_arm") {
+    c.effects.lever_arm = 1e-3 * a * dir;  // m
+  } else {
+    throw std::invalid_argument("unknown effect " + e);
+  }
+}
+
+double max_size(const std::string& e) {
+  // A readout cannot exceed the frame period.
+  return (e == "rolling_shutter" || e == "readout_direction") ? 1.0 : std::numeric_limits<double>::infinity();
+}
+
+std::optional<ModelParams> true_params(const SimulatedRecording& sim);
+
+// Per-coordinate RMS by which the effects in `c` move the observations: how far the true
+// model's predictions lie from the nominal model's, on a noise-free, outlier-free simulation.
+// (Not the nominal residual itself: the gyro's jittered stamps leave a floor of their own.)
+double shift_rms(SimConfig c) {
+  c.noise_px = 0;
+  c.outlier_fraction = 0;
+  c.gyro.noise_rad_s = 0;
+  const SimulatedRecording sim = simulate_recording(c);
+  const DiagnosisModel m(sim.rec);
+  const auto truth = true_params(sim);
+  if (!truth) throw std::invalid_argument("diagnosis model: no parameter for an effect of this case");
+  std::vector<int> all(m.size());
+  for (int i = 0; i < m.size(); ++i) all[i] = i;
+  const auto rn = m.residuals(nominal_params(sim.rec.nominal), all), rt = m.residuals(*truth, all);
+  double s = 0;
+  int n = 0;
+  for (size_t k = 0; k < all.size(); ++k)
+    if (rn[k].allFinite() && rt[k].allFinite()) s += (rn[k] - rt[k]).squaredNorm(), ++n;
+  return n > 0 ? std::sqrt(s / (2.0 * n)) : 0.0;
+}
+
+// The size of effect `e` that moves the observations by one noise sigma (the shift is near
+// linear in the size, so a few secant steps suffice); returns the size and the shift reached.
+std::pair<double, double> calibrate(const SimConfig& base, const std::string& e) {
+  double a = 1.0, shift = 0;
+  const double target = base.noise_px;
+  for (int it = 0; it < 4; ++it) {
+    SimConfig c = base;
+    apply(c, e, a);
+    shift = shift_rms(c);
+    if (std::abs(shift / target - 1) < 0.03 || !(shift > 0)) break;
+    const double next = std::min(a * std::clamp(target / shift, 0.05, 20.0), max_size(e));
+    if (next == a) break;
+    a = next;
+  }
+  return {a, shift};
+}
+
+// ---------------------------------------------------------------- checks
+
+const NamedEffect* find_effect(const Diagnosis& d, const std::string& name) {
+  for (const auto& e : d.effects)
+    if (e.name == name) return &e;
+  return nullptr;
+}
+
+std::optional<double> value(const NamedEffect* e, const std::string& p) {
+  if (!e) return std::nullopt;
+  for (const auto& x : e->params)
+    if (x.name == p && x.text.empty()) return x.value;
+  return std::nullopt;
+}
+
+std::string text_value(const NamedEffect* e, const std::string& p) {
+  if (!e) return "";
+  for (const auto& x : e->params)
+    if (x.name == p) return x.text;
+  return "";
+}
+
+std::string pct(double err, double truth) {
+  std::ostringstream o;
+  o.setf(std::ios::showpos);
+  o << format_number(100 * err / std::abs(truth), 2) << "%";  // + = above the truth
+  return o.str();
+}
+
+// "value +- sigma" for a parameter, with its sigma from the report's uncertainties.
+std::string with_sigma(double v, const std::vector<ParamUncertainty>& u, const std::string& effect,
+                       const std::string& param, double unit, int digits = 4) {
+  std::string s = format_number(v / unit, digits);
+  for (const auto& p : u)
+    if (p.effect == effect && p.param == param && p.sigma) s += " +- " + format_number(*p.sigma / unit, 2);
+  return s;
+}
+
+EffectCheck check_effect(const std::string& e, const Effects& t, const NominalModel& n, const Diagnosis& d,
+                         const std::vector<ParamUncertainty>& u) {
+  EffectCheck c{e, 0, "", "not named", false};
+  const NamedEffect* f = find_effect(d, e);
+  auto vec_check = [&](const Eigen::Vector3d& truth, const char* names[3], double unit, double tol, const char* u_name) {
+    std::ostringstream tr, re;
+    tr << "(" << format_number(truth.x() / unit, 3) << ", " << format_number(truth.y() / unit, 3) << ", "
+       << format_number(truth.z() / unit, 3) << ") " << u_name;
+    c.truth = tr.str();
+    double worst = 0;
+    bool all = true;
+    re << "(";
+    for (int k = 0; k < 3; ++k) {
+      const auto v = value(f, names[k]);
+      all = all && v.has_value();
+      if (v) worst = std::max(worst, std::abs(*v - truth[k]));
+      re << (k ? ", " : "") << (v ? with_sigma(*v, u, e, names[k], unit, 3) : "?");
+    }
+    re << ") " << u_name << ", max error " << format_number(worst / unit, 2) << " " << u_name;
+    if (f) c.recovered = re.str();
+    c.ok = f && all && worst <= tol;
+  };
+  if (e == "rolling_shutter") {
+    const double truth = *t.line_delay_s;
+    c.truth = "line delay " + format_number(truth * 1e6, 4) + " us (readout " +
+              format_number(truth * n.cam.height * 1e3, 3) + " ms)";
+    if (const auto v = value(f, "line_delay_s")) {
+      c.recovered = with_sigma(*v, u, e, "line_delay_s", 1e-6) + " us (" + pct(*v - truth, truth) + ")";
+      c.ok = std::abs(*v - truth) <= 0.03 * truth;
+    }
+  } else if (e == "readout_direction") {
+    const bool down = (n.time.readout == Readout::TopToBottom) != t.flip_readout;
+    c.truth = down ? "top_to_bottom" : "bottom_to_top";
+    c.truth += " (nominal line delay " + format_number(n.time.line_delay_s * 1e6, 3) + " us)";
+    if (f) {
+      const std::string got = text_value(f, "direction");
+      c.recovered = got;
+      c.ok = got == (down ? "top_to_bottom" : "bottom_to_top");
+    }
+  } else if (e == "time_offset") {
+    const double truth = *t.time_offset_s;
+    c.truth = format_number(truth * 1e3, 4) + " ms";
+    if (const auto v = value(f, "time_offset_s")) {
+      c.recovered = with_sigma(*v, u, e, "time_offset_s", 1e-3) + " ms (" + format_number((*v - truth) * 1e3, 2) + " ms)";
+      c.ok = std::abs(*v - truth) <= 0.5e-3;
+    }
+  } else if (e == "clock_drift") {
+    const double truth = *t.drift_ppm;
+    c.truth = format_number(truth, 4) + " ppm";
+    if (const auto v = value(f, "drift_ppm")) {
+      c.recovered = with_sigma(*v, u, e, "drift_ppm", 1.0) + " ppm (" + pct(*v - truth, truth) + ")";
+      c.ok = std::abs(*v - truth) <= 0.15 * std::abs(truth);
+    }
+  } else if (e == "lens_distortion") {
+    const double truth = t.k1k2->x();
+    c.truth = "k1 " + format_number(truth, 4) + ", k2 " + format_number(t.k1k2->y(), 3);
+    if (const auto v = value(f, "k1")) {
+      c.recovered = "k1 " + with_sigma(*v, u, e, "k1", 1.0) + " (" + pct(*v - truth, truth) + "), k2 " +
+                    format_number(value(f, "k2").value_or(NAN), 3);
+      c.ok = std::abs(*v - truth) <= 0.10 * std::abs(truth);
+    }
+  } else if (e == "focal_length") {
+    const Eigen::Vector2d truth = *t.fxfy;
+    c.truth = "fx " + format_number(truth.x(), 6) + ", fy " + format_number(truth.y(), 6) + " px (nominal " +
+              format_number(n.cam.fx, 6) + ")";
+    const auto fx = value(f, "fx"), fy = value(f, "fy");
+    if (fx && fy) {
+      c.recovered = "fx " + with_sigma(*fx, u, e, "fx", 1.0, 6) + " (" + pct(*fx - truth.x(), truth.x()) + "), fy " +
+                    with_sigma(*fy, u, e, "fy", 1.0, 6) + " (" + pct(*fy - truth.y(), truth.y()) + ")";
+      c.ok = std::abs(*fx - truth.x()) <= 0.002 * truth.x() && std::abs(*fy - truth.y()) <= 0.002 * truth.y();
+    }
+  } else if (e == "gyro_bias") {
+    const char* names[3] = {"bx", "by", "bz"};
+    vec_check(*t.gyro_bias, names, 1e-3, 1e-3, "mrad/s");
+  } else if (e == "lever_arm") {
+    const char* names[3] = {"x", "y", "z"};
+    vec_check(*t.lever_arm, names, 1e-3, 1e-2, "mm");
+  }
+  return c;
+}
+
+// The true model as diagnosis parameters, if every true effect has a parameter in it.
+std::optional<ModelParams> true_params(const SimulatedRecording& sim) {
+  ModelParams p = nominal_params(sim.rec.nominal);
+  const Effects& t = sim.truth;
+  if (t.line_delay_s) p[Param::LineDelay] = *t.line_delay_s;
+  p.flip_readout = t.flip_readout;
+  if (t.time_offset_s) p[Param::TimeOffset] = *t.time_offset_s;
+  if (t.drift_ppm) p[Param::Drift] = *t.drift_ppm;
+  if (t.k1k2) p[Param::K1] = t.k1k2->x(), p[Param::K2] = t.k1k2->y();
+  if (t.fxfy) p[Param::Fx] = t.fxfy->x(), p[Param::Fy] = t.fxfy->y();
+  auto set3 = [&](const std::optional<Eigen::Vector3d>& v, const char* a, const char* b, const char* c) {
+    const char* names[3] = {a, b, c};
+    for (int k = 0; k < 3 && v; ++k) {
+      const auto q = param_by_name(names[k]);
+      if (!q) return false;
+      p[*q] = (*v)[k];
+    }
+    return true;
+  };
+  if (!set3(t.lever_arm, "x", "y", "z") || !set3(t.gyro_bias, "bx", "by", "bz")) return std::nullopt;
+  return p;
+}
+
+void run_checks(CaseResult& r, const DiagnosisModel& m, const SimulatedRecording& sim, const Diagnosis& d) {
+  const std::vector<ParamUncertainty> u = effect_uncertainties(m, d, kHeldoutEvery);
+  for (auto& c : r.checks) {
+    const double shift = c.shift_sigmas;
+    c = check_effect(c.effect, sim.truth, sim.rec.nominal, d, u);
+    c.shift_sigmas = shift;
+  }
+  for (const auto& e : d.effects) r.named.push_back(e.name);
+  std::vector<std::string> want = sim.truth.names(), got = r.named;
+  std::sort(want.begin(), want.end());
+  std::sort(got.begin(), got.end());
+  r.names_ok = want == got;
+  // Noise floor: what the true model leaves on the held-out observations.
+  std::vector<int> held = d.heldout_indices;
+  if (held.empty())
+    for (int i = 0; i < m.size(); ++i)
+      if (held_out(m, i, kHeldoutEvery)) held.push_back(i);
+  if (const auto tp = true_params(sim)) {
+    r.floor_px = robust_stats(m.residuals(*tp, held)).rms_px;
+    r.floor_is_true_model = true;
+  } else {
+    r.floor_px = sim.rec.noise_px.value_or(0);
+  }
+  r.heldout_baseline_px = d.heldout_baseline_rms_px;
+  r.heldout_final_px = d.heldout_final_rms_px;
+  r.heldout_ok = d.heldout_final_rms_px <= 1.1 * r.floor_px;
+}
+
+}  // namespace
+
+bool CaseResult::pass() const {
+  if (!error.empty()) return false;
+  for (const auto& c : checks)
+    if (!c.ok) return false;
+  return names_ok && heldout_ok && (!c.speed || seconds < kSpeedLimitS);
+}
+
+CaseResult run_case(const SuiteCase& c, double duration_s, const std::string& report_dir) {
+  CaseResult r;
+  r.c = c;
+  try {
+    const SimConfig base = base_config(c.kind, c.duration_s > 0 ? c.duration_s : duration_s, c.seed);
+    r.noise_px = base.noise_px;
+    SimConfig cfg = base;
+    for (const auto& e : c.effects) {
+      const auto [a, shift] = calibrate(base, e);
+      apply(cfg, e, a);
+      r.checks.push_back({e, shift / base.noise_px, "", "", false});
+    }
+    r.combined_shift_sigmas = c.effects.empty() ? 0 : shift_rms(cfg) / base.noise_px;
+    const SimulatedRecording sim = simulate_recording(cfg);
+    const auto t0 = std::chrono::steady_clock::now();
+    const Diagnosis d = diagnose(sim.rec);
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r.observations = d.baseline.observations;
+    const DiagnosisModel m(sim.rec);
+    run_checks(r, m, sim, d);
+    if (!report_dir.empty())
+      write_report(report_dir, {std::string("simulated: ") + kind_name(c.kind) + " / " + c.name(), &m, &d,
+                                kHeldoutEvery, r.seconds});
+  } catch (const std::invalid_argument& e) {
+    // The diagnosis model rejects recordings it cannot model ("diagnosis: ..."), e.g. a kind
+    // not supported yet; anything else is a failure of the case.
+    r.unsupported = std::string(e.what()).starts_with("diagnosis");
+    r.error = (r.unsupported ? "unsupported: " : "") + std::string(e.what());
+  } catch (const std::exception& e) {
+    r.error = e.what();
+  }
+  return r;
+}
+
+// ---------------------------------------------------------------- output
+
+namespace {
+
+std::string join(const std::vector<std::string>& v, const std::string& sep) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : sep) + x;
+  return s;
+}
+
+std::string verdict(const CaseResult& r) {
+  if (r.unsupported) return "UNSUPPORTED";
+  return r.pass() ? "PASS" : "FAIL";
+}
+
+// What failed, in words.
+std::vector<std::string> failures(const CaseResult& r) {
+  std::vector<std::string> f;
+  if (!r.error.empty()) return {r.error};
+  if (!r.names_ok) f.push_back("named {" + join(r.named, ", ") + "}, truth {" + join(r.c.effects, ", ") + "}");
+  for (const auto& c : r.checks)
+    if (!c.ok) f.push_back(c.effect + ": " + c.recovered + " (truth " + c.truth + ")");
+  if (r.c.speed && !(r.seconds < kSpeedLimitS))
+    f.push_back("diagnosis took " + format_number(r.seconds, 3) + " s, the limit is " + format_number(kSpeedLimitS) + " s");
+  if (!r.heldout_ok)
+    f.push_back("held-out RMS " + format_number(r.heldout_final_px) + " px > 1.1 x floor " + format_number(r.floor_px) +
+                " px (" + format_number(r.heldout_final_px / r.floor_px, 3) + " x)");
+  return f;
+}
+
+}  // namespace
+
+std::string case_line(const CaseResult& r) {
+  std::ostringstream o;
+  o << verdict(r) << "  " << kind_name(r.c.kind) << " / " << r.c.name();
+  if (!r.error.empty()) return o.str() + ": " + r.error;
+  o << ": named {" << join(r.named, ", ") << "}, held-out " << format_number(r.heldout_final_px) << " px (floor "
+    << format_number(r.floor_px) << "), " << format_number(r.seconds, 3) << " s";
+  for (const auto& f : failures(r)) o << "\n      " << f;
+  return o.str();
+}
+
+std::string suite_markdown(const std::vector<CaseResult>& results, const SuiteSummary& s) {
+  int pass = 0;
+  for (const auto& r : results) pass += r.pass();
+  std::ostringstream o;
+  o << "# rsd-diagnose benchmark: concealed effects\n\n"
+    << "Generated by one command from the repository root (do not edit by hand; `rsd-diagnose-suite` is built "
+       "with the project, e.g. `build/tools/`):\n\n```sh\n" << s.command << "\n```\n\n"
+    << "CI runs the reduced suite (`rsd-diagnose-suite --reduced`, CTest `diagnosis_benchmark_reduced`): the "
+       "same goals on 6 of these rows (landmarks none, rolling_shutter + time_offset, rolling_shutter + "
+       "lens_distortion, the triple; matches none, the triple), reproduced exactly since a case's seed follows "
+       "from its name.\n\n"
+    << "**" << pass << " of " << results.size() << " cases pass" << (s.reduced ? " (reduced suite)" : "") << ".** "
+    << "Whole run " << format_number(s.seconds, 3) << " s on " << s.threads
+    << " thread(s) (load average at the start: " << s.load
+    << "); the time column is diagnose() alone per case, which runs on one thread.\n\n"
+    << "## What is run\n\n"
+    << "Each case is a recording simulated in code by `dsp::simulate_recording` "
+       "(tools/report/diagnosis_suite.cpp, `base_config`), then `dsp::diagnose` with its defaults "
+       "(every 5th frame held out):\n\n"
+    << "- **landmarks**: 1920x1080, f = 1329.75 px, 30 fps, a 7x9 target (0.1 m) at 1.2 m shaken by hand "
+       "(0.08 m, 0.12 rad at 1 Hz), trajectory at 500 Hz, noise 0.5 px, "
+    << format_number(s.duration_s) << " s; nominal model global shutter, no offset, drift, distortion or lever arm.\n"
+    << "- **matches**: 1920x1080, f = 1450 px, 30 fps, 120 matches per frame pair with 10% outliers, noise 0.7 px; "
+       "gyro 20-200 Hz irregular with gaps (1%), repeated stamps (3%), 0.5 ms jitter, 2 mrad/s noise, "
+       "imu_to_camera a non-identity rotation; rotation 0.25 rad at 1.2 Hz, "
+    << format_number(s.duration_s) << " s.\n\n"
+    << "**Effect size.** Each effect is scaled so that, alone, it moves the observations by one pixel-noise sigma "
+       "RMS (per coordinate): the RMS distance between the true and the nominal model's predictions on a noise-free, "
+       "outlier-free simulation with only that effect, divided by the noise sigma, is the `shift` column (a few secant steps reach 1 within 3%). Combined "
+       "cases use each effect at its own one-sigma size; `all` is their joint shift. So the nominal model's RMS "
+       "grows from sigma to about sqrt(2) sigma per effect: the residual RMS alone barely shows it. Directions: "
+       "rolling_shutter = a line delay where the nominal model has none; readout_direction = the nominal model has "
+       "the true line delay but top_to_bottom where the sensor reads bottom_to_top; lens_distortion = barrel k1 "
+       "(k2 = 0); focal_length = fx, fy scaled alike; gyro_bias and lever_arm along (0.6, -0.48, 0.64).\n\n"
+    << "**Goals** (issue 6): the named set equals the truth exactly (nothing invented on `none`); line delay within "
+       "3%, time offset within 0.5 ms, clock drift within 15%, k1 within 10%, fx and fy within 0.2%, each gyro bias "
+       "component within 1 mrad/s, each lever-arm component within 1 cm, the readout direction right; held-out final "
+       "RMS at most 1.1 x the **noise floor** = the RMS the true model leaves on the same held-out observations "
+       "(robust, inliers; when the truth has a parameter the diagnosis model lacks, the noise sigma stands in, "
+       "marked *). Recovered values show +- the 1-sigma uncertainty rsd-diagnose reports (diagnosis_report.hpp).\n\n"
+    << "## Results\n\n"
+    << (std::none_of(results.begin(), results.end(), [](const CaseResult& r) { return r.c.speed; }) ? "" : "The last rows (`speed`) repeat the triple on a 20 s recording, run alone after the others: "
+                         "diagnose() must also finish in under 30 s (issue 6, on 2 cores; it runs on one thread).\n\n")
+    << "| case | kind | obs | shift / sigma | truth | named | recovered (error) | held-out RMS px: nominal -> final "
+       "(floor) | time s | result |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+  for (const auto& r : results) {
+    std::vector<std::string> shift, truth, rec;
+    for (const auto& c : r.checks) {
+      shift.push_back(c.effect + " " + format_number(c.shift_sigmas, 3));
+      truth.push_back(c.effect + ": " + c.truth);
+      rec.push_back(c.effect + ": " + c.recovered);
+    }
+    if (r.checks.size() > 1) shift.push_back("all " + format_number(r.combined_shift_sigmas, 3));
+    o << "| " << r.c.name() << " | " << kind_name(r.c.kind) << " | " << r.observations << " | "
+      << (shift.empty() ? "0" : join(shift, "<br>")) << " | " << (truth.empty() ? "-" : join(truth, "<br>")) << " | ";
+    if (!r.error.empty()) {
+      o << "- | " << r.error << " | - | - | **" << verdict(r) << "** |\n";
+      continue;
+    }
+    o << (r.named.empty() ? "none" : join(r.named, ", ")) << " | " << (rec.empty() ? "-" : join(rec, "<br>")) << " | "
+      << format_number(r.heldout_baseline_px) << " -> " << format_number(r.heldout_final_px) << " ("
+      << format_number(r.floor_px) << (r.floor_is_true_model ? "" : "*") << ") | " << format_number(r.seconds, 3)
+      << " | **" << verdict(r) << "** |\n";
+  }
+  if (!s.example_dir.empty())
+    o << "\n## One case as rsd-diagnose reports it\n\n"
+      << "The report of `" << s.example_case << "` (the page `rsd-diagnose --report` writes): [" << s.example_dir
+      << "/index.md](" << s.example_dir << "/index.md). Both effects at one sigma: the nominal model's residual "
+         "against image row (top) shows the structure the RMS alone barely shows; the final model's (bottom) is "
+         "flat at the noise.\n\n"
+      << "![Residual against image row, before and after](" << s.example_dir << "/residual-vs-row.png)\n";
+  o << "\n## Reading the table\n\n"
+    << "- The `+-` values are the 1-sigma uncertainties rsd-diagnose's report gives (the larger of the classic "
+       "and the frame-clustered sandwich estimate, all named parameters free together). Compare each error with "
+       "its `+-`: an error of several of them would point at a bias rather than noise; a tolerance of only one or "
+       "two of them would make a goal a matter of the seed.\n"
+    << "- A one-sigma effect is small: a line delay of about 1.5-2.5 us/row (a 2 ms readout), a time offset of "
+       "about 1 ms, a clock drift of about 80 ppm, k1 of about -0.013 (landmarks) or -0.03 (matches, where "
+       "distortion shows only through the difference between the two ends of a match), focal lengths 0.2% "
+       "(landmarks) to 1.6% (matches) off, a gyro bias of about 20 mrad/s, a lever arm of under 1 mm. The 3% "
+       "line-delay goal is therefore the tightest: it needs the 20 s recordings used here. In matches "
+       "recordings the gyro's stamp jitter and noise move all of a frame pair's matches together, so the "
+       "information grows with the number of frames rather than matches.\n"
+    << "- The lever-arm goal (1 cm) is loose for a one-sigma lever arm (under 1 mm): a lever arm of zero would "
+       "meet it too. What shows the recovery is the error against the `+-` (hundredths of a millimetre).\n"
+    << "- The floor is the true model's held-out RMS: for matches it is about sqrt(2) x 0.7 px (a match carries "
+       "both ends' noise) plus what the gyro's jitter adds.\n";
+  bool any = false;
+  for (const auto& r : results) {
+    const auto f = failures(r);
+    if (f.empty()) continue;
+    if (!any) o << "\n## Failed goals\n\n";
+    any = true;
+    o << "- " << kind_name(r.c.kind) << " / " << r.c.name() << ": " << join(f, "; ") << "\n";
+  }
+  return o.str();
+}
+
+}  // namespace rsd::tools
