@@ -22,6 +22,7 @@
 #include "tools/common/cli_util.hpp"
 #include "formats/intrinsics_file.hpp"
 #include "formats/yaml_map.hpp"
+#include "dsp/core/statistics.hpp"
 #include "dsp/features/feature_tracks.hpp"
 #include "tools/common/frame_sources.hpp"
 #include "formats/recording_v1.hpp"
@@ -167,11 +168,6 @@ std::string channel_list(const LogScan& s) {
 }
 
 // ---------------------------------------------------------------- the nominal model
-
-double median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 Eigen::Matrix3d rotation(const std::vector<double>& r, const std::string& what) {
   const Eigen::Matrix3d R = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(r.data());

@@ -1,5 +1,7 @@
 #include "dsp/calib/led_calibration.hpp"
 
+#include "dsp/core/statistics.hpp"
+
 #include <ceres/ceres.h>
 #include <fftw3.h>
 
@@ -41,13 +43,6 @@ constexpr double kMaxNuInflation = 2;    // harmonics may raise nu's variance at
 constexpr double kMinHarmonicZ = 4;      // a harmonic counts as present at this many sigma
 
 // ---------------------------------------------------------------- small helpers
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 int next_pow2(int n) {
   int p = 1;

@@ -8,41 +8,6 @@
 
 namespace rsd::dsp {
 
-RobustStats robust_stats(const std::vector<Eigen::Vector2d>& residuals) {
-  RobustStats s;
-  s.observations = static_cast<int>(residuals.size());
-  std::vector<double> len;
-  for (const auto& r : residuals)
-    if (r.allFinite()) len.push_back(r.norm());
-  if (len.empty()) {
-    s.outliers = s.observations;
-    return s;
-  }
-  std::vector<double> sorted = len;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  // Median of a Rayleigh(sigma) length is sigma sqrt(2 ln 2); outliers push the median up
-  // (10% of them by 8%), so refine it by the RMS of the lengths within 3 scales, corrected for
-  // the truncation: E[l^2 | l < 3 sigma] = 2 sigma^2 g, g = (1 - 5.5 e^-4.5) / (1 - e^-4.5).
-  s.scale_px = sorted[sorted.size() / 2] / std::sqrt(2 * std::log(2.0));
-  const double g = (1 - 5.5 * std::exp(-4.5)) / (1 - std::exp(-4.5));
-  for (int it = 0; it < 5 && s.scale_px > 0; ++it) {
-    double sum2 = 0;
-    int n = 0;
-    for (double l : len)
-      if (l <= 3 * s.scale_px) sum2 += l * l, ++n;
-    if (n < 3) break;
-    s.scale_px = std::sqrt(sum2 / (2.0 * n * g));
-  }
-  const double limit = kOutlierSigmas * std::max(s.scale_px, 1e-12);
-  double sum = 0;
-  int n = 0;
-  for (double l : len)
-    if (l <= limit) sum += l * l, ++n;
-  s.outliers = s.observations - n;
-  s.rms_px = n > 0 ? std::sqrt(sum / (2.0 * n)) : 0.0;
-  return s;
-}
-
 namespace {
 
 NamedEffect describe(const SelectedEffect& st, const ModelParams& p, const NominalModel& n) {

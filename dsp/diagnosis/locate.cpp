@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <sstream>
 
+#include "dsp/core/statistics.hpp"
 #include "dsp/diagnosis/diagnosis.hpp"
 #include "dsp/diagnosis/fit.hpp"
 
@@ -95,9 +96,7 @@ Located time_signal(const std::vector<std::pair<int, double>>& fe) {
   for (size_t k = 0; k < sum.size(); ++k)
     if (cnt[k] > 0) mean.push_back(sum[k] / cnt[k]);
   if (mean.empty()) return {"time", 0, ""};
-  std::vector<double> sorted = mean;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double med = sorted[sorted.size() / 2];
+  const double med = median(mean);
   double total = 0, hot = 0;
   int first = -1, last = -1;
   for (size_t k = 0; k < sum.size(); ++k) {
