@@ -48,11 +48,8 @@ void LcmSource::open() {
 void LcmSource::on_image(const lcm_recv_buf_t* rbuf, const char* channel, void* user) {
   auto* self = static_cast<LcmSource*>(user);
   const auto* data = static_cast<const uint8_t*>(rbuf->data);
-  formats::DecodeStatus st = formats::check_image_t(data, rbuf->data_size, self->why_);
-  if (st == formats::DecodeStatus::Ok) st = formats::decode_checked(data, rbuf->data_size, self->img_, self->why_);
+  const formats::DecodeStatus st = formats::decode_frame(data, rbuf->data_size, self->img_, self->frame_, self->why_);
   if (st != formats::DecodeStatus::Ok) return self->skip(formats::to_skip(st), std::string(channel) + ": " + self->why_);
-  if (!formats::parse_frame(self->img_, self->frame_, self->why_))
-    return self->skip(formats::LogSkip::Undecodable, std::string(channel) + ": " + self->why_);
   if (self->opening_) {
     self->first_ = self->frame_;
     const FrameFormat& f = self->first_.format;

@@ -55,10 +55,8 @@ void ReplaySource::open() {
     ++events;
     if (ev.channel != cfg_.channel) continue;
     std::string why;
-    if (formats::check_image_t(ev.data.data(), ev.data.size(), why) != formats::DecodeStatus::Ok) continue;
-    if (formats::decode_checked(ev.data.data(), ev.data.size(), img_, why) != formats::DecodeStatus::Ok) continue;
     formats::RecordedFrame f;
-    if (!formats::parse_frame(img_, f, why)) continue;
+    if (formats::decode_frame(ev.data.data(), ev.data.size(), img_, f, why) != formats::DecodeStatus::Ok) continue;
     (first ? second : first) = f;
   }
   if (!first)
@@ -124,14 +122,9 @@ CaptureStatus ReplaySource::capture(const dsp::ImageView& dst, FrameMeta& meta, 
 }
 
 bool ReplaySource::take_frame(const dsp::ImageView& dst, FrameMeta& meta) {
-  formats::DecodeStatus st = formats::check_image_t(ev_.data.data(), ev_.data.size(), why_);
-  if (st == formats::DecodeStatus::Ok) st = formats::decode_checked(ev_.data.data(), ev_.data.size(), img_, why_);
+  const formats::DecodeStatus st = formats::decode_frame(ev_.data.data(), ev_.data.size(), img_, frame_, why_);
   if (st != formats::DecodeStatus::Ok) {
     reader_->skip(formats::to_skip(st), ev_.offset, "channel '" + ev_.channel + "': " + why_);
-    return false;
-  }
-  if (!formats::parse_frame(img_, frame_, why_)) {
-    reader_->skip(formats::LogSkip::Undecodable, ev_.offset, "channel '" + ev_.channel + "': " + why_);
     return false;
   }
   if (frame_.format.width != first_.format.width || frame_.format.height != first_.format.height ||

@@ -143,6 +143,13 @@ bool parse_frame(const bot_core::image_t& img, RecordedFrame& out, std::string& 
   return true;
 }
 
+DecodeStatus decode_frame(const uint8_t* data, size_t n, bot_core::image_t& img, RecordedFrame& out, std::string& why) {
+  DecodeStatus st = check_image_t(data, n, why);
+  if (st == DecodeStatus::Ok) st = decode_checked(data, n, img, why);
+  if (st == DecodeStatus::Ok && !parse_frame(img, out, why)) st = DecodeStatus::Undecodable;
+  return st;
+}
+
 void copy_pixels(const bot_core::image_t& img, const dsp::ImageView& dst) {
   const size_t row = static_cast<size_t>(dst.width) * dsp::bytes_per_pixel(dst.format);
   for (int y = 0; y < dst.height; ++y) std::memcpy(dst.row(y), img.data.data() + static_cast<size_t>(y) * img.row_stride, row);

@@ -92,6 +92,12 @@ DecodeStatus decode_checked(const uint8_t* data, size_t n, Msg& msg, std::string
 // A decoded image_t's size, format and metadata; false (with `why`) when inconsistent.
 bool parse_frame(const bot_core::image_t& img, RecordedFrame& out, std::string& why);
 
+// The one way rsd reads a raw frame from bytes (a log event, an LCM message): check_image_t,
+// decode_checked, then parse_frame. Not Ok: `why` explains, and parse_frame's complaints
+// count as Undecodable. `img` is reused between calls (no allocation once large enough).
+// The timestamp rule is parse_frame's: frame_ns, else frame_utime, else the message's utime.
+DecodeStatus decode_frame(const uint8_t* data, size_t n, bot_core::image_t& img, RecordedFrame& out, std::string& why);
+
 // Copies the pixels into dst (same size and format as the frame).
 void copy_pixels(const bot_core::image_t& img, const dsp::ImageView& dst);
 

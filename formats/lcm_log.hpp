@@ -12,7 +12,8 @@
 // Callers add the reasons only they can judge (unknown channel, wrong fingerprint, a
 // message that does not decode) through skip(), so one summary covers the whole log.
 //
-// Used by the daemon's replay source, rsd-replay, and tools that read logs (rsd-extract).
+// The only LCM log reader and writer in rsd: the daemon (replay source, --record), rsd-replay,
+// rsd-extract, the tools' frame sources (rsd-calib) and rsd-sim's logs all use it.
 #pragma once
 
 #include <array>

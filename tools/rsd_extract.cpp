@@ -6,7 +6,6 @@
 #include <CLI/CLI.hpp>
 #include <bot_core/image_t.hpp>
 #include <bot_core/pose_t.hpp>
-#include <lcm/lcm-cpp.hpp>
 #include <opencv2/imgproc.hpp>
 #include <rsd/velocity_t.hpp>
 
@@ -20,7 +19,9 @@
 #include <vector>
 
 #include "tools/common/cli_util.hpp"
+#include "formats/image_t_codec.hpp"
 #include "formats/intrinsics_file.hpp"
+#include "formats/lcm_log.hpp"
 #include "formats/yaml_map.hpp"
 #include "dsp/core/statistics.hpp"
 #include "dsp/features/feature_tracks.hpp"
@@ -81,36 +82,21 @@ struct LogScan {
   int malformed = 0;
 };
 
-std::string meta(const bot_core::image_t& m, const std::string& key) {
-  for (const auto& md : m.metadata)
-    if (md.key == key) return std::string(md.value.begin(), md.value.end());
-  return {};
+// A raw frame as every rsd reader takes it (formats/image_t_codec.hpp: fingerprint, sizes,
+// the one timestamp rule); a frame that does not decode is an error naming the event.
+FrameMeta frame_meta(const formats::LogEvent& ev, bot_core::image_t& img, const std::string& where) {
+  formats::RecordedFrame f;
+  std::string why;
+  if (formats::decode_frame(ev.data.data(), ev.data.size(), img, f, why) != formats::DecodeStatus::Ok)
+    throw std::runtime_error(where + ": " + why);
+  if (f.line_delay_s && *f.line_delay_s < 0) throw std::runtime_error(where + ": negative line delay in the metadata");
+  return {f.meta.first_row_ns * 1e-9, f.line_delay_s, f.readout, f.format.width, f.format.height};
 }
 
-FrameMeta frame_meta(const bot_core::image_t& m, const std::string& where) {
-  FrameMeta f{m.utime * 1e-6, std::nullopt, std::nullopt, m.width, m.height};
-  // The first row's capture time; without the key, utime is taken to be it.
-  if (const std::string s = meta(m, "frame_utime"); !s.empty()) {
-    const auto v = parse_number(s);
-    if (!v) throw std::runtime_error(where + ": metadata frame_utime '" + s + "' is not a number");
-    f.t = *v * 1e-6;
-  }
-  if (const std::string s = meta(m, "line_delay_ns"); !s.empty()) {
-    const auto v = parse_number(s);
-    if (!v || *v < 0) throw std::runtime_error(where + ": metadata line_delay_ns '" + s + "' is not a non-negative number");
-    f.line_delay_s = *v * 1e-9;
-  }
-  if (const std::string s = meta(m, "readout"); !s.empty()) {
-    dsp::Readout r;
-    if (!dsp::parse_readout(s, r)) throw std::runtime_error(where + ": metadata readout '" + s + "' is not top_to_bottom or bottom_to_top");
-    f.readout = r;
-  }
-  return f;
-}
-
-void add_velocity(const lcm::LogEvent& ev, LogScan& s, const std::string& where) {
+void add_velocity(const formats::LogEvent& ev, LogScan& s, const std::string& where) {
   rsd::velocity_t m{};
-  if (m.decode(ev.data, 0, ev.datalen) < 0 ||
+  std::string why;
+  if (formats::decode_checked(ev.data.data(), ev.data.size(), m, why) != formats::DecodeStatus::Ok ||
       (m.frame != rsd::velocity_t::FRAME_CAMERA && m.frame != rsd::velocity_t::FRAME_IMU)) {
     ++s.malformed;  // not an rsd.velocity_t, or a frame this version does not know
     return;
@@ -123,9 +109,10 @@ void add_velocity(const lcm::LogEvent& ev, LogScan& s, const std::string& where)
   s.gyro.push_back({m.utime * 1e-6, w});
 }
 
-void add_pose(const lcm::LogEvent& ev, LogScan& s) {
+void add_pose(const formats::LogEvent& ev, LogScan& s) {
   bot_core::pose_t m{};
-  if (m.decode(ev.data, 0, ev.datalen) < 0) return void(++s.malformed);
+  std::string why;
+  if (formats::decode_checked(ev.data.data(), ev.data.size(), m, why) != formats::DecodeStatus::Ok) return void(++s.malformed);
   const Eigen::Quaterniond q(m.orientation[0], m.orientation[1], m.orientation[2], m.orientation[3]);
   const Eigen::Vector3d p(m.pos[0], m.pos[1], m.pos[2]);
   if (!p.allFinite() || !q.coeffs().allFinite() || q.norm() < 0.5) return void(++s.malformed);
@@ -133,25 +120,26 @@ void add_pose(const lcm::LogEvent& ev, LogScan& s) {
 }
 
 LogScan scan_log(const Options& o) {
-  lcm::LogFile log(o.log, "r");
-  if (!log.good()) throw UsageError("LOG: '" + o.log + "' is not a readable LCM log");
+  if (!formats::looks_like_lcm_log(o.log)) throw UsageError("LOG: '" + o.log + "' is not a readable LCM log");
+  formats::LcmLogReader log(o.log);
+  formats::LogEvent ev;
+  bot_core::image_t img;
   LogScan s;
   int event = 0;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+  while (log.next(ev)) {
     ++event;
-    ++s.channels[ev->channel];
-    const std::string where = o.log + ": event " + std::to_string(event) + " on " + ev->channel;
-    if (ev->channel == o.image_channel) {
-      bot_core::image_t m;
-      if (m.decode(ev->data, 0, ev->datalen) < 0) throw std::runtime_error(where + ": not a bot_core.image_t");
-      s.frames.push_back(frame_meta(m, where));
-      if (s.frames.back().width != s.frames.front().width || s.frames.back().height != s.frames.front().height)
-        throw std::runtime_error(where + ": frame is " + std::to_string(m.width) + "x" + std::to_string(m.height) + ", the first was " +
+    ++s.channels[ev.channel];
+    const std::string where = o.log + ": event " + std::to_string(event) + " on " + ev.channel;
+    if (ev.channel == o.image_channel) {
+      s.frames.push_back(frame_meta(ev, img, where));
+      const FrameMeta& f = s.frames.back();
+      if (f.width != s.frames.front().width || f.height != s.frames.front().height)
+        throw std::runtime_error(where + ": frame is " + std::to_string(f.width) + "x" + std::to_string(f.height) + ", the first was " +
                                  std::to_string(s.frames.front().width) + "x" + std::to_string(s.frames.front().height));
-    } else if (ev->channel == o.velocity_channel) {
-      add_velocity(*ev, s, where);
-    } else if (ev->channel == o.pose_channel) {
-      add_pose(*ev, s);
+    } else if (ev.channel == o.velocity_channel) {
+      add_velocity(ev, s, where);
+    } else if (ev.channel == o.pose_channel) {
+      add_pose(ev, s);
     }
   }
   if (event == 0) throw UsageError("LOG: '" + o.log + "' holds no LCM events (not an LCM log, or empty)");

@@ -1,7 +1,6 @@
 #include "tools/common/frame_sources.hpp"
 
 #include <bot_core/image_t.hpp>
-#include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
 #include <cctype>
@@ -16,6 +15,7 @@
 #include "drivers/libcamera_source.hpp"
 #include "drivers/v4l2_source.hpp"
 #include "formats/image_file.hpp"
+#include "formats/lcm_log.hpp"
 
 namespace rsd::tools {
 
@@ -111,48 +111,37 @@ namespace {
 
 // ---------------------------------------------------------------- LCM logs
 
-bool is_lcm_log(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  unsigned char sync[4] = {};
-  return in.read(reinterpret_cast<char*>(sync), 4) && sync[0] == 0xED && sync[1] == 0xA1 && sync[2] == 0xDA && sync[3] == 0x01;
-}
-
-// Frames on one channel of an LCM log, as bot_core.image_t (GRAY, RGB, LE_GRAY16).
+// Frames on one channel of an LCM log, read as rsd reads every raw frame (formats/): the
+// robust log reader, and the bot_core.image_t codec with its fingerprint check and timestamp
+// rule. A damaged event is an error naming it: calibration must not quietly lose frames.
 class LcmLogSource final : public FrameSource {
  public:
-  LcmLogSource(const std::string& path, std::string channel) : path_(path), channel_(std::move(channel)), log_(path, "r") {
-    if (!log_.good()) throw UsageError("INPUT: '" + path + "' is not a readable LCM log");
-  }
+  LcmLogSource(const std::string& path, std::string channel) : path_(path), channel_(std::move(channel)), log_(path) {}
   std::optional<SourceFrame> next() override {
-    while (const lcm::LogEvent* ev = log_.readNextEvent()) {
+    while (log_.next(ev_)) {
       ++event_;
-      if (ev->channel != channel_) continue;
-      bot_core::image_t m;
+      if (ev_.channel != channel_) continue;
       const std::string where = path_ + ": event " + std::to_string(event_) + " on " + channel_;
-      if (m.decode(ev->data, 0, ev->datalen) < 0) throw std::runtime_error(where + ": not a bot_core.image_t");
-      return SourceFrame{to_image(m, where), where, m.utime * 1e-6};
+      std::string why;
+      if (formats::decode_frame(ev_.data.data(), ev_.data.size(), img_, frame_, why) != formats::DecodeStatus::Ok)
+        throw std::runtime_error(where + ": " + why);
+      const formats::FrameFormat& f = frame_.format;
+      Image img(f.width, f.height, f.format);
+      formats::copy_pixels(img_, img.view());
+      seen_any_ = true;
+      return SourceFrame{std::move(img), where, frame_.meta.first_row_ns * 1e-9};
     }
-    if (event_ == 0 || !seen_any_) throw UsageError("INPUT: '" + path_ + "' has no frames on channel " + channel_ + " (see --channel)");
+    if (!seen_any_) throw UsageError("INPUT: '" + path_ + "' has no frames on channel " + channel_ + " (see --channel)");
     return std::nullopt;
   }
   std::string description() const override { return path_ + " (" + channel_ + ")"; }
 
  private:
-  Image to_image(const bot_core::image_t& m, const std::string& where) {
-    const auto pf = formats::pixel_format(m.pixelformat);
-    if (!pf) throw std::runtime_error(where + ": pixel format " + std::to_string(m.pixelformat) + " is not GRAY, RGB or LE_GRAY16");
-    const dsp::PixelFormat f = *pf;
-    Image img(m.width, m.height, f);
-    const size_t row = static_cast<size_t>(img.stride());
-    if (m.width <= 0 || m.height <= 0 || m.row_stride < static_cast<int>(row) ||
-        static_cast<size_t>(m.size) < static_cast<size_t>(m.row_stride) * (m.height - 1) + row || m.data.size() < static_cast<size_t>(m.size))
-      throw std::runtime_error(where + ": image size fields disagree (" + std::to_string(m.width) + "x" + std::to_string(m.height) + ", stride " + std::to_string(m.row_stride) + ", size " + std::to_string(m.size) + ")");
-    for (int y = 0; y < m.height; ++y) std::memcpy(img.data.data() + y * row, m.data.data() + static_cast<size_t>(y) * m.row_stride, row);
-    seen_any_ = true;
-    return img;
-  }
   std::string path_, channel_;
-  lcm::LogFile log_;
+  formats::LcmLogReader log_;
+  formats::LogEvent ev_;
+  bot_core::image_t img_;
+  formats::RecordedFrame frame_;
   int event_ = 0;
   bool seen_any_ = false;
 };
@@ -215,7 +204,7 @@ class LiveSource final : public FrameSource {
 std::unique_ptr<FrameSource> open_frame_source(const std::vector<std::string>& inputs, const FrameSourceOptions& opt) {
   if (inputs.size() == 1 && inputs.front().rfind("live:", 0) == 0)
     return std::make_unique<LiveSource>(inputs.front(), opt.live_frames);
-  if (inputs.size() == 1 && fs::is_regular_file(inputs.front()) && is_lcm_log(inputs.front()))
+  if (inputs.size() == 1 && fs::is_regular_file(inputs.front()) && formats::looks_like_lcm_log(inputs.front()))
     return std::make_unique<LcmLogSource>(inputs.front(), opt.channel);
   return std::make_unique<ImageFileSource>(expand_inputs(inputs), describe_inputs(inputs));
 }

@@ -1,10 +1,10 @@
 #include "tools/sim/sim_lcm_log.hpp"
 
 #include "formats/image_t_codec.hpp"
+#include "formats/lcm_log.hpp"
 
 #include <bot_core/image_t.hpp>
 #include <bot_core/pose_t.hpp>
-#include <lcm/lcm-cpp.hpp>
 #include <rsd/velocity_t.hpp>
 
 #include <charconv>
@@ -33,15 +33,10 @@ void add_meta(bot_core::image_t& img, const std::string& key, const std::string&
 }
 
 template <class Msg>
-void write(lcm::LogFile& log, const std::string& path, const char* channel, int64_t utime, const Msg& msg) {
+void write(formats::LcmLogWriter& log, const std::string& path, const char* channel, int64_t utime, const Msg& msg) {
   std::vector<uint8_t> buf(msg.getEncodedSize());
   msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  lcm::LogEvent ev{};
-  ev.timestamp = utime;
-  ev.channel = channel;
-  ev.datalen = static_cast<int32_t>(buf.size());
-  ev.data = buf.data();
-  if (log.writeEvent(&ev) != 0) throw std::runtime_error(path + ": cannot write LCM event (disk full?)");
+  if (!log.write(channel, utime, buf.data(), buf.size())) throw std::runtime_error(path + ": cannot write LCM event (disk full?)");
 }
 
 // Pose sample i as bot_core.pose_t; rates by differences over the neighbouring samples.
@@ -85,8 +80,7 @@ void camera_velocity(const dsp::CameraMotion& motion, double t, Eigen::Vector3d&
 void write_sim_lcm_log(const SimLogSpec& spec, const std::vector<double>& frame_times, int width, int height,
                        dsp::PixelFormat format, const std::function<void(size_t, const dsp::ImageView&)>& render,
                        const dsp::CameraMotion& motion, const SimPoseLog& poses) {
-  lcm::LogFile log(spec.path, "w");
-  if (!log.good()) throw std::runtime_error(spec.path + ": cannot open LCM log for writing");
+  formats::LcmLogWriter log(spec.path);
   dsp::Image frame(width, height, format);
   const double period = 1.0 / spec.velocity_rate_hz;
   double next_velocity = frame_times.empty() ? 0 : frame_times.front() - 0.1;
