@@ -8,9 +8,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <map>
 #include <sstream>
 #include <vector>
+
+#include "formats/intrinsics_file.hpp"
+#include "formats/timing_section.hpp"
+#include "formats/yaml_map.hpp"
 
 namespace rsd::formats {
 
@@ -174,69 +179,34 @@ class CsvReader {
   int line_no_ = 1;
 };
 
-std::string where(const std::string& file, const YAML::Node& n) {
-  const auto m = n.Mark();
-  return file + ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1);
+// Sections are read with the strict YAML reader every rsd file uses (formats/yaml_map.hpp):
+// camera: and timing: by their one reader each, the rest here. Keys the format requires are
+// required; errors name file, line, column and the key's path.
+void require(const YamlMap& m, std::initializer_list<const char*> keys) {
+  for (const char* k : keys)
+    if (!m.has(k)) m.fail(k, "is missing");
 }
 
-template <class T>
-T get(const std::string& file, const YAML::Node& parent, const char* key, const char* path) {
-  const YAML::Node n = parent[key];
-  if (!n) throw RecordingError(where(file, parent) + ": missing key '" + path + "'");
-  try {
-    return n.as<T>();
-  } catch (const YAML::Exception&) {
-    throw RecordingError(where(file, n) + ": key '" + path + "' has the wrong type ('" + YAML::Dump(n) + "')");
+std::string one_of(YamlMap& m, const char* key, std::initializer_list<const char*> allowed) {
+  require(m, {key});
+  const std::string v = m.text(key, "");
+  std::string list;
+  for (const char* a : allowed) {
+    if (v == a) return v;
+    list += std::string(list.empty() ? "" : " or ") + a;
   }
+  m.fail(key, "is '" + v + "', expected " + list);
 }
 
-template <class T>
-T get_or(const std::string& file, const YAML::Node& parent, const char* key, const char* path, T fallback) {
-  return parent[key] ? get<T>(file, parent, key, path) : fallback;
-}
-
-std::vector<double> get_list(const std::string& file, const YAML::Node& parent, const char* key, const char* path,
-                             size_t n, bool required) {
-  if (!parent[key]) {
-    if (required) throw RecordingError(where(file, parent) + ": missing key '" + path + "'");
-    return {};
+void read_motion(YamlMap m, Recording& r, std::string& file) {
+  r.motion = one_of(m, "kind", {"trajectory", "gyro"}) == "trajectory" ? dsp::MotionKind::Trajectory : dsp::MotionKind::Gyro;
+  require(m, {"file"});
+  file = m.text("file", "");
+  if (m.has("imu_to_camera")) r.nominal.imu_to_camera = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(m.numbers("imu_to_camera", 9).data());
+  if (m.has("lever_arm_m")) {
+    const auto l = m.numbers("lever_arm_m", 3);
+    r.nominal.lever_arm = Eigen::Vector3d(l[0], l[1], l[2]);
   }
-  const auto v = get<std::vector<double>>(file, parent, key, path);
-  if (v.size() != n)
-    throw RecordingError(where(file, parent[key]) + ": key '" + path + "' needs " + std::to_string(n) + " numbers, has " +
-                         std::to_string(v.size()));
-  return v;
-}
-
-YAML::Node section(const std::string& file, const YAML::Node& root, const char* key) {
-  const YAML::Node n = root[key];
-  if (!n || !n.IsMap()) throw RecordingError(where(file, root) + ": missing section '" + key + "'");
-  return n;
-}
-
-void read_camera(const std::string& f, const YAML::Node& c, dsp::NominalModel& n) {
-  n.cam.width = get<int>(f, c, "width", "camera.width");
-  n.cam.height = get<int>(f, c, "height", "camera.height");
-  n.cam.fx = get<double>(f, c, "fx", "camera.fx");
-  n.cam.fy = get<double>(f, c, "fy", "camera.fy");
-  n.cam.cx = get<double>(f, c, "cx", "camera.cx");
-  n.cam.cy = get<double>(f, c, "cy", "camera.cy");
-  const auto d = get_list(f, c, "distortion", "camera.distortion", 4, false);
-  if (!d.empty()) n.cam.dist = {d[0], d[1], d[2], d[3], 0.0};
-  if (n.cam.width <= 1 || n.cam.height <= 1) throw RecordingError(where(f, c) + ": camera width and height must be > 1");
-  if (!(n.cam.fx > 0 && n.cam.fy > 0)) throw RecordingError(where(f, c) + ": camera fx and fy must be positive");
-}
-
-void read_timing(const std::string& f, const YAML::Node& t, dsp::NominalModel& n) {
-  n.frame_rate_hz = get<double>(f, t, "frame_rate_hz", "timing.frame_rate_hz");
-  if (!(n.frame_rate_hz > 0)) throw RecordingError(where(f, t["frame_rate_hz"]) + ": timing.frame_rate_hz must be positive");
-  n.time.line_delay_s = get_or<double>(f, t, "line_delay_s", "timing.line_delay_s", 0.0);
-  if (n.time.line_delay_s < 0) throw RecordingError(where(f, t["line_delay_s"]) + ": timing.line_delay_s must not be negative");
-  const auto ro = get_or<std::string>(f, t, "readout", "timing.readout", "top_to_bottom");
-  if (!dsp::parse_readout(ro, n.time.readout))
-    throw RecordingError(where(f, t["readout"]) + ": timing.readout is '" + ro + "', expected top_to_bottom or bottom_to_top");
-  n.time.time_offset_s = get_or<double>(f, t, "time_offset_s", "timing.time_offset_s", 0.0);
-  n.time.drift_ppm = get_or<double>(f, t, "drift_ppm", "timing.drift_ppm", 0.0);
 }
 
 struct Files {
@@ -245,36 +215,33 @@ struct Files {
 
 Files read_header(const fs::path& dir, Recording& r) {
   const std::string f = (dir / "recording.yaml").string();
-  YAML::Node y;
-  try {
-    y = YAML::LoadFile(f);
-  } catch (const YAML::BadFile&) {
-    throw RecordingError(f + ": cannot open (is " + dir.string() + " an rsd-recording/1 directory?)");
-  } catch (const YAML::ParserException& e) {
-    throw RecordingError(f + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) + ": " + e.msg);
-  }
-  if (!y.IsMap()) throw RecordingError(f + ": not a YAML mapping");
-  const auto format = get<std::string>(f, y, "format", "format");
-  if (format != "rsd-recording/1") throw RecordingError(where(f, y["format"]) + ": format is '" + format + "', expected rsd-recording/1");
-  read_camera(f, section(f, y, "camera"), r.nominal);
-  read_timing(f, section(f, y, "timing"), r.nominal);
-  const YAML::Node m = section(f, y, "motion"), o = section(f, y, "observations");
+  if (!fs::exists(f)) throw RecordingError(f + ": cannot open (is " + dir.string() + " an rsd-recording/1 directory?)");
   Files files;
-  const auto mk = get<std::string>(f, m, "kind", "motion.kind");
-  if (mk != "trajectory" && mk != "gyro") throw RecordingError(where(f, m["kind"]) + ": motion.kind is '" + mk + "', expected trajectory or gyro");
-  r.motion = mk == "trajectory" ? dsp::MotionKind::Trajectory : dsp::MotionKind::Gyro;
-  files.motion = get<std::string>(f, m, "file", "motion.file");
-  const auto R = get_list(f, m, "imu_to_camera", "motion.imu_to_camera", 9, false);
-  if (!R.empty()) r.nominal.imu_to_camera = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(R.data());
-  const auto L = get_list(f, m, "lever_arm_m", "motion.lever_arm_m", 3, false);
-  if (!L.empty()) r.nominal.lever_arm = Eigen::Vector3d(L[0], L[1], L[2]);
-  const auto ok = get<std::string>(f, o, "kind", "observations.kind");
-  if (ok != "landmarks" && ok != "matches") throw RecordingError(where(f, o["kind"]) + ": observations.kind is '" + ok + "', expected landmarks or matches");
-  r.kind = ok == "landmarks" ? dsp::ObservationKind::Landmarks : dsp::ObservationKind::Matches;
-  files.observations = get<std::string>(f, o, "file", "observations.file");
-  if (r.kind == dsp::ObservationKind::Landmarks) files.points = get<std::string>(f, o, "points", "observations.points");
-  files.frames = get<std::string>(f, y, "frames", "frames");
-  if (y["noise_px"]) r.noise_px = get<double>(f, y, "noise_px", "noise_px");
+  try {
+    YamlMap y = YamlMap::load(f);
+    one_of(y, "format", {"rsd-recording/1"});
+    // Values first (a bad one is named where it is), then what the format requires.
+    const YamlMap cam = y.map("camera");
+    r.nominal.cam = read_camera_section(cam, r.nominal.cam);
+    require(cam, {"width", "height", "fx", "fy", "cx", "cy"});
+    const YamlMap timing = y.map("timing");
+    read_timing_section(timing, r.nominal);
+    require(timing, {"frame_rate_hz"});
+    read_motion(y.map("motion"), r, files.motion);
+    YamlMap o = y.map("observations");
+    r.kind = one_of(o, "kind", {"landmarks", "matches"}) == "landmarks" ? dsp::ObservationKind::Landmarks : dsp::ObservationKind::Matches;
+    require(o, {"file"});
+    files.observations = o.text("file", "");
+    if (r.kind == dsp::ObservationKind::Landmarks) {
+      require(o, {"points"});
+      files.points = o.text("points", "");
+    }
+    require(y, {"frames"});
+    files.frames = y.text("frames", "");
+    if (y.has("noise_px")) r.noise_px = y.number("noise_px");
+  } catch (const ConfigError& e) {
+    throw RecordingError(e.what());
+  }
   return files;
 }
 

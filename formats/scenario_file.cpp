@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "formats/intrinsics_file.hpp"
+#include "formats/timing_section.hpp"
 #include "formats/recording_v1.hpp"
 #include "formats/yaml_map.hpp"
 
@@ -10,16 +11,6 @@ namespace rsd::formats {
 
 
 namespace {
-
-void read_timing(YamlMap m, dsp::NominalModel& n) {
-  n.frame_rate_hz = m.number("frame_rate_hz", n.frame_rate_hz);
-  n.time.line_delay_s = m.number("line_delay_s", n.time.line_delay_s);
-  if (!dsp::parse_readout(m.text("readout", "top_to_bottom"), n.time.readout))
-    m.fail("readout", "must be top_to_bottom or bottom_to_top");
-  n.time.time_offset_s = m.number("time_offset_s", 0.0);
-  n.time.drift_ppm = m.number("drift_ppm", 0.0);
-  m.finish();
-}
 
 void read_gyro(YamlMap m, dsp::GyroSampling& g) {
   if (m.has("rate_hz")) {
@@ -156,7 +147,7 @@ Scenario load_scenario(const std::string& file) {
   c.duration_s = root.number("duration_s", c.duration_s);
   c.start_time_s = root.number("start_time_s", c.start_time_s);
   if (root.has("camera")) c.nominal.cam = read_camera_section(root.map("camera"), c.nominal.cam);
-  if (root.has("timing")) read_timing(root.map("timing"), c.nominal);
+  if (root.has("timing")) read_timing_section(root.map("timing"), c.nominal);
   if (root.has("motion")) read_motion(root.map("motion"), c, file);
   s.target_spec.seed = c.seed;
   if (root.has("target")) read_target(root.map("target"), c, s.target_spec);

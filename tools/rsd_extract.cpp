@@ -28,6 +28,7 @@
 #include "tools/common/frame_sources.hpp"
 #include "formats/recording_v1.hpp"
 #include "formats/target_spec.hpp"
+#include "formats/timing_section.hpp"
 #include "dsp/features/target_observations.hpp"
 
 namespace formats = rsd::formats;
@@ -172,18 +173,6 @@ struct Nominal {
   std::vector<std::string> notes;
 };
 
-void read_nominal_timing(formats::YamlMap t, Nominal& n, bool& line_delay_given) {
-  n.model.frame_rate_hz = t.number("frame_rate_hz", n.model.frame_rate_hz);
-  if (t.has("line_delay_s")) line_delay_given = true;
-  n.model.time.line_delay_s = t.number("line_delay_s", n.model.time.line_delay_s);
-  if (t.has("readout") && !dsp::parse_readout(t.text("readout", ""), n.model.time.readout))
-    t.fail("readout", "must be top_to_bottom or bottom_to_top");
-  n.model.time.time_offset_s = t.number("time_offset_s", n.model.time.time_offset_s);
-  n.model.time.drift_ppm = t.number("drift_ppm", n.model.time.drift_ppm);
-  if (n.model.time.line_delay_s < 0) t.fail("line_delay_s", "must not be negative");
-  t.finish();
-}
-
 // --nominal: recording.yaml's camera, timing and motion keys; a whole recording.yaml is
 // accepted (its other keys are ignored), so a simulator's header can serve as the nominal.
 void read_nominal_file(const std::string& file, Nominal& n, bool& line_delay_given) {
@@ -194,7 +183,11 @@ void read_nominal_file(const std::string& file, Nominal& n, bool& line_delay_giv
     n.model.cam = formats::read_camera_section(c, n.model.cam);
     n.have_camera = true;
   }
-  if (root.has("timing")) read_nominal_timing(root.map("timing"), n, line_delay_given);
+  if (root.has("timing")) {
+    formats::YamlMap t = root.map("timing");
+    if (t.has("line_delay_s")) line_delay_given = true;
+    formats::read_timing_section(t, n.model);
+  }
   if (root.has("motion")) {
     formats::YamlMap m = root.map("motion");
     if (m.has("imu_to_camera")) n.imu_to_camera = rotation(m.numbers("imu_to_camera", 9), file + ": motion.imu_to_camera");

@@ -105,7 +105,7 @@ TEST(RecordingIo, MalformedFilesAreNamedWithLineAndColumn) {
   EXPECT_NE(error_of(dir).find("points.csv: cannot open"), std::string::npos) << error_of(dir);
   fresh();
   replace_line(dir / "recording.yaml", 1, "format: rsd-recording/2");
-  EXPECT_NE(error_of(dir).find("recording.yaml:1:9: format is 'rsd-recording/2'"), std::string::npos) << error_of(dir);
+  EXPECT_NE(error_of(dir).find("recording.yaml:1:9: 'format' is 'rsd-recording/2', expected rsd-recording/1"), std::string::npos) << error_of(dir);
   fs::remove_all(dir);
 }
 

@@ -24,7 +24,7 @@ set_tests_properties(cli_diagnose_e2e_report PROPERTIES FIXTURES_REQUIRED diagno
 
 file(MAKE_DIRECTORY ${CMAKE_BINARY_DIR}/diag-bad)
 file(WRITE ${CMAKE_BINARY_DIR}/diag-bad/recording.yaml "format: rsd-recording/1\ncamera: {width: abc}\n")
-rsd_cli_test(cli_diagnose_bad_recording STATUS 1 MESSAGES "diag-bad/recording.yaml:2:17: key 'camera.width'"
+rsd_cli_test(cli_diagnose_bad_recording STATUS 1 MESSAGES "diag-bad/recording.yaml:2:17: 'camera.width' must be an integer, not 'abc'"
              COMMAND ${diagnose} ${CMAKE_BINARY_DIR}/diag-bad --json ${CMAKE_BINARY_DIR}/diag-bad.json)
 add_test(NAME cli_diagnose_e2e_bad_number_prepare
          COMMAND sh -c "rm -rf \"$0/bad\" && cp -r \"$0/rec\" \"$0/bad\" && sed -i '3s/^\\([^,]*,[^,]*\\),[^,]*/\\1,abc/' \"$0/bad/observations.csv\"" ${DIAG})
