@@ -14,6 +14,7 @@
 
 #include "daemon/service.hpp"
 #include "formats/yaml_map.hpp"
+#include "drivers/replay_source.hpp"
 
 namespace {
 
@@ -29,13 +30,13 @@ void on_signal(int sig) {
 bool apply_replay_options(rsd::daemon::Config& cfg, const std::string& file, const std::string& speed, bool loop) {
   if (!file.empty()) {
     cfg.source.driver = "replay";
-    cfg.source.replay.file = file;
+    cfg.source.settings_of<rsd::drivers::ReplayConfig>("replay").file = file;
   }
-  if (!speed.empty() && !rsd::drivers::parse_speed(speed, cfg.source.replay.speed)) {
+  if (!speed.empty() && !rsd::drivers::parse_speed(speed, cfg.source.settings_of<rsd::drivers::ReplayConfig>("replay").speed)) {
     std::fprintf(stderr, "rsd: --speed: expected a positive factor or fast, not '%s'\n", speed.c_str());
     return false;
   }
-  if (loop) cfg.source.replay.loop = true;
+  if (loop) cfg.source.settings_of<rsd::drivers::ReplayConfig>("replay").loop = true;
   if ((!speed.empty() || loop) && cfg.source.driver != "replay") {
     std::fprintf(stderr, "rsd: --speed and --loop apply to replays (--replay LOG or source.driver: replay)\n");
     return false;

@@ -1,5 +1,4 @@
 #include "daemon/service.hpp"
-#include "drivers/monotonic_clock.hpp"
 
 #include <cstdio>
 #include <memory>
@@ -8,6 +7,9 @@
 #include "daemon/recording_source.hpp"
 #include "daemon/systemd_notify.hpp"
 #include "daemon/velocity_input.hpp"
+#include "drivers/message_source.hpp"
+#include "drivers/monotonic_clock.hpp"
+#include "drivers/replay_source.hpp"
 
 namespace rsd::daemon {
 

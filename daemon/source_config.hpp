@@ -1,34 +1,35 @@
-// The `source:` section of rsd's configuration: which driver, its settings, and the camera's
-// intrinsics (the simulated camera knows its own; real cameras need `camera:`).
+// The `source:` section of rsd's configuration: which driver, every driver's own section
+// (each driver reads and prints it: drivers/driver.hpp), and the camera's intrinsics (the
+// simulated camera knows its own; real cameras need `camera:` or `intrinsics_file:`).
 #pragma once
 
+#include <any>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
 
-#include "drivers/aravis_source.hpp"
-#include "drivers/lcm_source.hpp"
-#include "drivers/libcamera_source.hpp"
-#include "drivers/replay_source.hpp"
-#include "drivers/sim_source.hpp"
-#include "drivers/v4l2_source.hpp"
-#include "formats/yaml_map.hpp"
+#include "drivers/camera_source.hpp"
+#include "dsp/geometry/camera_model.hpp"
+#include "formats/config_section.hpp"
 
 namespace rsd::daemon {
 
 struct SourceConfig {
-  std::string driver = "sim";  // sim, aravis, v4l2, libcamera, replay, lcm
-  drivers::SimSourceConfig sim;
-  drivers::AravisConfig aravis;
-  drivers::V4l2Config v4l2;
-  drivers::LibcameraConfig libcamera;
-  drivers::ReplayConfig replay;
-  drivers::LcmSourceConfig lcm;
-  std::optional<dsp::CameraModel> camera;  // intrinsics of a real camera (source.camera)
+  SourceConfig();  // every driver's defaults
+  std::string driver = "sim";
+  std::map<std::string, std::any> settings;  // by driver name: that driver's config struct
+  std::optional<dsp::CameraModel> camera;    // intrinsics of a real camera (source.camera)
+
+  // A driver's settings as its own type (drivers::ReplayConfig for "replay", ...).
+  template <class C>
+  C& settings_of(const std::string& name) { return std::any_cast<C&>(settings.at(name)); }
+  template <class C>
+  const C& settings_of(const std::string& name) const { return std::any_cast<const C&>(settings.at(name)); }
 };
 
-// Reads the section; throws drivers::ConfigError naming file, line and key.
-void read_source(formats::YamlMap m, SourceConfig& s);
+// Reads (formats::ConfigReader) or prints (formats::DefaultsPrinter) the section.
+void visit_source(formats::ConfigSection& c, SourceConfig& s);
 
 std::unique_ptr<drivers::CameraSource> make_source(const SourceConfig& s);
 

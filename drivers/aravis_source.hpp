@@ -23,6 +23,7 @@
 #include <string>
 
 #include "drivers/aravis_timestamps.hpp"
+#include "drivers/driver.hpp"
 #include "drivers/camera_source.hpp"
 
 namespace rsd::drivers {
@@ -80,5 +81,9 @@ class AravisSource final : public CameraSource {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// The driver's entry (drivers/driver_registry.cpp) and its config section (source.aravis).
+Driver aravis_driver();
+void visit_config(formats::ConfigSection& c, AravisConfig& s);
 
 }  // namespace rsd::drivers

@@ -18,6 +18,7 @@
 
 #include "formats/lcm_log.hpp"
 #include "drivers/message_source.hpp"
+#include "drivers/driver.hpp"
 #include "formats/image_t_codec.hpp"
 
 namespace rsd::drivers {
@@ -66,5 +67,9 @@ class LcmSource final : public MessageSource {
   FrameMeta* target_meta_ = nullptr;
   std::array<uint64_t, formats::kLogSkipKinds> skips_{};
 };
+
+// The driver's entry (drivers/driver_registry.cpp) and its config section (source.lcm).
+Driver lcm_driver();
+void visit_config(formats::ConfigSection& c, LcmSourceConfig& s);
 
 }  // namespace rsd::drivers

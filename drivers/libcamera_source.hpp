@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "drivers/camera_source.hpp"
+#include "drivers/driver.hpp"
 
 namespace rsd::drivers {
 
@@ -66,5 +67,9 @@ class LibcameraSource final : public CameraSource {
   std::vector<std::string> notes_;
   LibcameraStats stats_;
 };
+
+// The driver's entry (drivers/driver_registry.cpp) and its config section (source.libcamera).
+Driver libcamera_driver();
+void visit_config(formats::ConfigSection& c, LibcameraConfig& s);
 
 }  // namespace rsd::drivers

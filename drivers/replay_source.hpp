@@ -19,6 +19,7 @@
 
 #include "formats/lcm_log.hpp"
 #include "drivers/message_source.hpp"
+#include "drivers/driver.hpp"
 #include "formats/image_t_codec.hpp"
 
 namespace rsd::drivers {
@@ -96,5 +97,9 @@ class ReplaySource final : public MessageSource {
   int64_t first_frame_ns_ = 0, last_frame_ns_ = 0, offset_ns_ = 0, ts_offset_us_ = 0, last_ts_us_ = 0, first_ts_us_ = 0;
   std::vector<std::string> unknown_seen_;
 };
+
+// The driver's entry (drivers/driver_registry.cpp) and its config section (source.replay).
+Driver replay_driver();
+void visit_config(formats::ConfigSection& c, ReplayConfig& s);
 
 }  // namespace rsd::drivers

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "drivers/camera_source.hpp"
+#include "drivers/driver.hpp"
 #include "drivers/monotonic_clock.hpp"
 #include "dsp/geometry/camera_model.hpp"
 #include "dsp/geometry/camera_motion.hpp"
@@ -17,7 +18,8 @@
 namespace rsd::drivers {
 
 struct SimSourceConfig {
-  dsp::CameraModel camera = dsp::CameraModel::from_hfov(640, 480, 60.0 * 3.14159265358979 / 180.0);
+  double hfov_deg = 60;
+  dsp::CameraModel camera = dsp::CameraModel::from_hfov(640, 480, hfov_deg * 3.14159265358979 / 180.0);
   double fps = 30;
   double line_delay_s = 0;   // 0: the readout fills the frame period
   dsp::Readout readout = dsp::Readout::TopToBottom;
@@ -73,5 +75,9 @@ class SimSource final : public CameraSource {
   double next_velocity_s_ = 0;
   std::mt19937 rng_;
 };
+
+// The driver's entry (drivers/driver_registry.cpp) and its config section (source.sim).
+Driver sim_driver();
+void visit_config(formats::ConfigSection& c, SimSourceConfig& s);
 
 }  // namespace rsd::drivers

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "drivers/camera_source.hpp"
+#include "drivers/driver.hpp"
 #include "drivers/v4l2_device.hpp"
 #include "drivers/v4l2_logic.hpp"
 
@@ -81,5 +82,9 @@ class V4l2Source final : public CameraSource {
   V4l2Stats stats_;
   bool streaming_ = false;
 };
+
+// The driver's entry (drivers/driver_registry.cpp) and its config section (source.v4l2).
+Driver v4l2_driver();
+void visit_config(formats::ConfigSection& c, V4l2Config& s);
 
 }  // namespace rsd::drivers

@@ -24,6 +24,7 @@
 #include "formats/image_t_codec.hpp"
 #include "drivers/sim_source.hpp"
 #include "tests/support/temp_dir.hpp"
+#include "drivers/replay_source.hpp"
 
 #include "tests/support/allocation_counter.hpp"  // every C++ allocation of this process, counted
 
@@ -37,9 +38,9 @@ std::string tmp(const std::string& name) { return g_tmp.path(name); }
 
 daemon::Config sim_config(const std::string& record) {
   daemon::Config c;
-  c.source.sim.camera = dsp::CameraModel::from_hfov(160, 120, 1.0);
-  c.source.sim.fps = 30;
-  c.source.sim.realtime = true;  // a live camera
+  c.source.settings_of<drivers::SimSourceConfig>("sim").camera = dsp::CameraModel::from_hfov(160, 120, 1.0);
+  c.source.settings_of<drivers::SimSourceConfig>("sim").fps = 30;
+  c.source.settings_of<drivers::SimSourceConfig>("sim").realtime = true;  // a live camera
   c.record_file = record;
   return c;
 }
@@ -47,8 +48,8 @@ daemon::Config sim_config(const std::string& record) {
 daemon::Config replay_config(const std::string& log, const std::string& record, double speed = 0) {
   daemon::Config c;
   c.source.driver = "replay";
-  c.source.replay.file = log;
-  c.source.replay.speed = speed;
+  c.source.settings_of<drivers::ReplayConfig>("replay").file = log;
+  c.source.settings_of<drivers::ReplayConfig>("replay").speed = speed;
   c.record_file = record;
   return c;
 }

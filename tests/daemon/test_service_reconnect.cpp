@@ -6,6 +6,7 @@
 #include <chrono>
 
 #include "daemon/service.hpp"
+#include "drivers/sim_source.hpp"
 
 using namespace rsd;
 
@@ -45,8 +46,8 @@ class UnpluggedOnce final : public drivers::CameraSource {
 
 TEST(ServiceReconnect, LostCameraIsRetriedWithBackoffAndResumes) {
   daemon::Config cfg;
-  cfg.source.sim.camera = dsp::CameraModel::from_hfov(160, 120, 1.0);
-  cfg.source.sim.fps = 60;
+  cfg.source.settings_of<drivers::SimSourceConfig>("sim").camera = dsp::CameraModel::from_hfov(160, 120, 1.0);
+  cfg.source.settings_of<drivers::SimSourceConfig>("sim").fps = 60;
   daemon::StopFlags flags;
   daemon::RunLimits limits;
   limits.max_frames = 60;
@@ -55,7 +56,7 @@ TEST(ServiceReconnect, LostCameraIsRetriedWithBackoffAndResumes) {
   daemon::RunSummary summary;
   const auto t0 = std::chrono::steady_clock::now();
   daemon::run_service(
-      cfg, flags, limits, [](const daemon::Config& c) { return std::make_unique<UnpluggedOnce>(c.source.sim); },
+      cfg, flags, limits, [](const daemon::Config& c) { return std::make_unique<UnpluggedOnce>(c.source.settings_of<drivers::SimSourceConfig>("sim")); },
       &summary);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_EQ(summary.reconnects, 1);

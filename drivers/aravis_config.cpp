@@ -1,0 +1,27 @@
+// source.aravis: a GigE Vision camera's section, read and printed by one visit.
+#include "drivers/aravis_source.hpp"
+
+namespace rsd::drivers {
+
+void visit_config(formats::ConfigSection& c, AravisConfig& a) {
+  c.value("camera", a.camera);
+  c.value("pixel_format", a.pixel_format, "Mono8, Mono16, RGB8");
+  c.value("width", a.width, "0: keep the camera's");
+  c.value("height", a.height);
+  c.value("frame_rate_hz", a.frame_rate_hz);
+  c.value("exposure_s", a.exposure_s);
+  c.value("buffers", a.buffers);
+  c.value("line_delay_s", a.line_delay_s, "0: the readout fills the frame period");
+  c.choice("readout", a.readout, {{"top_to_bottom", dsp::Readout::TopToBottom}, {"bottom_to_top", dsp::Readout::BottomToTop}});
+  c.choice("stamp", a.stamp, {{"exposure_start", CameraStamp::ExposureStart}, {"exposure_end", CameraStamp::ExposureEnd}},
+           "what the camera's timestamp marks: exposure_start or exposure_end");
+  c.value("leader_delay_s", a.leader_delay_s);
+  c.value("use_camera_clock", a.use_camera_clock);
+}
+
+Driver aravis_driver() {
+  return make_driver<AravisSource, AravisConfig>("aravis", "GigE Vision, opened by address (never by discovery), or Fake_1", true,
+                                                 visit_config);
+}
+
+}  // namespace rsd::drivers

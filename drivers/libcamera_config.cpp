@@ -1,0 +1,24 @@
+// source.libcamera: a libcamera camera's section, read and printed by one visit.
+#include "drivers/libcamera_source.hpp"
+
+namespace rsd::drivers {
+
+void visit_config(formats::ConfigSection& c, LibcameraConfig& l) {
+  c.value("camera_id", l.camera_id, "\"\": the first camera");
+  c.value("width", l.width);
+  c.value("height", l.height);
+  c.choice("format", l.format, {{"mono8", dsp::PixelFormat::Mono8}, {"rgb8", dsp::PixelFormat::Rgb8}});
+  c.value("role", l.role);
+  c.value("fps", l.fps);
+  c.check(l.fps > 0, "fps", "must be positive");
+  c.value("line_delay_s", l.line_delay_s);
+  c.choice("readout", l.readout, {{"top_to_bottom", dsp::Readout::TopToBottom}, {"bottom_to_top", dsp::Readout::BottomToTop}});
+  c.value("exposure_s", l.exposure_s);
+}
+
+Driver libcamera_driver() {
+  return make_driver<LibcameraSource, LibcameraConfig>("libcamera", "a camera through libcamera (Raspberry Pi and other ISPs)", true,
+                                                       visit_config);
+}
+
+}  // namespace rsd::drivers

@@ -1,0 +1,44 @@
+// source.sim: the built-in simulated camera's section, read and printed by one visit.
+#include <cmath>
+
+#include "drivers/sim_source.hpp"
+
+namespace rsd::drivers {
+
+void visit_config(formats::ConfigSection& c, SimSourceConfig& s) {
+  int w = s.camera.width, h = s.camera.height;
+  c.value("width", w);
+  c.value("height", h);
+  c.check(w >= 16 && h >= 16 && w <= 8192 && h <= 8192, "width", "and height must be 16..8192 pixels");
+  c.value("hfov_deg", s.hfov_deg);
+  c.check(s.hfov_deg > 1 && s.hfov_deg < 179, "hfov_deg", "must be between 1 and 179 degrees");
+  if (!c.file().empty()) s.camera = dsp::CameraModel::from_hfov(w, h, s.hfov_deg * M_PI / 180.0);
+  c.value("fps", s.fps);
+  c.check(s.fps > 0, "fps", "must be positive");
+  c.value("line_delay_s", s.line_delay_s, "0: rows read over the whole frame period");
+  c.check(s.line_delay_s >= 0 && s.line_delay_s * h <= 1.0 / s.fps, "line_delay_s", "must be >= 0 and line_delay_s x height <= 1/fps");
+  c.choice("readout", s.readout, {{"top_to_bottom", dsp::Readout::TopToBottom}, {"bottom_to_top", dsp::Readout::BottomToTop}});
+  c.value("exposure_s", s.exposure_s);
+  c.choice("format", s.format, {{"mono8", dsp::PixelFormat::Mono8}, {"rgb8", dsp::PixelFormat::Rgb8}});
+  c.value("angular_rate_rad_s", s.angular_rate, "the camera's own motion, camera axes");
+  c.value("velocity_m_s", s.velocity);
+  c.value("wobble_rad_s", s.wobble_rad_s);
+  c.value("scene_depth_m", s.scene_depth_m, "a textured wall this far ahead");
+  c.check(s.scene_depth_m > 0, "scene_depth_m", "must be positive");
+  c.value("velocity_rate_hz", s.velocity_rate_hz, "the simulated IMU, published on velocity.channel");
+  c.check(s.velocity_rate_hz > 0, "velocity_rate_hz", "must be positive");
+  c.value("velocity_noise", s.velocity_noise);
+  c.value("velocity_latency_s", s.velocity_latency_s);
+  c.value("gyro_bias_rad_s", s.gyro_bias);
+  c.value("publish_velocity", s.publish_velocity);
+  c.value("realtime", s.realtime);
+  c.value("noise_grey", s.noise_grey);
+}
+
+Driver sim_driver() {
+  Driver d = make_driver<SimSource, SimSourceConfig>("sim", "the built-in simulated rolling-shutter camera", false, visit_config);
+  d.own_camera = [](const std::any& c) { return std::optional<dsp::CameraModel>(std::any_cast<const SimSourceConfig&>(c).camera); };
+  return d;
+}
+
+}  // namespace rsd::drivers

@@ -1,0 +1,109 @@
+// rsd's configuration: the defaults `rsd --print-default-config` prints are the structs'
+// defaults (printed text read back gives the default Config, field by field); each driver
+// reads its own section; bad values and unknown drivers are errors naming file, line and key.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <string>
+
+#include "daemon/config.hpp"
+#include "drivers/aravis_source.hpp"
+#include "drivers/lcm_source.hpp"
+#include "drivers/replay_source.hpp"
+#include "drivers/sim_source.hpp"
+#include "drivers/v4l2_source.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace rsd {
+namespace {
+
+const test::TempDir& g_tmp = test::register_temp_dir("rsd_test_config_");
+
+daemon::Config load(const std::string& name, const std::string& text) {
+  const std::string path = g_tmp.path(name);
+  std::ofstream(path) << text;
+  return daemon::load_config(path);
+}
+
+std::string error_of(const std::string& text) {
+  try {
+    load("bad.yaml", text);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(Config, PrintedDefaultsReadBackAsTheDefaults) {
+  const daemon::Config d;
+  const daemon::Config r = load("defaults.yaml", daemon::default_config_yaml());
+  EXPECT_EQ(r.source.driver, d.source.driver);
+  const auto& sim = r.source.settings_of<drivers::SimSourceConfig>("sim");
+  const auto& sim0 = d.source.settings_of<drivers::SimSourceConfig>("sim");
+  EXPECT_EQ(sim.camera.width, sim0.camera.width);
+  EXPECT_EQ(sim.camera.height, sim0.camera.height);
+  EXPECT_NEAR(sim.camera.fx, sim0.camera.fx, 1e-9 * sim0.camera.fx);
+  EXPECT_EQ(sim.fps, sim0.fps);
+  EXPECT_EQ(sim.exposure_s, sim0.exposure_s);
+  EXPECT_EQ(sim.angular_rate, sim0.angular_rate);
+  EXPECT_EQ(sim.velocity, sim0.velocity);
+  EXPECT_EQ(sim.velocity_rate_hz, sim0.velocity_rate_hz);
+  EXPECT_EQ(sim.realtime, sim0.realtime);
+  const auto& ar = r.source.settings_of<drivers::AravisConfig>("aravis");
+  EXPECT_EQ(ar.camera, drivers::AravisConfig{}.camera);
+  EXPECT_EQ(ar.buffers, drivers::AravisConfig{}.buffers);
+  EXPECT_EQ(ar.stamp, drivers::AravisConfig{}.stamp);
+  EXPECT_EQ(r.source.settings_of<drivers::V4l2Config>("v4l2").device, drivers::V4l2Config{}.device);
+  EXPECT_EQ(r.source.settings_of<drivers::ReplayConfig>("replay").speed, drivers::ReplayConfig{}.speed);
+  EXPECT_EQ(r.source.settings_of<drivers::LcmSourceConfig>("lcm").url, drivers::LcmSourceConfig{}.url);
+  EXPECT_EQ(r.pipeline.raw_slots, d.pipeline.raw_slots);
+  EXPECT_EQ(r.pipeline.queue_depth, d.pipeline.queue_depth);
+  EXPECT_EQ(r.rectify.reference, d.rectify.reference);
+  EXPECT_EQ(r.rectify.depth, d.rectify.depth);
+  EXPECT_EQ(r.rectify.grid_px, d.rectify.grid_px);
+  EXPECT_EQ(r.velocity_limits.max_age_s, d.velocity_limits.max_age_s);
+  EXPECT_EQ(r.velocity_input.imu_to_camera, d.velocity_input.imu_to_camera);
+  EXPECT_EQ(r.lcm_url, d.lcm_url);
+  EXPECT_EQ(r.channels.health, d.channels.health);
+}
+
+TEST(Config, EachDriverReadsItsOwnSection) {
+  const daemon::Config c = load("drivers.yaml",
+                                "source:\n"
+                                "  driver: aravis\n"
+                                "  camera: {width: 320, height: 240, fx: 300}\n"
+                                "  aravis: {camera: Fake_1, buffers: 3, stamp: exposure_end}\n"
+                                "  sim: {width: 160, height: 120, hfov_deg: 90}\n"
+                                "  replay: {speed: fast}\n");
+  EXPECT_EQ(c.source.driver, "aravis");
+  const auto& a = c.source.settings_of<drivers::AravisConfig>("aravis");
+  EXPECT_EQ(a.camera, "Fake_1");
+  EXPECT_EQ(a.buffers, 3);
+  EXPECT_EQ(a.stamp, drivers::CameraStamp::ExposureEnd);
+  const auto& s = c.source.settings_of<drivers::SimSourceConfig>("sim");
+  EXPECT_EQ(s.camera.width, 160);
+  EXPECT_NEAR(s.camera.fx, 80.0 / std::tan(M_PI / 4), 1e-9);  // (w / 2) / tan(hfov / 2)
+  EXPECT_EQ(c.source.settings_of<drivers::ReplayConfig>("replay").speed, 0.0);  // fast
+  ASSERT_TRUE(c.source.camera.has_value());
+  EXPECT_EQ(c.source.camera->width, 320);
+}
+
+TEST(Config, BadValuesNameFileLineAndKey) {
+  EXPECT_NE(error_of("source:\n  driver: webcam\n").find("bad.yaml:2:11: 'source.driver' must be sim, aravis, v4l2, libcamera, replay or lcm"),
+            std::string::npos)
+      << error_of("source:\n  driver: webcam\n");
+  EXPECT_NE(error_of("source:\n  sim: {readout: sideways}\n").find("'source.sim.readout' must be top_to_bottom or bottom_to_top"),
+            std::string::npos);
+  EXPECT_NE(error_of("source:\n  aravis: {buffers: many}\n").find("'source.aravis.buffers' must be an integer"), std::string::npos);
+  EXPECT_NE(error_of("source:\n  driver: v4l2\n").find("'source.driver' 'v4l2' needs the camera's intrinsics"), std::string::npos)
+      << error_of("source:\n  driver: v4l2\n");
+  EXPECT_NE(error_of("pipeline: {queue_depth: 0}\n").find("'pipeline.queue_depth' must be 1..64"), std::string::npos);
+  EXPECT_NE(error_of("rectification: {depth: sky}\n").find("'rectification.depth' must be infinite, plane or ground"),
+            std::string::npos);
+  EXPECT_NE(error_of("lcm: {url: \"udpm://239.255.76.67:7667\"}\n").find("'lcm.url' is multicast"), std::string::npos);
+  EXPECT_NE(error_of("velocity: {imu_to_camera: [1, 0, 0, 0, 1, 0, 0, 0, 2]}\n").find("must be a rotation matrix"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rsd
