@@ -20,8 +20,10 @@ void visit_config(formats::ConfigSection& c, AravisConfig& a) {
 }
 
 Driver aravis_driver() {
-  return make_driver<AravisSource, AravisConfig>("aravis", "GigE Vision, opened by address (never by discovery), or Fake_1", true,
-                                                 visit_config);
+  Driver d = make_driver<AravisSource, AravisConfig>("aravis", "GigE Vision, opened by address (never by discovery), or Fake_1",
+                                                     true, visit_config);
+  d.address_key = "camera";
+  return d;
 }
 
 }  // namespace rsd::drivers

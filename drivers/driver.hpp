@@ -23,6 +23,8 @@ struct Driver {
   std::string name;
   std::string summary;      // the comment of its section in the printed defaults
   bool real_camera = true;  // needs the camera's intrinsics (source.camera or intrinsics_file)
+  // The key of its section that names which camera to open ("live:NAME:ADDRESS" in the tools).
+  std::string address_key;
   std::function<std::any()> defaults;
   std::function<void(formats::ConfigSection&, std::any&)> visit;
   std::function<std::unique_ptr<CameraSource>(const std::any&)> make;

@@ -17,8 +17,10 @@ void visit_config(formats::ConfigSection& c, LibcameraConfig& l) {
 }
 
 Driver libcamera_driver() {
-  return make_driver<LibcameraSource, LibcameraConfig>("libcamera", "a camera through libcamera (Raspberry Pi and other ISPs)", true,
-                                                       visit_config);
+  Driver d = make_driver<LibcameraSource, LibcameraConfig>("libcamera", "a camera through libcamera (Raspberry Pi and other ISPs)",
+                                                           true, visit_config);
+  d.address_key = "camera_id";
+  return d;
 }
 
 }  // namespace rsd::drivers

@@ -16,6 +16,10 @@ void visit_config(formats::ConfigSection& c, V4l2Config& v) {
   c.value("exposure_s", v.exposure_s, "0: ask the driver");
 }
 
-Driver v4l2_driver() { return make_driver<V4l2Source, V4l2Config>("v4l2", "a V4L2 device (kernel video capture)", true, visit_config); }
+Driver v4l2_driver() {
+  Driver d = make_driver<V4l2Source, V4l2Config>("v4l2", "a V4L2 device (kernel video capture)", true, visit_config);
+  d.address_key = "device";
+  return d;
+}
 
 }  // namespace rsd::drivers

@@ -1,6 +1,6 @@
 #include "tools/common/frame_sources.hpp"
 
-#include <bot_core/image_t.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cctype>
@@ -10,10 +10,9 @@
 #include <fstream>
 
 #include "tools/common/cli_util.hpp"
-#include "drivers/aravis_source.hpp"
-#include "formats/image_t_codec.hpp"
-#include "drivers/libcamera_source.hpp"
-#include "drivers/v4l2_source.hpp"
+#include "drivers/driver_registry.hpp"
+#include "drivers/replay_source.hpp"
+#include "formats/config_section.hpp"
 #include "formats/image_file.hpp"
 #include "formats/lcm_log.hpp"
 
@@ -23,23 +22,6 @@ namespace fs = std::filesystem;
 using dsp::Image;
 
 namespace {
-
-class ImageFileSource final : public FrameSource {
- public:
-  ImageFileSource(std::vector<std::string> files, std::string description)
-      : files_(std::move(files)), description_(std::move(description)) {}
-  std::optional<SourceFrame> next() override {
-    if (index_ >= files_.size()) return std::nullopt;
-    const std::string& f = files_[index_++];
-    return SourceFrame{formats::read_image(f), f, std::nullopt};  // formats::read_image names the file on error
-  }
-  std::string description() const override { return description_; }
-
- private:
-  std::vector<std::string> files_;
-  std::string description_;
-  size_t index_ = 0;
-};
 
 std::string lower(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -111,103 +93,72 @@ namespace {
 
 // ---------------------------------------------------------------- LCM logs
 
-// Frames on one channel of an LCM log, read as rsd reads every raw frame (formats/): the
-// robust log reader, and the bot_core.image_t codec with its fingerprint check and timestamp
-// rule. A damaged event is an error naming it: calibration must not quietly lose frames.
-class LcmLogSource final : public FrameSource {
- public:
-  LcmLogSource(const std::string& path, std::string channel) : path_(path), channel_(std::move(channel)), log_(path) {}
-  std::optional<SourceFrame> next() override {
-    while (log_.next(ev_)) {
-      ++event_;
-      if (ev_.channel != channel_) continue;
-      const std::string where = path_ + ": event " + std::to_string(event_) + " on " + channel_;
-      std::string why;
-      if (formats::decode_frame(ev_.data.data(), ev_.data.size(), img_, frame_, why) != formats::DecodeStatus::Ok)
-        throw std::runtime_error(where + ": " + why);
-      const formats::FrameFormat& f = frame_.format;
-      Image img(f.width, f.height, f.format);
-      formats::copy_pixels(img_, img.view());
-      seen_any_ = true;
-      return SourceFrame{std::move(img), where, frame_.meta.first_row_ns * 1e-9};
-    }
-    if (!seen_any_) throw UsageError("INPUT: '" + path_ + "' has no frames on channel " + channel_ + " (see --channel)");
-    return std::nullopt;
-  }
-  std::string description() const override { return path_ + " (" + channel_ + ")"; }
-
- private:
-  std::string path_, channel_;
-  formats::LcmLogReader log_;
-  formats::LogEvent ev_;
-  bot_core::image_t img_;
-  formats::RecordedFrame frame_;
-  int event_ = 0;
-  bool seen_any_ = false;
-};
-
-// ---------------------------------------------------------------- live cameras
-
-std::unique_ptr<drivers::CameraSource> make_camera(const std::string& spec) {
+// A registered camera driver, configured through its own section reader with the address
+// the spec gives ("live:aravis:192.168.1.20": aravis.camera = 192.168.1.20).
+std::unique_ptr<drivers::CameraSource> make_live(const std::string& spec) {
   const std::string rest = spec.substr(5);  // after "live:"
-  if (rest.rfind("aravis:", 0) == 0) {
-    drivers::AravisConfig c;
-    c.camera = rest.substr(7);
-    return std::make_unique<drivers::AravisSource>(c);
+  const size_t colon = rest.find(':');
+  const std::string name = rest.substr(0, colon);
+  const drivers::Driver* d = drivers::find_driver(name);
+  if (!d || !d->real_camera || d->address_key.empty())
+    throw UsageError("INPUT: '" + spec + "': live sources are live:aravis:ADDRESS, live:v4l2:DEVICE or live:libcamera[:ID]");
+  std::any cfg = d->defaults();
+  if (colon != std::string::npos) {
+    YAML::Node node;
+    node[d->address_key] = rest.substr(colon + 1);
+    formats::ConfigReader reader(formats::YamlMap(spec, node, ""));
+    d->visit(reader, cfg);
   }
-  if (rest.rfind("v4l2:", 0) == 0) {
-    drivers::V4l2Config c;
-    c.device = rest.substr(5);
-    return std::make_unique<drivers::V4l2Source>(c);
-  }
-  if (rest.rfind("libcamera", 0) == 0) {
-    drivers::LibcameraConfig c;
-    if (rest.size() > 10) c.camera_id = rest.substr(10);
-    return std::make_unique<drivers::LibcameraSource>(c);
-  }
-  throw UsageError("INPUT: '" + spec + "': live sources are live:aravis:ADDRESS, live:v4l2:DEVICE or live:libcamera[:ID]");
+  return d->make(cfg);
 }
-
-class LiveSource final : public FrameSource {
- public:
-  LiveSource(const std::string& spec, int frames) : spec_(spec), left_(frames), cam_(make_camera(spec)) {
-    try {
-      cam_->open();
-    } catch (const drivers::CameraError& e) {
-      throw std::runtime_error(spec + ": " + e.what());
-    }
-    cam_->start();
-  }
-  ~LiveSource() override { cam_->stop(); }
-  std::optional<SourceFrame> next() override {
-    if (left_-- <= 0) return std::nullopt;
-    const drivers::FrameFormat f = cam_->format();
-    SourceFrame out{Image(f.width, f.height, f.format), spec_ + ": frame " + std::to_string(taken_++), std::nullopt};
-    drivers::FrameMeta meta;
-    for (int tries = 0; tries < 20; ++tries)
-      if (cam_->capture(out.image.view(), meta, std::chrono::milliseconds(500)) == drivers::CaptureStatus::Frame) {
-        out.timestamp_s = meta.first_row_ns * 1e-9;
-        return out;
-      }
-    throw std::runtime_error(spec_ + ": no frame within 10 s");
-  }
-  std::string description() const override { return spec_; }
-
- private:
-  std::string spec_;
-  int left_, taken_ = 0;
-  std::unique_ptr<drivers::CameraSource> cam_;
-};
 
 }  // namespace
 
-std::unique_ptr<FrameSource> open_frame_source(const std::vector<std::string>& inputs, const FrameSourceOptions& opt) {
-  if (inputs.size() == 1 && inputs.front().rfind("live:", 0) == 0)
-    return std::make_unique<LiveSource>(inputs.front(), opt.live_frames);
-  if (inputs.size() == 1 && fs::is_regular_file(inputs.front()) && formats::looks_like_lcm_log(inputs.front()))
-    return std::make_unique<LcmLogSource>(inputs.front(), opt.channel);
-  return std::make_unique<ImageFileSource>(expand_inputs(inputs), describe_inputs(inputs));
+FrameSource::FrameSource(std::unique_ptr<drivers::CameraSource> cam, std::string description, bool stamped, int limit)
+    : cam_(std::move(cam)), images_(dynamic_cast<const drivers::ImagesSource*>(cam_.get())),
+      description_(std::move(description)), stamped_(stamped), left_(limit) {
+  try {
+    cam_->open();
+  } catch (const drivers::CameraError& e) {
+    throw std::runtime_error(description_ + ": " + e.what());
+  }
+  cam_->start();
 }
 
+FrameSource::~FrameSource() { cam_->stop(); }
+
+std::optional<SourceFrame> FrameSource::next() {
+  if (left_ == 0) return std::nullopt;
+  const drivers::FrameFormat f = cam_->format();
+  SourceFrame out{dsp::Image(f.width, f.height, f.format), "", std::nullopt};
+  drivers::FrameMeta meta;
+  for (int tries = 0; tries < 20; ++tries) {  // a live camera: 10 s for a frame
+    const drivers::CaptureStatus st = cam_->capture(out.image.view(), meta, std::chrono::milliseconds(500));
+    if (st == drivers::CaptureStatus::EndOfStream) return std::nullopt;
+    if (st != drivers::CaptureStatus::Frame) continue;
+    out.name = images_ ? images_->current_file() : description_ + ": frame " + std::to_string(taken_);
+    if (stamped_) out.timestamp_s = static_cast<double>(meta.first_row_ns) * 1e-9;
+    ++taken_;
+    if (left_ > 0) --left_;
+    return out;
+  }
+  throw std::runtime_error(description_ + ": no frame within 10 s");
+}
+
+std::unique_ptr<FrameSource> open_frame_source(const std::vector<std::string>& inputs, const FrameSourceOptions& opt) {
+  if (inputs.size() == 1 && inputs.front().rfind("live:", 0) == 0)
+    return std::make_unique<FrameSource>(make_live(inputs.front()), inputs.front(), true, opt.live_frames);
+  if (inputs.size() == 1 && fs::is_regular_file(inputs.front()) && formats::looks_like_lcm_log(inputs.front())) {
+    drivers::ReplayConfig c;
+    c.file = inputs.front();
+    c.speed = 0;  // as fast as it reads, nothing dropped
+    c.channel = opt.channel;
+    return std::make_unique<FrameSource>(std::make_unique<drivers::ReplaySource>(c), inputs.front() + " (" + opt.channel + ")",
+                                         true, -1);
+  }
+  drivers::ImagesConfig c;
+  c.files = expand_inputs(inputs);
+  return std::make_unique<FrameSource>(std::make_unique<drivers::ImagesSource>(c), describe_inputs(inputs), false, -1);
+}
 
 }  // namespace rsd::tools

@@ -1,6 +1,7 @@
 // Where a tool reads frames from: image files or directories of them, an LCM log of
 // bot_core.image_t frames (rsd's own raw frames, a recording, lcm-logger output), or a live
-// camera through rsd's drivers. One interface, so calibration and extraction work the same
+// camera. Every one is a drivers::CameraSource (images, replay, or a registered camera
+// driver), read here frame by frame into images, so calibration and extraction work the same
 // on all of them.
 #pragma once
 
@@ -9,21 +10,16 @@
 #include <string>
 #include <vector>
 
+#include "drivers/camera_source.hpp"
+#include "drivers/images_source.hpp"
 #include "dsp/core/image.hpp"
 
 namespace rsd::tools {
 
 struct SourceFrame {
   dsp::Image image;
-  std::string name;                   // for error messages: file, or log event
+  std::string name;                   // for error messages: file, or frame of a log or camera
   std::optional<double> timestamp_s;  // first row's capture time, when the source knows it
-};
-
-class FrameSource {
- public:
-  virtual ~FrameSource() = default;
-  virtual std::optional<SourceFrame> next() = 0;  // nullopt at the end
-  virtual std::string description() const = 0;
 };
 
 struct FrameSourceOptions {
@@ -31,9 +27,26 @@ struct FrameSourceOptions {
   int live_frames = 60;             // live cameras: how many frames to take
 };
 
-// INPUT forms: "live:aravis:ADDRESS", "live:v4l2:/dev/videoN", "live:libcamera[:ID]"; an LCM
-// log (recognised by its sync word); image files and directories (natural name order).
-// Throws UsageError for inputs that do not exist or hold nothing usable.
+// Pulls frames from a started camera source until it ends (or, live, `limit` frames).
+class FrameSource {
+ public:
+  FrameSource(std::unique_ptr<drivers::CameraSource> cam, std::string description, bool stamped, int limit);
+  ~FrameSource();
+  std::optional<SourceFrame> next();  // nullopt at the end
+  const std::string& description() const { return description_; }
+
+ private:
+  std::unique_ptr<drivers::CameraSource> cam_;
+  const drivers::ImagesSource* images_ = nullptr;  // names frames by their files
+  std::string description_;
+  bool stamped_;
+  int left_, taken_ = 0;
+};
+
+// INPUT forms: "live:DRIVER:ADDRESS" (a registered camera driver: live:aravis:ADDRESS,
+// live:v4l2:/dev/videoN, live:libcamera[:ID]); an LCM log (recognised by its sync word);
+// image files and directories (natural name order). Throws UsageError for inputs that do not
+// exist or name no driver, std::runtime_error for sources that cannot be opened.
 std::unique_ptr<FrameSource> open_frame_source(const std::vector<std::string>& inputs, const FrameSourceOptions& opt);
 
 // "frame2" before "frame10": digit runs compare as numbers.
