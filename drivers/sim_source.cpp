@@ -66,12 +66,8 @@ void SimSource::open() {
   ro.noise_sigma = cfg_.noise_grey;
   ro.noise_seed = cfg_.seed;
   renderer_ = std::make_unique<dsp::RsRenderer>(cfg_.camera, timing_, ro);
-  dsp::Plane wall;
-  wall.origin = Eigen::Vector3d(-3.0 * cfg_.scene_depth_m, -3.0 * cfg_.scene_depth_m, cfg_.scene_depth_m);
-  wall.axis_s = Eigen::Vector3d::UnitX();
-  wall.axis_t = Eigen::Vector3d::UnitY();
-  wall.texture = baked_noise(cfg_.seed, cfg_.scene_depth_m);
-  scene_.planes = {wall};
+  const double z = cfg_.scene_depth_m;
+  scene_.planes = {dsp::fronto_parallel(Eigen::Vector3d(-3.0 * z, -3.0 * z, z), baked_noise(cfg_.seed, z))};
 }
 
 FrameFormat SimSource::format() const { return {cfg_.camera.width, cfg_.camera.height, cfg_.format}; }

@@ -11,12 +11,7 @@ namespace {
 
 // A textured wall half a metre behind the target, so that every pixel sees something.
 dsp::Plane wall(unsigned seed) {
-  dsp::Plane w;
-  w.origin = Eigen::Vector3d(0, 0, 0.5);
-  w.axis_s = Eigen::Vector3d::UnitX();
-  w.axis_t = Eigen::Vector3d::UnitY();
-  w.texture = std::make_shared<dsp::NoiseTexture>(seed, 0.05);
-  return w;
+  return dsp::fronto_parallel(Eigen::Vector3d(0, 0, 0.5), std::make_shared<dsp::NoiseTexture>(seed, 0.05));
 }
 
 // Inner corners of a (cols+1) x (rows+1) board, centred on the origin.
@@ -43,16 +38,12 @@ Target aprilgrid(const TargetSpec& s) {
     const Eigen::Vector2d p = g.corners[i] - centre;
     t.landmarks.push_back({g.corner_ids[i], Eigen::Vector3d(p.x(), p.y(), 0.0)});
   }
-  dsp::Plane plane;
-  plane.axis_s = Eigen::Vector3d::UnitX();
-  plane.axis_t = Eigen::Vector3d::UnitY();
   const Eigen::Vector2d corner = -centre - g.grid_origin_in_bitmap_m;  // bitmap's top-left in world x, y
-  plane.origin = Eigen::Vector3d(corner.x(), corner.y(), 0.0);
   auto tex = std::make_shared<dsp::BitmapTexture>(g.bitmap, g.pixels_per_m);
+  dsp::Plane plane = dsp::fronto_parallel(Eigen::Vector3d(corner.x(), corner.y(), 0.0), tex);
   plane.s_min = plane.t_min = 0;
   plane.s_max = tex->width_m();
   plane.t_max = tex->height_m();
-  plane.texture = tex;
   t.scene.planes = {plane, wall(s.seed)};
   return t;
 }

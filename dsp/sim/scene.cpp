@@ -76,13 +76,18 @@ Eigen::Vector3f BitmapTexture::colour(double s, double t) const {
          a * b * texel(x0 + 1, y0 + 1);
 }
 
-Plane fronto_parallel_checkerboard(double z, int cols, int rows, double square_m) {
+Plane fronto_parallel(const Eigen::Vector3d& origin, std::shared_ptr<const Texture> texture) {
   Plane p;
   p.axis_s = Eigen::Vector3d::UnitX();
   p.axis_t = Eigen::Vector3d::UnitY();
-  p.origin = Eigen::Vector3d(-0.5 * cols * square_m, -0.5 * rows * square_m, z);
-  p.texture = std::make_shared<CheckerboardTexture>(cols, rows, square_m);
+  p.origin = origin;
+  p.texture = std::move(texture);
   return p;
+}
+
+Plane fronto_parallel_checkerboard(double z, int cols, int rows, double square_m) {
+  return fronto_parallel(Eigen::Vector3d(-0.5 * cols * square_m, -0.5 * rows * square_m, z),
+                         std::make_shared<CheckerboardTexture>(cols, rows, square_m));
 }
 
 }  // namespace rsd::dsp

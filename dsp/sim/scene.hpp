@@ -77,6 +77,10 @@ struct Scene {
   Eigen::Vector3f background{0.2f, 0.2f, 0.2f};
 };
 
+// A plane facing the camera (s along x, t along y, the camera looking down +z), unbounded,
+// with plane coordinate (0, 0) at `origin`.
+Plane fronto_parallel(const Eigen::Vector3d& origin, std::shared_ptr<const Texture> texture);
+
 // A plane facing the camera at distance z (camera looking down +z from the world origin),
 // holding a checkerboard centred on the optical axis.
 Plane fronto_parallel_checkerboard(double z, int cols, int rows, double square_m);

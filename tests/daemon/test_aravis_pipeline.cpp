@@ -110,12 +110,7 @@ TEST(AravisPipeline, FakeCameraStreamsStampsRectifiesPublishes) {
   dsp::RowTiming timing = dsp::RowTiming::full_frame(kH, 50);
   auto renderer = std::make_shared<dsp::RsRenderer>(dsp::CameraModel::from_hfov(kW, kH, 1.0), timing, dsp::RenderOptions{});
   auto scene = std::make_shared<dsp::Scene>();
-  dsp::Plane wall;
-  wall.origin = Eigen::Vector3d(0, 0, 3);
-  wall.axis_s = Eigen::Vector3d::UnitX();
-  wall.axis_t = Eigen::Vector3d::UnitY();
-  wall.texture = std::make_shared<dsp::CheckerboardTexture>(40, 40, 0.1);
-  scene->planes = {wall};
+  scene->planes = {dsp::fronto_parallel(Eigen::Vector3d(0, 0, 3), std::make_shared<dsp::CheckerboardTexture>(40, 40, 0.1))};
   c.fake_fill = [renderer, scene](const dsp::ImageView& v, uint64_t id) {
     dsp::Twist tw;
     tw.w = -kRate;

@@ -17,10 +17,12 @@
 
 #include "dsp/analysis/rs_optical_flow.hpp"
 #include "dsp/geometry/rs_projection.hpp"
+#include "tests/support/random_twist.hpp"
 
 using namespace rsd::dsp;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
+using rsd::test::random_twist;
 
 namespace {
 
@@ -67,17 +69,6 @@ Vector3d random_point(const CameraModel& cam, std::mt19937& rng, double zmin, do
   std::uniform_real_distribution<double> u(0, cam.width - 1), v(0, cam.height - 1), z(zmin, zmax);
   const double zz = z(rng);
   return zz * Vector3d((u(rng) - cam.cx) / cam.fx, (v(rng) - cam.cy) / cam.fy, 1.0);
-}
-
-Twist random_twist(std::mt19937& rng, const Vector3d& vmask, const Vector3d& wmask, double vmax,
-                   double wmax) {
-  std::uniform_real_distribution<double> a(-1, 1);
-  Twist tw;
-  for (int i = 0; i < 3; ++i) {
-    tw.v[i] = vmask[i] * vmax * a(rng);
-    tw.w[i] = wmask[i] * wmax * a(rng);
-  }
-  return tw;
 }
 
 // d/dt0 of the rolling-shutter image q(t0) (an RsProjection for frame start t0): central

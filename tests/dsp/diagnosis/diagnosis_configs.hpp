@@ -6,6 +6,9 @@
 
 namespace rsd::test {
 
+// A simulation of `kind` with the VGA camera, seeded, with per-coordinate noise in px.
+inline dsp::SimConfig simulation(dsp::ObservationKind kind, unsigned seed, double duration_s, double noise_px);
+
 inline void vga_camera(dsp::NominalModel& n) {
   n.cam.width = 640, n.cam.height = 480;
   n.cam.fx = n.cam.fy = 500, n.cam.cx = 319.5, n.cam.cy = 239.5;
@@ -15,6 +18,16 @@ inline void vga_camera(dsp::NominalModel& n) {
 inline void small_target(dsp::SimConfig& c) {
   c.target_rows = 5, c.target_cols = 6, c.target_spacing_m = 0.12, c.target_distance_m = 1.0;
   c.translation_amplitude_m = 0.1, c.rotation_amplitude_rad = 0.15;
+}
+
+inline dsp::SimConfig simulation(dsp::ObservationKind kind, unsigned seed, double duration_s, double noise_px) {
+  dsp::SimConfig c;
+  c.kind = kind;
+  c.seed = seed;
+  c.duration_s = duration_s;
+  c.noise_px = noise_px;
+  vga_camera(c.nominal);
+  return c;
 }
 
 }  // namespace rsd::test

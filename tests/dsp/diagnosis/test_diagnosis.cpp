@@ -19,12 +19,7 @@ using rsd::test::param;
 namespace {
 
 SimConfig small_landmarks(unsigned seed) {
-  SimConfig c;
-  c.kind = ObservationKind::Landmarks;
-  c.seed = seed;
-  c.duration_s = 1.0;
-  c.noise_px = 0.5;
-  rsd::test::vga_camera(c.nominal);
+  SimConfig c = rsd::test::simulation(ObservationKind::Landmarks, seed, 1.0, 0.5);
   rsd::test::small_target(c);
   return c;
 }

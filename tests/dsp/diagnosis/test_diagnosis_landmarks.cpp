@@ -28,12 +28,7 @@ namespace {
 constexpr double kNoise = 0.5;
 
 SimConfig target(unsigned seed, double duration_s = 3.0) {
-  SimConfig c;
-  c.kind = ObservationKind::Landmarks;
-  c.seed = seed;
-  c.duration_s = duration_s;
-  c.noise_px = kNoise;
-  rsd::test::vga_camera(c.nominal);
+  SimConfig c = rsd::test::simulation(ObservationKind::Landmarks, seed, duration_s, kNoise);
   rsd::test::small_target(c);
   return c;
 }

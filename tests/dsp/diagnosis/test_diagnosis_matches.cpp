@@ -29,15 +29,10 @@ namespace {
 constexpr double kNoise = 0.5;
 
 SimConfig phone(unsigned seed, double duration_s = 4.0) {
-  SimConfig c;
-  c.kind = ObservationKind::Matches;
-  c.seed = seed;
-  c.duration_s = duration_s;
+  SimConfig c = rsd::test::simulation(ObservationKind::Matches, seed, duration_s, kNoise);
   c.start_time_s = 1000;
-  c.noise_px = kNoise;
   c.outlier_fraction = 0.1;
   c.matches_per_pair = 60;
-  rsd::test::vga_camera(c.nominal);
   c.nominal.imu_to_camera << 0, -1, 0, -1, 0, 0, 0, 0, -1;
   c.rotation_amplitude_rad = 0.25, c.motion_frequency_hz = 1.2;
   c.gyro = {20, 200, 0.01, 0.03, 0.0005, 0.002};

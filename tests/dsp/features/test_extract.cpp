@@ -50,13 +50,8 @@ Eigen::Affine3d pose(const Eigen::Vector3d& rotation, const Eigen::Vector3d& tra
 
 // A textured wall 1 m in front of the camera.
 dsp::Scene wall(unsigned seed) {
-  dsp::Plane w;
-  w.origin = Eigen::Vector3d(0, 0, 1.0);
-  w.axis_s = Eigen::Vector3d::UnitX();
-  w.axis_t = Eigen::Vector3d::UnitY();
-  w.texture = std::make_shared<dsp::NoiseTexture>(seed, 0.02);
   dsp::Scene s;
-  s.planes = {w};
+  s.planes = {dsp::fronto_parallel(Eigen::Vector3d(0, 0, 1.0), std::make_shared<dsp::NoiseTexture>(seed, 0.02))};
   return s;
 }
 

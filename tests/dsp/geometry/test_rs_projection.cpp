@@ -7,11 +7,13 @@
 
 #include "dsp/geometry/rs_projection.hpp"
 #include "tests/support/brute_force.hpp"
+#include "tests/support/random_twist.hpp"
 
 using namespace rsd::dsp;
 using rsd::test::brute_force_project;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
+using rsd::test::random_twist;
 
 namespace {
 
@@ -50,17 +52,6 @@ Vector3d random_point(const CameraModel& cam, std::mt19937& rng, double zmin, do
   const double zz = z(rng);
   const Vector2d px(u(rng), v(rng));
   return zz * Vector3d((px.x() - cam.cx) / cam.fx, (px.y() - cam.cy) / cam.fy, 1.0);
-}
-
-Twist random_twist(std::mt19937& rng, const Vector3d& vmask, const Vector3d& wmask, double vmax,
-                   double wmax) {
-  std::uniform_real_distribution<double> a(-1, 1);
-  Twist tw;
-  for (int i = 0; i < 3; ++i) {
-    tw.v[i] = vmask[i] * vmax * a(rng);
-    tw.w[i] = wmask[i] * wmax * a(rng);
-  }
-  return tw;
 }
 
 using Solver = RsProjection (*)(const CameraModel&, const RowTiming&, const Twist&, const Vector3d&);
