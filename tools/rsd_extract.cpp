@@ -22,6 +22,7 @@
 #include "formats/image_t_codec.hpp"
 #include "formats/intrinsics_file.hpp"
 #include "formats/lcm_log.hpp"
+#include "formats/motion_log.hpp"
 #include "formats/yaml_map.hpp"
 #include "dsp/core/statistics.hpp"
 #include "dsp/features/feature_tracks.hpp"
@@ -35,6 +36,9 @@ namespace formats = rsd::formats;
 using namespace rsd;
 using namespace rsd::tools;
 using namespace rsd::dsp;
+
+using formats::MotionLog;
+using formats::channel_list;
 
 namespace {
 
@@ -64,97 +68,6 @@ struct Options {
   std::string readout, imu_to_camera, lever_arm;
   TrackOptions track;
 };
-
-// ---------------------------------------------------------------- pass 1: the log's contents
-
-struct FrameMeta {
-  double t;                              // first row's capture time, s
-  std::optional<double> line_delay_s;    // metadata line_delay_ns
-  std::optional<dsp::Readout> readout;   // metadata readout
-  int width, height;
-};
-
-struct LogScan {
-  std::vector<FrameMeta> frames;
-  std::vector<dsp::GyroSample> gyro;
-  std::optional<int> gyro_frame;  // rsd::velocity_t::FRAME_*, the one all samples share
-  std::vector<dsp::PoseSample> poses;
-  std::map<std::string, int> channels;  // every channel with its event count (for errors)
-  int malformed = 0;
-};
-
-// A raw frame as every rsd reader takes it (formats/image_t_codec.hpp: fingerprint, sizes,
-// the one timestamp rule); a frame that does not decode is an error naming the event.
-FrameMeta frame_meta(const formats::LogEvent& ev, bot_core::image_t& img, const std::string& where) {
-  formats::RecordedFrame f;
-  std::string why;
-  if (formats::decode_frame(ev.data.data(), ev.data.size(), img, f, why) != formats::DecodeStatus::Ok)
-    throw std::runtime_error(where + ": " + why);
-  if (f.line_delay_s && *f.line_delay_s < 0) throw std::runtime_error(where + ": negative line delay in the metadata");
-  return {f.meta.first_row_ns * 1e-9, f.line_delay_s, f.readout, f.format.width, f.format.height};
-}
-
-void add_velocity(const formats::LogEvent& ev, LogScan& s, const std::string& where) {
-  rsd::velocity_t m{};
-  std::string why;
-  if (formats::decode_checked(ev.data.data(), ev.data.size(), m, why) != formats::DecodeStatus::Ok ||
-      (m.frame != rsd::velocity_t::FRAME_CAMERA && m.frame != rsd::velocity_t::FRAME_IMU)) {
-    ++s.malformed;  // not an rsd.velocity_t, or a frame this version does not know
-    return;
-  }
-  if (s.gyro_frame && *s.gyro_frame != m.frame)
-    throw std::runtime_error(where + ": velocity frame changes between camera and IMU axes within the log");
-  s.gyro_frame = m.frame;
-  const Eigen::Vector3d w(m.angular_velocity[0], m.angular_velocity[1], m.angular_velocity[2]);
-  if (!w.allFinite()) return void(++s.malformed);
-  s.gyro.push_back({m.utime * 1e-6, w});
-}
-
-void add_pose(const formats::LogEvent& ev, LogScan& s) {
-  bot_core::pose_t m{};
-  std::string why;
-  if (formats::decode_checked(ev.data.data(), ev.data.size(), m, why) != formats::DecodeStatus::Ok) return void(++s.malformed);
-  const Eigen::Quaterniond q(m.orientation[0], m.orientation[1], m.orientation[2], m.orientation[3]);
-  const Eigen::Vector3d p(m.pos[0], m.pos[1], m.pos[2]);
-  if (!p.allFinite() || !q.coeffs().allFinite() || q.norm() < 0.5) return void(++s.malformed);
-  s.poses.push_back({m.utime * 1e-6, p, q.normalized()});
-}
-
-LogScan scan_log(const Options& o) {
-  if (!formats::looks_like_lcm_log(o.log)) throw UsageError("LOG: '" + o.log + "' is not a readable LCM log");
-  formats::LcmLogReader log(o.log);
-  formats::LogEvent ev;
-  bot_core::image_t img;
-  LogScan s;
-  int event = 0;
-  while (log.next(ev)) {
-    ++event;
-    ++s.channels[ev.channel];
-    const std::string where = o.log + ": event " + std::to_string(event) + " on " + ev.channel;
-    if (ev.channel == o.image_channel) {
-      s.frames.push_back(frame_meta(ev, img, where));
-      const FrameMeta& f = s.frames.back();
-      if (f.width != s.frames.front().width || f.height != s.frames.front().height)
-        throw std::runtime_error(where + ": frame is " + std::to_string(f.width) + "x" + std::to_string(f.height) + ", the first was " +
-                                 std::to_string(s.frames.front().width) + "x" + std::to_string(s.frames.front().height));
-    } else if (ev.channel == o.velocity_channel) {
-      add_velocity(ev, s, where);
-    } else if (ev.channel == o.pose_channel) {
-      add_pose(ev, s);
-    }
-  }
-  if (event == 0) throw UsageError("LOG: '" + o.log + "' holds no LCM events (not an LCM log, or empty)");
-  // Motion may be logged out of order (several publishers): recording-v1 wants it ordered.
-  std::stable_sort(s.gyro.begin(), s.gyro.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
-  std::stable_sort(s.poses.begin(), s.poses.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
-  return s;
-}
-
-std::string channel_list(const LogScan& s) {
-  std::string list;
-  for (const auto& [name, n] : s.channels) list += (list.empty() ? "" : ", ") + name + " (" + std::to_string(n) + ")";
-  return list;
-}
 
 // ---------------------------------------------------------------- the nominal model
 
@@ -226,9 +139,9 @@ void apply_options(const Options& o, Nominal& n, std::string& line_delay_from) {
   }
 }
 
-Nominal nominal_model(const Options& o, const LogScan& s) {
+Nominal nominal_model(const Options& o, const MotionLog& s) {
   Nominal n;
-  const FrameMeta& f0 = s.frames.front();
+  const formats::LogFrame& f0 = s.frames.front();
   n.model.cam.width = f0.width, n.model.cam.height = f0.height;
   n.model.cam.cx = 0.5 * (f0.width - 1), n.model.cam.cy = 0.5 * (f0.height - 1);
   std::vector<double> dt;
@@ -287,11 +200,11 @@ cv::Mat grey8(const dsp::Image& img, double& scale16) {
 
 // Frames whose whole readout the motion covers (at the nominal time offset): outside it the
 // motion would be extrapolated, and the diagnosis would blame the camera for it.
-std::vector<bool> covered(const LogScan& s, const Nominal& n, bool by_gyro) {
+std::vector<bool> covered(const MotionLog& s, const Nominal& n, bool by_gyro) {
   const double t0 = by_gyro ? s.gyro.front().t : s.poses.front().t;
   const double t1 = by_gyro ? s.gyro.back().t : s.poses.back().t;
   std::vector<bool> ok;
-  for (const FrameMeta& f : s.frames) {
+  for (const formats::LogFrame& f : s.frames) {
     const double tm = f.t + n.model.time.time_offset_s;
     ok.push_back(tm >= t0 && tm + 1.0 / n.model.frame_rate_hz <= t1);
   }
@@ -313,7 +226,7 @@ struct Pass2 {
   }
 };
 
-void extract_matches(const Options& o, const LogScan& s, const std::vector<bool>& ok, dsp::Recording& rec) {
+void extract_matches(const Options& o, const MotionLog& s, const std::vector<bool>& ok, dsp::Recording& rec) {
   Pass2 p{open_frame_source({o.log}, FrameSourceOptions{o.image_channel, 0})};
   cv::Mat prev;
   int lost = 0, fb = 0, unlike = 0, pairs = 0;
@@ -335,7 +248,7 @@ void extract_matches(const Options& o, const LogScan& s, const std::vector<bool>
   if (rec.matches.empty()) throw std::runtime_error(o.log + ": no features could be tracked between consecutive frames");
 }
 
-void extract_landmarks(const Options& o, const TargetSpec& target, const LogScan& s, const std::vector<bool>& ok,
+void extract_landmarks(const Options& o, const TargetSpec& target, const MotionLog& s, const std::vector<bool>& ok,
                        dsp::Recording& rec) {
   Pass2 p{open_frame_source({o.log}, FrameSourceOptions{o.image_channel, 0})};
   int seen = 0;
@@ -356,7 +269,7 @@ void extract_landmarks(const Options& o, const TargetSpec& target, const LogScan
 
 // ---------------------------------------------------------------- the run
 
-dsp::ObservationKind choose_kind(const Options& o, const LogScan& s) {
+dsp::ObservationKind choose_kind(const Options& o, const MotionLog& s) {
   const std::string ch = " (channels in the log: " + channel_list(s) + ")";
   if (o.kind == "landmarks" || (o.kind == "auto" && !o.target.empty() && !s.poses.empty())) {
     if (o.target.empty()) throw UsageError("--kind landmarks needs --target (checkerboard:COLSxROWS:SQUARE_M or aprilgrid:...)");
@@ -381,7 +294,9 @@ int run(const Options& o) {
     }
   }
   std::fprintf(stderr, "rsd-extract: reading %s\n", o.log.c_str());
-  const LogScan s = scan_log(o);
+  if (!formats::looks_like_lcm_log(o.log)) throw UsageError("LOG: '" + o.log + "' is not a readable LCM log");
+  const MotionLog s = formats::read_motion_log(o.log, {o.image_channel, o.velocity_channel, o.pose_channel});
+  if (s.events == 0) throw UsageError("LOG: '" + o.log + "' holds no LCM events (not an LCM log, or empty)");
   if (s.frames.empty())
     throw UsageError(o.log + ": no bot_core.image_t frames on channel " + o.image_channel + " (see --image-channel; channels in the log: " + channel_list(s) + ")");
   const dsp::ObservationKind kind = choose_kind(o, s);
