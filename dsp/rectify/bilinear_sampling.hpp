@@ -1,0 +1,116 @@
+// Bilinear sampling of a source image at 16.16 fixed-point positions: the scalar reference
+// every kernel must agree with bit for bit (bilinear_sampling_avx2.cpp), and the choice of
+// kernels for a pixel format at run time.
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+
+#include "dsp/core/image.hpp"
+#include "dsp/rectify/rs_rectifier.hpp"
+
+namespace rsd::dsp::rectify_detail {
+
+// ---- Bilinear sampling, fixed point ----------------------------------------------------
+//
+// A position (16.16) is rounded to 1/256 px: integer tap x0 and 8-bit weight fx. The blend
+// rounds after each direction, top = (p00 (256 - fx) + p01 fx + 128) >> 8, then
+// out = (top (256 - fy) + bot fy + 128) >> 8: for 8-bit pixels every intermediate fits 16 bits,
+// which lets the AVX2 kernel work on 16 pixels per instruction. The scalar code computes the
+// same integers, so both paths agree bit for bit; the result is within 1 grey level of exact
+// bilinear interpolation at the rounded position. A tap outside the image reads 0 (black).
+
+struct Tap {
+  int x0, y0;
+  std::uint32_t fx, fy;
+};
+
+inline Tap tap(std::int32_t xs, std::int32_t ys) {
+  const std::int32_t x8 = (xs + 128) >> 8, y8 = (ys + 128) >> 8;
+  return {x8 >> 8, y8 >> 8, static_cast<std::uint32_t>(x8 & 255), static_cast<std::uint32_t>(y8 & 255)};
+}
+
+inline std::uint32_t blend(std::uint32_t p00, std::uint32_t p01, std::uint32_t p10, std::uint32_t p11,
+                           std::uint32_t fx, std::uint32_t fy) {
+  const std::uint32_t top = (p00 * (256 - fx) + p01 * fx + 128) >> 8, bot = (p10 * (256 - fx) + p11 * fx + 128) >> 8;
+  return (top * (256 - fy) + bot * fy + 128) >> 8;
+}
+
+// memcpy: 16-bit rows need not be 2-byte aligned.
+template <class T>
+inline std::uint32_t load(const std::uint8_t* p) {
+  T v;
+  std::memcpy(&v, p, sizeof(T));
+  return v;
+}
+template <class T>
+inline void store(std::uint8_t* p, std::uint32_t v) {
+  const T t = static_cast<T>(v);
+  std::memcpy(p, &t, sizeof(T));
+}
+
+template <class T, int C>
+inline std::uint32_t texel(const ImageView& src, int x, int y, int c) {
+  if (x < 0 || y < 0 || x >= src.width || y >= src.height) return 0;
+  return load<T>(src.row(y) + (C * x + c) * sizeof(T));
+}
+
+template <class T, int C>
+inline void sample_border(const ImageView& src, const Tap& t, std::uint8_t* out) {
+  for (int c = 0; c < C; ++c) {
+    const std::uint32_t v =
+        blend(texel<T, C>(src, t.x0, t.y0, c), texel<T, C>(src, t.x0 + 1, t.y0, c),
+              texel<T, C>(src, t.x0, t.y0 + 1, c), texel<T, C>(src, t.x0 + 1, t.y0 + 1, c), t.fx, t.fy);
+    store<T>(out + c * sizeof(T), v);
+  }
+}
+
+template <class T, int C>
+inline void sample_pixel(const ImageView& src, std::int32_t xs, std::int32_t ys, std::uint8_t* out) {
+  const Tap t = tap(xs, ys);
+  if (t.x0 < 0 || t.y0 < 0 || t.x0 >= src.width - 1 || t.y0 >= src.height - 1) {
+    sample_border<T, C>(src, t, out);
+    return;
+  }
+  const std::uint8_t* r0 = src.row(t.y0) + C * t.x0 * sizeof(T);
+  const std::uint8_t* r1 = r0 + src.stride;
+  constexpr int kNext = C * sizeof(T);
+  for (int c = 0; c < C; ++c) {
+    const int o = c * sizeof(T);
+    store<T>(out + o, blend(load<T>(r0 + o), load<T>(r0 + kNext + o), load<T>(r1 + o),
+                            load<T>(r1 + kNext + o), t.fx, t.fy));
+  }
+}
+
+template <class T, int C>
+inline void sample_row_scalar(const ImageView& src, const std::int32_t* xs, const std::int32_t* ys,
+                       std::uint8_t* out, int n) {
+  for (int i = 0; i < n; ++i) sample_pixel<T, C>(src, xs[i], ys[i], out + i * C * sizeof(T));
+}
+
+// Source positions along one cell of a row are affine in x: x_k = ax + k sx (16.16).
+using Affine = Rectifier::Affine;
+
+template <class T, int C>
+inline void sample_affine_scalar(const ImageView& src, const Affine& a, std::uint8_t* out, int n) {
+  std::int32_t x = a.ax, y = a.ay;
+  for (int i = 0; i < n; ++i, x += a.sx, y += a.sy) sample_pixel<T, C>(src, x, y, out + i * C * sizeof(T));
+}
+
+// Row samplers for one pixel format: positions given per pixel, or affine along a cell.
+struct Samplers {
+  void (*row)(const ImageView&, const std::int32_t*, const std::int32_t*, std::uint8_t*, int);
+  void (*affine)(const ImageView&, const Affine&, std::uint8_t*, int);
+};
+
+// The AVX2 kernels when `simd` and the build has them, else the scalar reference.
+Samplers pick_samplers(PixelFormat f, bool simd);
+bool cpu_has_avx2();
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define RSD_HAVE_AVX2_KERNELS 1
+// The AVX2 kernels for a format (bilinear_sampling_avx2.cpp).
+Samplers avx2_samplers(PixelFormat f);
+#endif
+
+}  // namespace rsd::dsp::rectify_detail
