@@ -22,6 +22,7 @@
 
 #include "tools/common/cli_util.hpp"
 #include "dsp/analysis/paper_experiment.hpp"
+#include "tools/report/plot_page.hpp"
 
 using namespace rsd::dsp;
 using namespace rsd::tools;
@@ -210,18 +211,9 @@ double column_max(const std::vector<CellResult>& results, const Measure& m) {
 }
 
 void open_page(const std::string& file) {
-  plsdev(file.ends_with(".svg") ? "svgcairo" : "pngcairo");
-  plsfnam(file.c_str());
-  plspage(0, 0, 1500, 1500, 0, 0);
-  plscol0(kWhite, 255, 255, 255);
-  plscol0(kBlack, 0, 0, 0);
-  plscol0(kBlue, 0, 70, 230);
-  plscol0(kRed, 220, 20, 20);
-  plscol0(kLightGrey, 210, 210, 210);
-  plscol0(kGrey, 90, 90, 90);
-  plinit();
-  plfont(1);
-  pladv(0);
+  open_plot_page(file, 1500, 1500,
+                 {{kWhite, 255, 255, 255}, {kBlack, 0, 0, 0}, {kBlue, 0, 70, 230}, {kRed, 220, 20, 20},
+                  {kLightGrey, 210, 210, 210}, {kGrey, 90, 90, 90}});
 }
 
 // Panel (row, col) of the 4 x 3 grid in normalised page coordinates; row 0 on top.

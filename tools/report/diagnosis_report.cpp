@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "tools/common/cli_util.hpp"
+#include "tools/report/plot_page.hpp"
 
 namespace rsd::tools {
 
@@ -171,20 +172,9 @@ struct Figures {
 };
 
 void open_page(const std::string& file, int w, int h) {
-  plsdev("pngcairo");
-  plsfnam(file.c_str());
-  plspage(0, 0, w, h, 0, 0);
-  plscol0(kWhite, 255, 255, 255);
-  plscol0(kBlack, 0, 0, 0);
-  plscol0(kLightBlue, 140, 170, 240);
-  plscol0(kLightRed, 245, 160, 150);
-  plscol0(kBlue, 0, 50, 200);
-  plscol0(kRed, 200, 20, 20);
-  plscol0(kLightGrey, 215, 215, 215);
-  plscol0(kGrey, 100, 100, 100);
-  plinit();
-  plfont(1);
-  pladv(0);
+  open_plot_page(file, w, h,
+                 {{kWhite, 255, 255, 255}, {kBlack, 0, 0, 0}, {kLightBlue, 140, 170, 240}, {kLightRed, 245, 160, 150},
+                  {kBlue, 0, 50, 200}, {kRed, 200, 20, 20}, {kLightGrey, 215, 215, 215}, {kGrey, 100, 100, 100}});
 }
 
 struct Bins {

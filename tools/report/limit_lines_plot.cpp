@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "tools/common/cli_util.hpp"
+#include "tools/report/plot_page.hpp"
 
 namespace rsd::tools {
 namespace {
@@ -109,22 +110,9 @@ Curve exact_curve(const LimitLinesInput& in, const RowTiming& t, double x_max) {
 }
 
 void open_page(const std::string& file) {
-  const bool svg = file.ends_with(".svg");
-  plsdev(svg ? "svgcairo" : "pngcairo");
-  plsfnam(file.c_str());
-  plspage(0, 0, 1600, 900, 0, 0);  // pixels (PNG) or points (SVG): the same layout
-  plscol0(kWhite, 255, 255, 255);
-  plscol0(kBlack, 0, 0, 0);
-  plscol0(kBlue, 0, 70, 230);
-  plscol0(kGreen, 0, 150, 40);
-  plscol0(kRed, 220, 20, 20);
-  plscol0(kLightGrey, 200, 200, 200);
-  plscol0(kGrey, 90, 90, 90);
-  plscol0(kPurple, 150, 0, 170);
-  plinit();
-  plfont(1);
-  plschr(0, 1.0);
-  pladv(0);
+  open_plot_page(file, 1600, 900,
+                 {{kWhite, 255, 255, 255}, {kBlack, 0, 0, 0}, {kBlue, 0, 70, 230}, {kGreen, 0, 150, 40}, {kRed, 220, 20, 20},
+                  {kLightGrey, 200, 200, 200}, {kGrey, 90, 90, 90}, {kPurple, 150, 0, 170}});
 }
 
 // Title and subtitle centred over the whole width (plot and legend).
