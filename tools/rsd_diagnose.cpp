@@ -36,7 +36,7 @@ constexpr const char* kDescription =
 
 struct Options {
   std::string dir, json, report;
-  int heldout_every = 5;
+  int heldout_every = kHeldoutEvery;
 };
 
 std::string effect_json(const NamedEffect& e) {
@@ -91,7 +91,7 @@ int run(int argc, char** argv) {
   DiagnosisOptions opt;
   opt.heldout_every = o.heldout_every;
   const auto t0 = std::chrono::steady_clock::now();
-  const Diagnosis d = diagnose(rec, opt);
+  const Diagnosis d = diagnose(model, opt);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << "rsd-diagnose: diagnosed in " << format_number(secs, 3) << " s\n";
   write_file(o.json, diagnosis_json(d));

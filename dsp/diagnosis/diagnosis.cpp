@@ -62,7 +62,7 @@ NamedEffect describe(const SelectedEffect& st, const ModelParams& p, const Nomin
 // Fitting and held-out observations: whole frames are held out, every n-th in time order.
 void split(const DiagnosisModel& m, int every, std::vector<int>& fit, std::vector<int>& held) {
   for (int i = 0; i < m.size(); ++i)
-    (every > 1 && m.frame_rank(i) % every == every - 1 ? held : fit).push_back(i);
+    (held_out(m, i, every) ? held : fit).push_back(i);
 }
 
 // Without a stated noise: the robust scale once every applicable continuous effect is fitted
@@ -118,8 +118,10 @@ std::vector<int> usable(const DiagnosisModel& m, const ModelParams& p, const std
 
 }  // namespace
 
-Diagnosis diagnose(const Recording& rec, const DiagnosisOptions& opt) {
-  const DiagnosisModel m(rec);
+Diagnosis diagnose(const Recording& rec, const DiagnosisOptions& opt) { return diagnose(DiagnosisModel(rec), opt); }
+
+Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
+  const Recording& rec = m.recording();
   Diagnosis d;
   std::vector<int> all(m.size()), fit, held;
   for (int i = 0; i < m.size(); ++i) all[i] = i;
@@ -147,6 +149,7 @@ Diagnosis diagnose(const Recording& rec, const DiagnosisOptions& opt) {
   d.heldout_observations = static_cast<int>(use_held.size());
   d.heldout_baseline_rms_px = robust_stats(m.residuals(nominal, use_held)).rms_px;
   d.heldout_final_rms_px = robust_stats(m.residuals(sel.params, use_held)).rms_px;
+  d.uncertainties = effect_uncertainties(m, d.effects, d.fitted, d.heldout_indices, opt.heldout_every);
   return d;
 }
 

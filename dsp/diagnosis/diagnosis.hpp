@@ -9,36 +9,14 @@
 #include <string>
 #include <vector>
 
-#include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/fit.hpp"
+#include "dsp/diagnosis/locate.hpp"
 #include "dsp/diagnosis/model.hpp"
+#include "dsp/diagnosis/named_effect.hpp"
+#include "dsp/diagnosis/robust_stats.hpp"
+#include "dsp/diagnosis/uncertainty.hpp"
 
 namespace rsd::dsp {
-
-// Where the residual lives: `strength` is the share (0..1) of the inlier residual energy a
-// signal's pattern explains. Signals: image_velocity, row, radius, image_scale, time_trend,
-// time, angular_rate (gyro recordings), depth (trajectory recordings); see
-// dsp/diagnosis/locate.cpp. Uses at most 3000 of `idx`.
-struct Located {
-  std::string signal;
-  double strength;
-  std::string detail;
-};
-std::vector<Located> locate(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx);
-
-struct EffectParam {
-  std::string name;
-  double value = 0;
-  std::string text;  // non-empty for a non-numeric value (readout direction)
-};
-struct NamedEffect {
-  std::string name;  // the spec's effect name
-  std::vector<EffectParam> params;
-  std::string explains;
-  double rms_px = 0;    // fitting-set RMS once this effect (and those before it) is in
-  double bic_drop = 0;  // how much BIC fell when it was added
-  double heldout_drop = 0;  // how much the held-out robust chi-square fell when it was added
-};
 
 struct Diagnosis {
   RobustStats baseline;
@@ -59,15 +37,18 @@ struct Diagnosis {
   std::vector<int> heldout_indices;    // observations (DiagnosisModel order) left out of the fit
   std::vector<std::string> candidates;  // the effects considered for this recording's kinds
   ModelParams gross;                    // where the global search put offset and focal length
+  std::vector<ParamUncertainty> uncertainties;  // of every named effect's parameters, in order
 };
 
 struct DiagnosisOptions {
-  int heldout_every = 5;          // every n-th frame is held out of the fit (0: none)
+  int heldout_every = kHeldoutEvery;  // every n-th frame is held out of the fit (0: none)
   double min_bic_drop = 10;       // "very strong" evidence on the usual BIC scale
   int max_iterations = 30;        // final fits
   int screen_observations = 5000;  // candidates are fitted on this many fitting observations
 };
 
+Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt = {});
+// The same on a recording's own model.
 Diagnosis diagnose(const Recording& rec, const DiagnosisOptions& opt = {});
 
 }  // namespace rsd::dsp

@@ -13,7 +13,8 @@
 #include <sstream>
 
 #include "dsp/core/statistics.hpp"
-#include "dsp/diagnosis/diagnosis.hpp"
+#include "dsp/diagnosis/locate.hpp"
+#include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/fit.hpp"
 
 namespace rsd::dsp {

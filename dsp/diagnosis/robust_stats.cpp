@@ -40,4 +40,11 @@ RobustStats robust_stats(const std::vector<Eigen::Vector2d>& residuals) {
   return s;
 }
 
+std::vector<bool> inliers(const std::vector<Eigen::Vector2d>& r) {
+  const RobustStats s = robust_stats(r);
+  std::vector<bool> in(r.size());
+  for (size_t k = 0; k < r.size(); ++k) in[k] = r[k].allFinite() && r[k].norm() <= kOutlierSigmas * s.scale_px;
+  return in;
+}
+
 }  // namespace rsd::dsp

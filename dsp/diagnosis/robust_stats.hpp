@@ -19,4 +19,7 @@ struct RobustStats {
 constexpr double kOutlierSigmas = 5.0;
 RobustStats robust_stats(const std::vector<Eigen::Vector2d>& residuals);
 
+// The inlier rule every layer uses: finite and within kOutlierSigmas robust scales.
+std::vector<bool> inliers(const std::vector<Eigen::Vector2d>& residuals);
+
 }  // namespace rsd::dsp

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "dsp/diagnosis/diagnosis.hpp"
+#include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/fit.hpp"
 
 namespace rsd::dsp {

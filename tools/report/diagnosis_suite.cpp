@@ -18,7 +18,6 @@ using namespace rsd::dsp;
 
 namespace {
 
-constexpr int kHeldoutEvery = 5;  // diagnose()'s default split, which the floor must share
 
 const char* kind_name(ObservationKind k) { return to_string(k); }
 
@@ -342,7 +341,7 @@ std::optional<ModelParams> true_params(const SimulatedRecording& sim) {
 }
 
 void run_checks(CaseResult& r, const DiagnosisModel& m, const SimulatedRecording& sim, const Diagnosis& d) {
-  const std::vector<ParamUncertainty> u = effect_uncertainties(m, d, kHeldoutEvery);
+  const std::vector<ParamUncertainty>& u = d.uncertainties;
   for (auto& c : r.checks) {
     const double shift = c.shift_sigmas;
     c = check_effect(c.effect, sim.truth, sim.rec.nominal, d, u);
@@ -393,10 +392,10 @@ CaseResult run_case(const SuiteCase& c, double duration_s, const std::string& re
     r.combined_shift_sigmas = c.effects.empty() ? 0 : shift_rms(cfg) / base.noise_px;
     const SimulatedRecording sim = simulate_recording(cfg);
     const auto t0 = std::chrono::steady_clock::now();
-    const Diagnosis d = diagnose(sim.rec);
+    const DiagnosisModel m(sim.rec);
+    const Diagnosis d = diagnose(m);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     r.observations = d.baseline.observations;
-    const DiagnosisModel m(sim.rec);
     run_checks(r, m, sim, d);
     if (!report_dir.empty())
       write_report(report_dir, {std::string("simulated: ") + kind_name(c.kind) + " / " + c.name(), &m, &d,

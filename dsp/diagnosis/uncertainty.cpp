@@ -1,0 +1,136 @@
+#include "dsp/diagnosis/uncertainty.hpp"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "dsp/diagnosis/robust_stats.hpp"
+
+namespace rsd::dsp {
+
+std::optional<Param> param_by_name(const std::string& name) {
+  for (int k = 0; k < kParamCount; ++k)
+    if (name == param_name(Param(k))) return Param(k);
+  return std::nullopt;
+}
+
+bool held_out(const DiagnosisModel& m, int i, int every) {
+  return every > 1 && m.frame_rank(i) % every == every - 1;
+}
+
+namespace {
+
+// The fitting-set observations that are inliers at the fit, with their residuals.
+struct FitInliers {
+  std::vector<int> idx;
+  std::vector<Eigen::Vector2d> r;
+};
+
+FitInliers fit_inliers(const DiagnosisModel& m, const ModelParams& fitted, const std::vector<int>& heldout,
+                       int heldout_every) {
+  // The fitting set: everything diagnose() did not hold out.
+  std::vector<bool> held(m.size(), false);
+  for (int i = 0; i < m.size(); ++i) held[i] = held_out(m, i, heldout_every);
+  if (!heldout.empty()) {
+    std::fill(held.begin(), held.end(), false);
+    for (int i : heldout) held[i] = true;
+  }
+  std::vector<int> idx;
+  for (int i = 0; i < m.size(); ++i)
+    if (!held[i]) idx.push_back(i);
+  const auto r0 = m.residuals(fitted, idx);
+  const std::vector<bool> in = inliers(r0);
+  FitInliers out;
+  for (size_t k = 0; k < idx.size(); ++k)
+    if (in[k]) out.idx.push_back(idx[k]), out.r.push_back(r0[k]);
+  return out;
+}
+
+// d residual / d parameter (px per unit), two rows per observation, by central differences of
+// a hundredth of the parameter's typical change: well above the rolling-shutter root-finder's
+// tolerance, well inside the linear range. A failed prediction contributes nothing.
+Eigen::MatrixXd jacobian(const DiagnosisModel& m, const ModelParams& at, const std::vector<Param>& free,
+                         const std::vector<int>& idx) {
+  Eigen::MatrixXd J(2 * idx.size(), free.size());
+  for (size_t j = 0; j < free.size(); ++j) {
+    const double h = 1e-2 * param_scale(free[j], m.recording().nominal);
+    ModelParams hi = at, lo = at;
+    hi[free[j]] += h, lo[free[j]] -= h;
+    const auto rh = m.residuals(hi, idx), rl = m.residuals(lo, idx);
+    for (size_t k = 0; k < idx.size(); ++k) {
+      const Eigen::Vector2d g = (rh[k] - rl[k]) / (2 * h);
+      J.block<2, 1>(2 * k, j) = g.allFinite() ? g : Eigen::Vector2d::Zero();
+    }
+  }
+  return J;
+}
+
+// Per-parameter variances: the larger of the classic s^2 (J^T J)^-1 and the sandwich estimate
+// clustered by frame. Errors shared by a frame's observations (a matches recording's gyro
+// noise and stamp jitter move all of a frame pair's matches together) make the classic
+// estimate optimistic; the sandwich over per-frame score sums sees them. Empty if singular.
+std::optional<Eigen::VectorXd> variances(const DiagnosisModel& m, const Eigen::MatrixXd& J, const FitInliers& f) {
+  const Eigen::Index n = J.cols();
+  if (n == 0 || J.rows() <= n) return std::nullopt;
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(J.transpose() * J);
+  if (!lu.isInvertible()) return std::nullopt;
+  const Eigen::MatrixXd B = lu.inverse();
+  double sum2 = 0;
+  for (const auto& r : f.r) sum2 += r.squaredNorm();
+  const double s2 = sum2 / (2.0 * f.r.size());  // per-coordinate residual variance
+  Eigen::VectorXd v = s2 * B.diagonal();
+  std::map<int, Eigen::VectorXd> score;
+  for (size_t k = 0; k < f.idx.size(); ++k) {
+    auto it = score.try_emplace(m.frame_rank(f.idx[k]), Eigen::VectorXd::Zero(n)).first;
+    it->second += J.middleRows(2 * k, 2).transpose() * f.r[k];
+  }
+  const double g = static_cast<double>(score.size());
+  if (g >= 20) {  // fewer clusters make the sandwich itself too noisy
+    Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(n, n);
+    for (const auto& [rank, sc] : score) meat += sc * sc.transpose();
+    v = v.cwiseMax((g / (g - 1) * B * meat * B).diagonal());
+  }
+  return v;
+}
+
+}  // namespace
+
+std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, const std::vector<NamedEffect>& effects,
+                                                   const ModelParams& fitted, const std::vector<int>& heldout,
+                                                   int heldout_every) {
+  // Every continuous parameter of every named effect is free at once.
+  std::vector<Param> free;
+  for (const NamedEffect& e : effects)
+    for (const EffectParam& p : e.params)
+      if (const auto k = param_by_name(p.name); k && p.text.empty() &&
+                                                 std::find(free.begin(), free.end(), *k) == free.end())
+        free.push_back(*k);
+  std::optional<Eigen::VectorXd> var;
+  if (!free.empty()) {
+    const FitInliers f = fit_inliers(m, fitted, heldout, heldout_every);
+    var = variances(m, jacobian(m, fitted, free, f.idx), f);
+  }
+  auto sigma_of = [&](Param p) -> std::optional<double> {
+    const auto it = std::find(free.begin(), free.end(), p);
+    if (!var || it == free.end()) return std::nullopt;
+    const double v = (*var)[it - free.begin()];
+    return v >= 0 ? std::optional<double>(std::sqrt(v)) : std::nullopt;
+  };
+
+  std::vector<ParamUncertainty> out;
+  const int height = m.recording().nominal.cam.height;
+  for (const NamedEffect& e : effects)
+    for (const EffectParam& p : e.params) {
+      ParamUncertainty u{e.name, p.name, p.value, p.text, std::nullopt};
+      if (p.text.empty()) {
+        if (const auto k = param_by_name(p.name)) u.sigma = sigma_of(*k);
+        else if (p.name == "frame_readout_s")
+          if (const auto sl = sigma_of(Param::LineDelay)) u.sigma = *sl * height;
+      }
+      out.push_back(u);
+    }
+  return out;
+}
+
+}  // namespace rsd::dsp

@@ -1,0 +1,44 @@
+// What the diagnosis knows about its own numbers: the held-out split, and the uncertainty of
+// every named effect's parameters at the fit.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dsp/diagnosis/model.hpp"
+#include "dsp/diagnosis/named_effect.hpp"
+
+namespace rsd::dsp {
+
+// Every n-th frame in time order is held out of the fit (0 or 1: none).
+inline constexpr int kHeldoutEvery = 5;
+
+// One fitted parameter of a named effect with its 1-sigma uncertainty (nullopt when it has
+// none: the discrete readout direction, or a parameter the model does not expose).
+struct ParamUncertainty {
+  std::string effect, param;
+  double value = 0;
+  std::string text;  // non-numeric value (direction)
+  std::optional<double> sigma;
+};
+
+// Whether observation i is in the held-out set: its frame is every n-th in time order.
+bool held_out(const DiagnosisModel& m, int i, int heldout_every);
+
+// Uncertainties of every named effect's parameters at the fit: numeric Jacobian (central
+// differences) of the fitting-set inlier residuals with respect to all named effects'
+// continuous parameters at once (so correlations between effects widen them); per parameter
+// the larger of the classic s^2 (J^T J)^-1 (s the per-coordinate RMS of those residuals) and
+// the sandwich estimate with residuals clustered by frame (errors a frame shares: gyro noise,
+// stamp jitter). Derived parameters (frame_readout_s = line_delay_s x height) are propagated.
+// `heldout`: the observations left out of the fit (empty: those of held_out()).
+std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, const std::vector<NamedEffect>& effects,
+                                                   const ModelParams& fitted, const std::vector<int>& heldout,
+                                                   int heldout_every);
+
+// The ModelParams index of a spec parameter name ("line_delay_s", "k1", "x", ...), if the
+// diagnosis model has one by that name.
+std::optional<Param> param_by_name(const std::string& name);
+
+}  // namespace rsd::dsp
