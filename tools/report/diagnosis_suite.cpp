@@ -18,8 +18,6 @@ using namespace rsd::dsp;
 
 namespace {
 
-
-
 bool applies(const std::string& effect, ObservationKind k) {
   if (effect == "gyro_bias") return k == ObservationKind::Matches;
   if (effect == "lever_arm") return k == ObservationKind::Landmarks;
