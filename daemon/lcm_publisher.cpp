@@ -11,7 +11,7 @@ namespace rsd::daemon {
 
 namespace {
 
-const char* const kMetaKeys[] = {"frame_utime", "line_delay_ns", "readout", "exposure_ns", "sequence", "rectified"};
+constexpr std::initializer_list<const char*> kMetaKeys = {"frame_utime", "line_delay_ns", "readout", "exposure_ns", "sequence", "rectified"};
 constexpr size_t kMetaValueCapacity = 32;
 
 }  // namespace
@@ -20,18 +20,7 @@ LcmPublisher::LcmPublisher(const std::string& url, Channels channels, const driv
     : lcm_(lcm_create(url.c_str())), ch_(std::move(channels)) {
   if (!lcm_) throw std::runtime_error("lcm: cannot open '" + url + "' (use memq:// or file:///path.lcmlog?mode=w)");
   // Everything sized once, for the largest message we will send.
-  image_.width = fmt.width;
-  image_.height = fmt.height;
-  image_.row_stride = fmt.width * dsp::bytes_per_pixel(fmt.format);
-  image_.pixelformat = formats::fourcc(fmt.format);
-  image_.size = static_cast<int32_t>(fmt.bytes());
-  image_.data.resize(fmt.bytes());
-  image_.nmetadata = static_cast<int32_t>(std::size(kMetaKeys));
-  image_.metadata.resize(std::size(kMetaKeys));
-  for (size_t i = 0; i < std::size(kMetaKeys); ++i) {
-    image_.metadata[i].key = kMetaKeys[i];
-    image_.metadata[i].value.reserve(kMetaValueCapacity);
-  }
+  formats::preallocate(image_, fmt, kMetaKeys, kMetaValueCapacity);
   info_.unrectified_reason.reserve(128);
   health_.source.reserve(64);
   health_.source_state.reserve(64);

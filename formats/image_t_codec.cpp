@@ -15,7 +15,7 @@ int32_t be32s(const uint8_t* p) {
                               static_cast<uint32_t>(p[2]) << 8 | p[3]);
 }
 
-const char* const kKeys[] = {"frame_utime", "line_delay_ns", "readout", "exposure_ns", "sequence", "rectified",
+constexpr std::initializer_list<const char*> kKeys = {"frame_utime", "line_delay_ns", "readout", "exposure_ns", "sequence", "rectified",
                              "frame_ns",    "exposure_s",    "timing",  "intrinsics"};
 constexpr size_t kValueCapacity = 256;
 
@@ -150,6 +150,22 @@ DecodeStatus decode_frame(const uint8_t* data, size_t n, bot_core::image_t& img,
   return st;
 }
 
+void preallocate(bot_core::image_t& img, const FrameFormat& fmt, std::initializer_list<const char*> keys, size_t capacity) {
+  img.width = fmt.width;
+  img.height = fmt.height;
+  img.row_stride = static_cast<int32_t>(fmt.width * dsp::bytes_per_pixel(fmt.format));
+  img.pixelformat = fourcc(fmt.format);
+  img.size = static_cast<int32_t>(fmt.bytes());
+  img.data.resize(fmt.bytes());
+  img.nmetadata = static_cast<int32_t>(keys.size());
+  img.metadata.resize(keys.size());
+  size_t i = 0;
+  for (const char* k : keys) {
+    img.metadata[i].key = k;
+    img.metadata[i++].value.reserve(capacity);
+  }
+}
+
 void copy_pixels(const bot_core::image_t& img, const dsp::ImageView& dst) {
   const size_t row = static_cast<size_t>(dst.width) * dsp::bytes_per_pixel(dst.format);
   for (int y = 0; y < dst.height; ++y) std::memcpy(dst.row(y), img.data.data() + static_cast<size_t>(y) * img.row_stride, row);
@@ -167,18 +183,7 @@ dsp::RowTiming row_timing(const RecordedFrame& f, double fallback_fps) {
 RawFrameEncoder::RawFrameEncoder(const FrameFormat& fmt, const dsp::RowTiming& timing,
                                  const std::optional<dsp::CameraModel>& camera)
     : timing_(timing) {
-  msg_.width = fmt.width;
-  msg_.height = fmt.height;
-  msg_.row_stride = static_cast<int32_t>(fmt.width * dsp::bytes_per_pixel(fmt.format));
-  msg_.pixelformat = fourcc(fmt.format);
-  msg_.size = static_cast<int32_t>(fmt.bytes());
-  msg_.data.resize(fmt.bytes());
-  msg_.nmetadata = static_cast<int32_t>(std::size(kKeys));
-  msg_.metadata.resize(std::size(kKeys));
-  for (size_t i = 0; i < std::size(kKeys); ++i) {
-    msg_.metadata[i].key = kKeys[i];
-    msg_.metadata[i].value.reserve(kValueCapacity);
-  }
+  preallocate(msg_, fmt, kKeys, kValueCapacity);
   char text[kValueCapacity];
   set(2, dsp::to_string(timing.readout).data());
   set(5, "0");

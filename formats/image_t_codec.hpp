@@ -17,6 +17,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <initializer_list>
 #include <optional>
 #include <string>
 #include <vector>
@@ -97,6 +98,10 @@ bool parse_frame(const bot_core::image_t& img, RecordedFrame& out, std::string& 
 // count as Undecodable. `img` is reused between calls (no allocation once large enough).
 // The timestamp rule is parse_frame's: frame_ns, else frame_utime, else the message's utime.
 DecodeStatus decode_frame(const uint8_t* data, size_t n, bot_core::image_t& img, RecordedFrame& out, std::string& why);
+
+// Sizes a message once for frames of `fmt`, with metadata slots named `keys` whose values
+// have room for `capacity` bytes: filling and encoding it per frame then allocates nothing.
+void preallocate(bot_core::image_t& img, const FrameFormat& fmt, std::initializer_list<const char*> keys, size_t capacity);
 
 // Copies the pixels into dst (same size and format as the frame).
 void copy_pixels(const bot_core::image_t& img, const dsp::ImageView& dst);
