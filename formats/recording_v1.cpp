@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "formats/intrinsics_file.hpp"
-#include "formats/timing_section.hpp"
+#include "formats/nominal_sections.hpp"
 #include "formats/yaml_map.hpp"
 
 namespace rsd::formats {
@@ -202,11 +202,7 @@ void read_motion(YamlMap m, Recording& r, std::string& file) {
   r.motion = one_of(m, "kind", {"trajectory", "gyro"}) == "trajectory" ? dsp::MotionKind::Trajectory : dsp::MotionKind::Gyro;
   require(m, {"file"});
   file = m.text("file", "");
-  if (m.has("imu_to_camera")) r.nominal.imu_to_camera = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(m.numbers("imu_to_camera", 9).data());
-  if (m.has("lever_arm_m")) {
-    const auto l = m.numbers("lever_arm_m", 3);
-    r.nominal.lever_arm = Eigen::Vector3d(l[0], l[1], l[2]);
-  }
+  read_motion_extrinsics(m, r.nominal);
 }
 
 struct Files {

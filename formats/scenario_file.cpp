@@ -3,7 +3,7 @@
 #include <filesystem>
 
 #include "formats/intrinsics_file.hpp"
-#include "formats/timing_section.hpp"
+#include "formats/nominal_sections.hpp"
 #include "formats/recording_v1.hpp"
 #include "formats/yaml_map.hpp"
 

@@ -29,7 +29,7 @@
 #include "tools/common/frame_sources.hpp"
 #include "formats/recording_v1.hpp"
 #include "formats/target_spec.hpp"
-#include "formats/timing_section.hpp"
+#include "formats/nominal_sections.hpp"
 #include "dsp/features/target_observations.hpp"
 
 namespace formats = rsd::formats;
@@ -103,11 +103,8 @@ void read_nominal_file(const std::string& file, Nominal& n, bool& line_delay_giv
   }
   if (root.has("motion")) {
     formats::YamlMap m = root.map("motion");
-    if (m.has("imu_to_camera")) n.imu_to_camera = rotation(m.numbers("imu_to_camera", 9), file + ": motion.imu_to_camera");
-    if (m.has("lever_arm_m")) {
-      const auto l = m.numbers("lever_arm_m", 3);
-      n.model.lever_arm = Eigen::Vector3d(l[0], l[1], l[2]);
-    }
+    formats::read_motion_extrinsics(m, n.model);
+    if (m.has("imu_to_camera")) n.imu_to_camera = n.model.imu_to_camera;
     m.text("kind", ""), m.text("file", "");  // a recording.yaml's own files: not ours to follow
     m.finish();
   }

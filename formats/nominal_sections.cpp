@@ -1,4 +1,6 @@
-#include "formats/timing_section.hpp"
+#include "formats/nominal_sections.hpp"
+
+#include <Eigen/LU>
 
 namespace rsd::formats {
 
@@ -12,6 +14,20 @@ void read_timing_section(YamlMap t, dsp::NominalModel& n) {
   n.time.time_offset_s = t.number("time_offset_s", n.time.time_offset_s);
   n.time.drift_ppm = t.number("drift_ppm", n.time.drift_ppm);
   t.finish();
+}
+
+void read_motion_extrinsics(YamlMap& m, dsp::NominalModel& n) {
+  if (m.has("imu_to_camera")) {
+    const auto r = m.numbers("imu_to_camera", 9);
+    const Eigen::Matrix3d R = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(r.data());
+    if ((R * R.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-6 || R.determinant() < 0)
+      m.fail("imu_to_camera", "is not a rotation matrix (row-major, orthonormal, determinant +1)");
+    n.imu_to_camera = R;
+  }
+  if (m.has("lever_arm_m")) {
+    const auto l = m.numbers("lever_arm_m", 3);
+    n.lever_arm = Eigen::Vector3d(l[0], l[1], l[2]);
+  }
 }
 
 }  // namespace rsd::formats
