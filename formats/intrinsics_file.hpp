@@ -34,6 +34,11 @@ struct Intrinsics {
 // are all zero; camera_matrix without skew. Unknown top-level keys are refused.
 Intrinsics load_intrinsics(const std::string& file, const std::string& camera = "");
 
+// One camera of a Kalibr camchain (camera_model pinhole; intrinsics; distortion_model radtan or
+// none, distortion_coeffs; resolution): the intrinsics load_intrinsics and the calibration
+// reader (formats/calibration_v1.hpp) both take from a Kalibr file.
+dsp::CameraModel read_kalibr_camera(YamlMap& cam);
+
 // A `camera:` mapping {width, height, fx, fy, cx, cy, distortion: [k1, k2, p1, p2]} read
 // strictly over `defaults` (fy defaults to fx, cx and cy to the image centre).
 dsp::CameraModel read_camera_section(YamlMap m, const dsp::CameraModel& defaults);

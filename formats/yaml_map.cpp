@@ -86,6 +86,29 @@ std::vector<double> YamlMap::numbers(const std::string& key, size_t count) {
     fail(key, "must be a list of " + std::to_string(count) + " numbers");
   }
   if (v.size() != count) fail(key, "must have " + std::to_string(count) + " numbers, has " + std::to_string(v.size()));
+  for (double x : v)
+    if (!std::isfinite(x)) fail(key, "must hold finite numbers");
+  return v;
+}
+
+std::vector<double> YamlMap::matrix(const std::string& key, size_t rows, size_t cols) {
+  const YAML::Node n = child(key);
+  if (!n) fail(key, "is missing");
+  const std::string shape = "must be " + std::to_string(rows) + " rows of " + std::to_string(cols) + " numbers";
+  if (!n.IsSequence() || n.size() != rows) fail(key, shape);
+  std::vector<double> v;
+  for (const auto& row : n) {
+    std::vector<double> r;
+    try {
+      r = row.as<std::vector<double>>();
+    } catch (const YAML::Exception&) {
+      fail(key, shape);
+    }
+    if (r.size() != cols) fail(key, shape);
+    for (double x : r)
+      if (!std::isfinite(x)) fail(key, "must hold finite numbers");
+    v.insert(v.end(), r.begin(), r.end());
+  }
   return v;
 }
 

@@ -27,7 +27,9 @@ class YamlMap {
   int integer(const std::string& key, int fallback);
   bool boolean(const std::string& key, bool fallback);
   std::string text(const std::string& key, const std::string& fallback);
-  std::vector<double> numbers(const std::string& key, size_t n);  // required length n
+  std::vector<double> numbers(const std::string& key, size_t n);  // required length n, finite
+  // A list of `rows` lists of `cols` finite numbers, row-major (required).
+  std::vector<double> matrix(const std::string& key, size_t rows, size_t cols);
   YamlMap map(const std::string& key);  // nested mapping (required)
   std::vector<std::string> keys() const;
   const std::string& file() const { return file_; }

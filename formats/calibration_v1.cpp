@@ -1,0 +1,140 @@
+#include "formats/calibration_v1.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/LU>
+#include <cmath>
+#include <fstream>
+#include <stdexcept>
+
+#include "formats/config_section.hpp"
+#include "formats/intrinsics_file.hpp"
+#include "formats/yaml_map.hpp"
+
+namespace rsd::formats {
+
+namespace {
+
+constexpr const char* kFormat = "rsd-calibration/1";
+// The keys a sigma may be given for: the numeric keys of cam0 and cam0.rsd.
+const std::map<std::string, size_t> kSigmaKeys = {
+    {"intrinsics", 4}, {"distortion_coeffs", 4}, {"timeshift_cam_imu", 1}, {"line_delay_s", 1},
+    {"drift_ppm", 1},  {"gyro_bias_rad_s", 3},   {"gyro_scale", 3},        {"lever_arm_m", 3}};
+
+Eigen::Vector3d vec3(YamlMap& m, const char* key, const Eigen::Vector3d& fallback) {
+  if (!m.has(key)) return fallback;
+  const auto v = m.numbers(key, 3);
+  return {v[0], v[1], v[2]};
+}
+
+void read_t_cam_imu(YamlMap& cam, Calibration& c) {
+  if (!cam.has("T_cam_imu")) return;
+  const std::vector<double> t = cam.matrix("T_cam_imu", 4, 4);
+  const Eigen::Matrix<double, 4, 4, Eigen::RowMajor> T(t.data());
+  const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
+  if ((R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 || std::abs(R.determinant() - 1) > 1e-6)
+    cam.fail("T_cam_imu", "has a rotation part that is not a rotation (orthonormal, determinant +1, within 1e-6)");
+  if (T(3, 0) != 0 || T(3, 1) != 0 || T(3, 2) != 0 || T(3, 3) != 1) cam.fail("T_cam_imu", "must end with the row [0, 0, 0, 1]");
+  c.imu_to_camera = R;
+  c.imu_to_camera_t = T.topRightCorner<3, 1>();
+}
+
+void read_sigma(YamlMap s, Calibration& c) {
+  for (const std::string& k : s.keys()) {
+    const auto it = kSigmaKeys.find(k);
+    if (it == kSigmaKeys.end()) s.fail(k, "is not a key a sigma can be given for");
+    std::vector<double> v = it->second == 1 ? std::vector<double>{s.number(k)} : s.numbers(k, it->second);
+    for (double x : v)
+      if (!(x >= 0)) s.fail(k, "must not be negative");
+    c.sigma[k] = std::move(v);
+  }
+  s.finish();
+}
+
+void read_rsd(YamlMap r, Calibration& c) {
+  c.has_rsd_block = true;
+  if (!r.has("format")) r.fail("format", "is missing (rsd-calibration/1)");
+  const std::string format = r.text("format", "");
+  if (format != kFormat) r.fail("format", "is '" + format + "', expected " + kFormat);
+  c.line_delay_s = r.number("line_delay_s", c.line_delay_s);
+  if (c.line_delay_s < 0) r.fail("line_delay_s", "must not be negative (0: global shutter)");
+  if (r.has("readout") && !dsp::parse_readout(r.text("readout", ""), c.readout))
+    r.fail("readout", "must be top_to_bottom or bottom_to_top");
+  c.drift_ppm = r.number("drift_ppm", c.drift_ppm);
+  c.gyro_bias_rad_s = vec3(r, "gyro_bias_rad_s", c.gyro_bias_rad_s);
+  c.gyro_scale = vec3(r, "gyro_scale", c.gyro_scale);
+  if (!(c.gyro_scale.array() > 0).all()) r.fail("gyro_scale", "must be positive");
+  c.lever_arm_m = vec3(r, "lever_arm_m", c.lever_arm_m);
+  c.source = r.text("source", "");
+  if (r.has("sigma")) read_sigma(r.map("sigma"), c);
+  r.finish();  // unknown keys inside cam0.rsd are errors
+}
+
+// ---------------------------------------------------------------- writing
+
+YAML::Node number(double x) { return YAML::Node(config_number(x)); }
+
+YAML::Node flow(const double* v, int n) {
+  YAML::Node s(YAML::NodeType::Sequence);
+  for (int i = 0; i < n; ++i) s.push_back(number(v[i]));
+  s.SetStyle(YAML::EmitterStyle::Flow);
+  return s;
+}
+
+YAML::Node flow(const Eigen::Vector3d& v) { return flow(v.data(), 3); }
+
+}  // namespace
+
+Calibration read_calibration(const std::string& file) {
+  YamlMap root = YamlMap::load(file);
+  YamlMap cam = root.map("cam0");
+  Calibration c;
+  c.file = file;
+  c.cam = read_kalibr_camera(cam);
+  read_t_cam_imu(cam, c);
+  c.timeshift_cam_imu_s = cam.number("timeshift_cam_imu", 0.0);
+  if (cam.has("rsd")) read_rsd(cam.map("rsd"), c);
+  return c;
+}
+
+void require_resolution(const Calibration& c, int width, int height) {
+  if (c.cam.width != width || c.cam.height != height)
+    throw ConfigError(c.file + ": 'cam0.resolution' is [" + std::to_string(c.cam.width) + ", " + std::to_string(c.cam.height) +
+                      "], but the camera delivers " + std::to_string(width) + "x" + std::to_string(height));
+}
+
+void write_calibration(const std::string& file, const Calibration& c) {
+  YAML::Node cam;
+  cam["camera_model"] = "pinhole";
+  const double k[4] = {c.cam.fx, c.cam.fy, c.cam.cx, c.cam.cy};
+  cam["intrinsics"] = flow(k, 4);
+  cam["distortion_model"] = "radtan";
+  const double d[4] = {c.cam.dist.k1, c.cam.dist.k2, c.cam.dist.p1, c.cam.dist.p2};
+  cam["distortion_coeffs"] = flow(d, 4);
+  const double res[2] = {static_cast<double>(c.cam.width), static_cast<double>(c.cam.height)};
+  cam["resolution"] = flow(res, 2);
+  Eigen::Matrix<double, 4, 4, Eigen::RowMajor> T = Eigen::Matrix4d::Identity();
+  T.topLeftCorner<3, 3>() = c.imu_to_camera;
+  T.topRightCorner<3, 1>() = c.imu_to_camera_t;
+  for (int r = 0; r < 4; ++r) cam["T_cam_imu"].push_back(flow(T.row(r).data(), 4));
+  cam["timeshift_cam_imu"] = number(c.timeshift_cam_imu_s);
+  YAML::Node rsd;
+  rsd["format"] = kFormat;
+  rsd["line_delay_s"] = number(c.line_delay_s);
+  rsd["readout"] = std::string(dsp::to_string(c.readout));
+  rsd["drift_ppm"] = number(c.drift_ppm);
+  rsd["gyro_bias_rad_s"] = flow(c.gyro_bias_rad_s);
+  rsd["gyro_scale"] = flow(c.gyro_scale);
+  rsd["lever_arm_m"] = flow(c.lever_arm_m);
+  if (!c.source.empty()) rsd["source"] = c.source;
+  for (const auto& [key, v] : c.sigma) rsd["sigma"][key] = v.size() == 1 ? number(v[0]) : flow(v.data(), static_cast<int>(v.size()));
+  cam["rsd"] = rsd;
+  YAML::Node root;
+  root["cam0"] = cam;
+  std::ofstream out(file);
+  out << "# " << kFormat << " (docs/formats/calibration-v1.md): a Kalibr camchain-imucam file with rsd's additions\n"
+      << YAML::Dump(root) << "\n";
+  if (!out) throw std::runtime_error(file + ": cannot write the calibration");
+}
+
+}  // namespace rsd::formats
