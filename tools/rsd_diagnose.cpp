@@ -11,8 +11,10 @@
 #include <string>
 
 #include "tools/common/cli_util.hpp"
+#include "tools/report/diagnosis_calibration.hpp"
 #include "tools/report/diagnosis_report.hpp"
 #include "dsp/diagnosis/diagnosis.hpp"
+#include "formats/calibration_v1.hpp"
 #include "formats/recording_v1.hpp"
 
 namespace formats = rsd::formats;
@@ -30,12 +32,14 @@ constexpr const char* kDescription =
     "REPORT_DIR gets index.md (verdict, effects with 1-sigma uncertainties, held-out RMS\n"
     "before and after, located signals) and PNG figures of the residual against row, radius\n"
     "and time and over the image, before and after.\n\n"
-    "Example: rsd-diagnose rec/ --json diagnosis.json --report report/\n"
+    "--write-calibration CAL writes what the diagnosis found (the nominal model with every named\n"
+    "effect applied, with the fit's sigmas) as an rsd-calibration/1 file for rsd and the tools.\n\n"
+    "Example: rsd-diagnose rec/ --json diagnosis.json --report report/ --write-calibration cal.yaml\n"
     "Exit status: 0 on success (whatever the verdict), 2 on bad arguments, 1 on other errors\n"
     "(an unreadable recording is named by file:line:col).";
 
 struct Options {
-  std::string dir, json, report;
+  std::string dir, json, report, calibration;
   int heldout_every = kHeldoutEvery;
 };
 
@@ -79,10 +83,14 @@ int run(int argc, char** argv) {
   app.add_option("DIR", o.dir, "Recording directory (holds recording.yaml)")->required()->check(CLI::ExistingDirectory);
   app.add_option("--json", o.json, "Write the diagnosis JSON (rsd-diagnosis/1) here")->required();
   app.add_option("--report", o.report, "Write index.md into this directory (created if missing)");
+  app.add_option("--write-calibration", o.calibration,
+                 "Write the nominal model with every named effect applied as an rsd-calibration/1 file "
+                 "(docs/formats/calibration-v1.md), for rsd and the other tools");
   app.add_option("--heldout-every", o.heldout_every, "Hold out every n-th frame (0: none)")
       ->check(int_range(0, 1000))->capture_default_str();
   if (const auto rc = parse_command_line(app, argc, argv)) return *rc;
   require_writable(o.json, "--json");
+  if (!o.calibration.empty()) require_writable(o.calibration, "--write-calibration");
   std::cerr << "rsd-diagnose: reading " << o.dir << "\n";
   const Recording rec = formats::read_recording(o.dir);
   // The model is built first so that an unsupported recording fails before the long part.
@@ -95,6 +103,10 @@ int run(int argc, char** argv) {
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << "rsd-diagnose: diagnosed in " << format_number(secs, 3) << " s\n";
   write_file(o.json, diagnosis_json(d));
+  if (!o.calibration.empty()) {
+    formats::write_calibration(o.calibration, calibration_from(rec.nominal, d, "rsd-diagnose: " + o.dir + "/recording.yaml"));
+    std::cerr << "rsd-diagnose: wrote the calibration to " << o.calibration << "\n";
+  }
   if (!o.report.empty()) {
     std::cerr << "rsd-diagnose: writing the report to " << o.report << "\n";
     write_report(o.report, {o.dir, &model, &d, o.heldout_every, secs});

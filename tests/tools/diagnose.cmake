@@ -10,7 +10,8 @@ add_test(NAME cli_diagnose_e2e_simulate
          COMMAND rsd-sim recording ${PROJECT_SOURCE_DIR}/config/scenarios/suite/landmarks-small-rolling-shutter.yaml ${DIAG}/rec)
 set_tests_properties(cli_diagnose_e2e_simulate PROPERTIES FIXTURES_SETUP diagnose_e2e_rec LABELS e2e)
 rsd_cli_test(cli_diagnose_e2e_run STATUS 0 LABELS e2e MESSAGES "effects: rolling_shutter; final RMS 0."
-             COMMAND ${diagnose} ${DIAG}/rec --json ${DIAG}/diagnosis.json --report ${DIAG}/report)
+             COMMAND ${diagnose} ${DIAG}/rec --json ${DIAG}/diagnosis.json --report ${DIAG}/report
+                     --write-calibration ${DIAG}/calibration.yaml)
 set_tests_properties(cli_diagnose_e2e_run PROPERTIES FIXTURES_REQUIRED diagnose_e2e_rec FIXTURES_SETUP diagnose_e2e_out
                      TIMEOUT 120)
 add_test(NAME cli_diagnose_e2e_json
@@ -21,6 +22,12 @@ add_test(NAME cli_diagnose_e2e_report
          COMMAND sh -c "r=\"$0/report\"; grep -q 'Verdict: the nominal model does not fit' \"$r/index.md\" && grep -q '| `rolling_shutter` | `line_delay_s` | [0-9.e-]* | [0-9.e-]* | 0 |' \"$r/index.md\" || exit 1; for p in residual-vs-row residual-vs-radius residual-vs-time residual-map; do grep -q \"($p.png)\" \"$r/index.md\" && sh \"$1\" \"$r/$p.png\" 30000 || { echo \"bad $p.png\"; exit 1; }; done"
                  ${DIAG} ${CMAKE_CURRENT_SOURCE_DIR}/check_png.sh)
 set_tests_properties(cli_diagnose_e2e_report PROPERTIES FIXTURES_REQUIRED diagnose_e2e_out LABELS e2e)
+
+# The calibration it wrote: rsd-calibration/1, the line delay within 3% of 5e-5 s, with a sigma.
+add_test(NAME cli_diagnose_e2e_calibration
+         COMMAND sh -c "c=\"$0/calibration.yaml\"; cat \"$c\"; grep -q 'format: rsd-calibration/1' \"$c\" && grep -A2 '^    sigma:' \"$c\" | grep -q 'line_delay_s: [0-9]' && grep -m1 '^    line_delay_s:' \"$c\" | awk '{d = $2 + 0} END {exit !(d > 0.97 * 5e-5 && d < 1.03 * 5e-5)}'"
+                 ${DIAG})
+set_tests_properties(cli_diagnose_e2e_calibration PROPERTIES FIXTURES_REQUIRED diagnose_e2e_out LABELS e2e)
 
 file(MAKE_DIRECTORY ${CMAKE_BINARY_DIR}/diag-bad)
 file(WRITE ${CMAKE_BINARY_DIR}/diag-bad/recording.yaml "format: rsd-recording/1\ncamera: {width: abc}\n")

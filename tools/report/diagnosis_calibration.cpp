@@ -1,0 +1,55 @@
+#include "tools/report/diagnosis_calibration.hpp"
+
+#include <optional>
+
+namespace rsd::tools {
+
+namespace {
+
+std::optional<double> sigma_of(const dsp::Diagnosis& d, const std::string& param) {
+  for (const dsp::ParamUncertainty& u : d.uncertainties)
+    if (u.param == param && u.sigma) return u.sigma;
+  return std::nullopt;
+}
+
+// The sigma of a calibration key from the fit's parameters, if every element has one.
+void add_sigma(formats::Calibration& c, const dsp::Diagnosis& d, const std::string& key, std::initializer_list<const char*> params) {
+  std::vector<double> s;
+  for (const char* p : params) {
+    const auto v = sigma_of(d, p);
+    if (!v) return;
+    s.push_back(*v);
+  }
+  c.sigma[key] = s;
+}
+
+}  // namespace
+
+formats::Calibration calibration_from(const dsp::NominalModel& nominal, const dsp::Diagnosis& d, const std::string& source) {
+  using dsp::Param;
+  const dsp::ModelParams& p = d.fitted;  // full values: the nominal where no effect was named
+  formats::Calibration c;
+  c.cam = nominal.cam;
+  c.cam.fx = p[Param::Fx];
+  c.cam.fy = p[Param::Fy];
+  c.cam.dist.k1 = p[Param::K1];
+  c.cam.dist.k2 = p[Param::K2];
+  c.imu_to_camera = nominal.imu_to_camera;
+  c.timeshift_cam_imu_s = p[Param::TimeOffset];  // t_imu = t_cam + offset, as time_offset_s
+  c.line_delay_s = p[Param::LineDelay];
+  c.readout = p.flip_readout ? (nominal.time.readout == dsp::Readout::TopToBottom ? dsp::Readout::BottomToTop
+                                                                                 : dsp::Readout::TopToBottom)
+                             : nominal.time.readout;
+  c.drift_ppm = p[Param::Drift];
+  c.gyro_bias_rad_s = {p[Param::BiasX], p[Param::BiasY], p[Param::BiasZ]};
+  c.lever_arm_m = {p[Param::LeverX], p[Param::LeverY], p[Param::LeverZ]};
+  c.source = source;
+  add_sigma(c, d, "line_delay_s", {"line_delay_s"});
+  add_sigma(c, d, "timeshift_cam_imu", {"time_offset_s"});
+  add_sigma(c, d, "drift_ppm", {"drift_ppm"});
+  add_sigma(c, d, "gyro_bias_rad_s", {"bx", "by", "bz"});
+  add_sigma(c, d, "lever_arm_m", {"x", "y", "z"});
+  return c;
+}
+
+}  // namespace rsd::tools
