@@ -25,6 +25,7 @@
 #include "dsp/calib/led_calibration.hpp"
 #include "dsp/calib/led_capture_synthesis.hpp"
 #include "tools/common/frame_sources.hpp"
+#include "formats/calibration_v1.hpp"
 #include "formats/image_file.hpp"
 
 namespace formats = rsd::formats;
@@ -55,6 +56,7 @@ struct LedOptions {
   std::vector<std::string> inputs;
   std::string channel = "RSD_RAW";
   int live_frames = 60;
+  std::string write_calibration, calibration_in;
 };
 
 struct SynthOptions {
@@ -92,6 +94,13 @@ CLI::App* add_led_command(CLI::App& app, LedOptions& o) {
                 "warnings go to stderr");
   led->add_option("--channel", o.channel, "LCM log input: the image channel")->capture_default_str();
   led->add_option("--frames", o.live_frames, "Live input: frames to capture")->check(int_range(1, 100000))->capture_default_str();
+  led->add_option("--write-calibration", o.write_calibration,
+                  "Write the line delay (and the readout direction when the data show it) as an\n"
+                  "rsd-calibration/1 file (docs/formats/calibration-v1.md)");
+  led->add_option("--calibration", o.calibration_in,
+                  "With --write-calibration: the camera's calibration to copy, line delay replaced\n"
+                  "(without it the file's intrinsics are placeholders)")
+      ->check(CLI::ExistingFile);
   led->add_option("INPUT", o.inputs, "Image files or directories, an LCM log, or live:DRIVER:DEVICE")->required();
   return led;
 }
@@ -229,13 +238,36 @@ void print_json(const LedCalibrationResult& r) {
   for (const std::string& w : r.warnings) std::cerr << "rsd-calib: warning: " << w << "\n";
 }
 
+// The measured line delay into a calibration: a copy of the camera's (`in`, checked to be for
+// frames of this size), or one with placeholder intrinsics, said so in its source and on stderr.
+void write_led_calibration(const LedCalibrationResult& r, const LedOptions& o) {
+  formats::Calibration c;
+  if (!o.calibration_in.empty()) {
+    c = formats::read_calibration(o.calibration_in);
+    formats::require_resolution(c, r.width, r.rows);
+    c.source = "rsd-calib led (line delay) over " + o.calibration_in + (c.source.empty() ? "" : " (" + c.source + ")");
+  } else {
+    c.cam = CameraModel::from_hfov(r.width, r.rows, 60.0 * M_PI / 180.0);
+    c.source = "rsd-calib led (line delay); intrinsics are placeholders, not calibrated";
+    std::cerr << "rsd-calib: warning: " << o.write_calibration
+              << ": the intrinsics are placeholders (give --calibration with the camera's calibration to keep them)\n";
+  }
+  c.line_delay_s = r.line_delay_s;
+  if (r.readout) c.readout = *r.readout;
+  c.sigma["line_delay_s"] = {r.line_delay_sigma_s};
+  formats::write_calibration(o.write_calibration, c);
+}
+
 int run_led(const LedOptions& o) {
+  if (!o.calibration_in.empty() && o.write_calibration.empty()) throw UsageError("--calibration goes with --write-calibration");
+  if (!o.write_calibration.empty()) require_writable(o.write_calibration, "--write-calibration");
   const auto src = open_frame_source(o.inputs, {o.channel, o.live_frames});
   const LedCalibrationResult r = calibrate(*src, calibration_options(o));
   if (o.json)
     print_json(r);
   else
     print_text(r, o);
+  if (!o.write_calibration.empty()) write_led_calibration(r, o);
   return 0;
 }
 

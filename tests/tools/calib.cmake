@@ -54,3 +54,24 @@ rsd_cli_test(cli_led_bad_freq STATUS 2 MESSAGES "--freq: expected a positive num
              COMMAND ${calib} led --freq -5 ${PROJECT_SOURCE_DIR})
 rsd_cli_test(cli_led_missing_input STATUS 2 MESSAGES "INPUT: '${LED}/none' does not exist"
              COMMAND ${calib} led --freq 20 ${LED}/none)
+
+# --write-calibration: the line delay within 1% of 1/(240 x 7.5) s, with its sigma; into a copy
+# of the camera's calibration (intrinsics kept) when one is given, refused when its resolution
+# is not the frames'.
+file(WRITE ${CMAKE_BINARY_DIR}/led-camera.yaml
+"cam0:\n  camera_model: pinhole\n  intrinsics: [71, 72, 31.5, 119.5]\n  distortion_model: radtan\n  distortion_coeffs: [0.1, 0, 0, 0]\n  resolution: [64, 240]\n")
+file(WRITE ${CMAKE_BINARY_DIR}/led-other-camera.yaml
+"cam0:\n  camera_model: pinhole\n  intrinsics: [71, 72, 31.5, 119.5]\n  distortion_model: radtan\n  distortion_coeffs: [0, 0, 0, 0]\n  resolution: [640, 480]\n")
+rsd_cli_test(cli_led_write_calibration STATUS 0 MESSAGES "Line delay"
+             COMMAND ${calib} led --freq 20 --fps 7.5 ${LED}/d0 --write-calibration ${LED}/cal.yaml
+                     --calibration ${CMAKE_BINARY_DIR}/led-camera.yaml)
+set_tests_properties(cli_led_write_calibration PROPERTIES FIXTURES_REQUIRED led_d0 FIXTURES_SETUP led_cal)
+add_test(NAME cli_led_write_calibration_file
+         COMMAND sh -c "c=\"$0\"; cat \"$c\"; grep -q 'format: rsd-calibration/1' \"$c\" && grep -q 'intrinsics: \\[71, 72, 31.5, 119.5\\]' \"$c\" && grep -q 'distortion_coeffs: \\[0.1, 0, 0, 0\\]' \"$c\" && grep -A1 '^    sigma:' \"$c\" | grep -q 'line_delay_s: [0-9]' && grep -m1 '^    line_delay_s:' \"$c\" | awk '{d = $2 + 0} END {t = 1 / (240 * 7.5); exit !(d > 0.99 * t && d < 1.01 * t)}'"
+                 ${LED}/cal.yaml)
+set_tests_properties(cli_led_write_calibration_file PROPERTIES FIXTURES_REQUIRED led_cal LABELS cli)
+rsd_cli_test(cli_led_write_calibration_wrong_camera STATUS 1
+             MESSAGES "led-other-camera.yaml: 'cam0.resolution' is [640, 480], but the camera delivers 64x240"
+             COMMAND ${calib} led --freq 20 --fps 7.5 ${LED}/d0 --write-calibration ${LED}/cal-wrong.yaml
+                     --calibration ${CMAKE_BINARY_DIR}/led-other-camera.yaml)
+set_tests_properties(cli_led_write_calibration_wrong_camera PROPERTIES FIXTURES_REQUIRED led_d0)
