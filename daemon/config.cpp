@@ -84,6 +84,18 @@ void visit_config(formats::ConfigSection& c, Config& cfg) {
   c.section("lcm", [&](formats::ConfigSection& s) { visit_lcm(s, cfg); });
 }
 
+// The IMU part of a calibration: the velocity input's rotation, clock offset, bias and scale.
+void use_imu_calibration(Config& c, const formats::Calibration& cal) {
+  VelocityInputConfig& in = c.velocity_input;
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  if (in.imu_to_camera != I && cal.imu_to_camera != I && in.imu_to_camera != cal.imu_to_camera)
+    throw formats::ConfigError(cal.file + ": the calibration's T_cam_imu and velocity.imu_to_camera both rotate the IMU: keep one");
+  if (cal.imu_to_camera != I) in.imu_to_camera = cal.imu_to_camera;
+  in.imu_time_offset_s = cal.timeshift_cam_imu_s;
+  in.gyro_bias_rad_s = cal.gyro_bias_rad_s;
+  in.gyro_scale = cal.gyro_scale;
+}
+
 }  // namespace
 
 Config load_config(const std::string& file) {
@@ -91,7 +103,18 @@ Config load_config(const std::string& file) {
   formats::ConfigReader reader(formats::YamlMap::load(file));
   visit_config(reader, c);
   reader.finish();
+  if (c.source.calibration) use_imu_calibration(c, *c.source.calibration);
   return c;
+}
+
+void use_calibration_file(Config& c, const std::string& file) {
+  formats::Calibration cal = formats::read_calibration(file);
+  // The command line's calibration replaces what the configuration says of the same things.
+  c.source.camera.reset();
+  c.source.camera_origin = "source.camera";
+  if (cal.imu_to_camera != Eigen::Matrix3d::Identity()) c.velocity_input.imu_to_camera = Eigen::Matrix3d::Identity();
+  use_imu_calibration(c, cal);
+  use_calibration(c.source, std::move(cal));
 }
 
 std::string default_config_yaml() {

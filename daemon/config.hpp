@@ -29,8 +29,12 @@ struct Config {
   bool record_append = false;  // after a SIGHUP reload: continue the recording
 };
 
-// Throws drivers::ConfigError.
+// Throws formats::ConfigError naming file, line and key.
 Config load_config(const std::string& file);
+// rsd --calibration FILE: an rsd-calibration/1 file (docs/formats/calibration-v1.md) over the
+// configuration: intrinsics, row timing, and the IMU's rotation, clock offset, bias and scale
+// replace what the configuration (or its own calibration_file) says of them.
+void use_calibration_file(Config& c, const std::string& file);
 std::string default_config_yaml();
 
 }  // namespace rsd::daemon

@@ -6,6 +6,7 @@
 //   rsd --print-default-config   print every key with its default
 //   rsd --record FILE            also write raw frames, velocity and outputs to an LCM log
 //   rsd --replay LOG [--speed N|fast] [--loop]   play a recorded log through the pipeline
+//   rsd --calibration CAL        apply an rsd-calibration/1 file (intrinsics, row timing, IMU)
 #include <CLI/CLI.hpp>
 #include <unistd.h>
 
@@ -52,9 +53,13 @@ int main(int argc, char** argv) {
                "frame info and health over LCM. Without --config it runs the built-in simulated camera."};
   std::string config_file;
   bool check = false, print_default = false, quiet = false, progress = false, loop = false;
-  std::string record_file, replay_file, speed;
+  std::string record_file, replay_file, speed, calibration_file;
   rsd::daemon::RunLimits limits;
   app.add_option("--config,-c", config_file, "YAML configuration (see --print-default-config)")->check(CLI::ExistingFile);
+  app.add_option("--calibration", calibration_file,
+                 "an rsd-calibration/1 file (docs/formats/calibration-v1.md) over the configuration: intrinsics, line delay,\n"
+                 "readout, and the IMU's rotation, time offset, gyro bias and scale")
+      ->check(CLI::ExistingFile);
   app.add_flag("--check-config", check, "validate the configuration and exit (status 0 if valid)");
   app.add_flag("--print-default-config", print_default, "print the default configuration and exit");
   app.add_option("--frames", limits.max_frames, "stop after publishing this many frames (0: run until stopped)");
@@ -76,6 +81,7 @@ int main(int argc, char** argv) {
   rsd::daemon::Config cfg;
   try {
     if (!config_file.empty()) cfg = rsd::daemon::load_config(config_file);
+    if (!calibration_file.empty()) rsd::daemon::use_calibration_file(cfg, calibration_file);
   } catch (const rsd::formats::ConfigError& e) {
     std::fprintf(stderr, "rsd: configuration error: %s\n", e.what());
     return 2;
@@ -100,10 +106,13 @@ int main(int argc, char** argv) {
     // SIGHUP: read the configuration again; a broken file keeps the running one. The
     // command line's replay and recording stay, and the recording continues.
     try {
-      if (!config_file.empty()) {
-        cfg = rsd::daemon::load_config(config_file);
-        apply_replay_options(cfg, replay_file, speed, loop);
-        cfg.record_file = record_file;
+      if (!config_file.empty() || !calibration_file.empty()) {
+        rsd::daemon::Config next;
+        if (!config_file.empty()) next = rsd::daemon::load_config(config_file);
+        if (!calibration_file.empty()) rsd::daemon::use_calibration_file(next, calibration_file);
+        apply_replay_options(next, replay_file, speed, loop);
+        next.record_file = record_file;
+        cfg = next;
       }
       std::fprintf(stderr, "rsd: configuration reloaded\n");
     } catch (const rsd::formats::ConfigError& e) {

@@ -23,15 +23,28 @@ void read_intrinsics(formats::YamlMap& m, SourceConfig& s) {
     return;
   }
   if (s.camera) m.fail("intrinsics_file", "and source.camera both give intrinsics: keep one");
+  s.camera_origin = "source.intrinsics_file";
   std::filesystem::path file = m.text("intrinsics_file", "");
   if (file.is_relative()) file = std::filesystem::path(m.file()).parent_path() / file;
   const formats::Intrinsics in = formats::load_intrinsics(file.string(), m.text("intrinsics_camera", ""));
   s.camera = in.cam;
   if (in.line_delay_s)  // a calibrated line delay beats "the readout fills the frame"
-    for (const drivers::Driver& d : drivers::all_drivers()) d.use_line_delay(s.settings[d.name], *in.line_delay_s);
+    for (const drivers::Driver& d : drivers::all_drivers()) d.use_row_timing(s.settings[d.name], *in.line_delay_s, std::nullopt, false);
 }
 
 }  // namespace
+
+void use_calibration(SourceConfig& s, formats::Calibration cal) {
+  if (s.camera && s.camera_origin != cal.file + " (cam0)")
+    throw formats::ConfigError(cal.file + ": the calibration's intrinsics and " + s.camera_origin + " both give the camera: keep one");
+  s.camera = cal.cam;
+  s.camera_origin = cal.file + " (cam0)";
+  // A line delay of 0 in a calibration means a global shutter; the drivers' own timing (0: the
+  // readout fills the frame) then stays, since there is no rolling shutter to correct.
+  if (cal.has_rsd_block && cal.line_delay_s > 0)
+    for (const drivers::Driver& d : drivers::all_drivers()) d.use_row_timing(s.settings[d.name], cal.line_delay_s, cal.readout, true);
+  s.calibration = std::move(cal);
+}
 
 SourceConfig::SourceConfig() {
   for (const drivers::Driver& d : drivers::all_drivers()) settings[d.name] = d.defaults();
@@ -43,16 +56,26 @@ void visit_source(formats::ConfigSection& c, SourceConfig& s) {
   c.check(driver != nullptr, "driver", "must be " + drivers::driver_names());
   c.note("camera: {width: 1280, height: 720, fx: 900, fy: 900, cx: 639.5, cy: 359.5, distortion: [0, 0, 0, 0]}");
   c.note("intrinsics_file: camchain.yaml   # or a Kalibr camchain / ROS camera_info file (intrinsics_camera: cam0)");
-  c.note("The intrinsics of a real camera are required (camera or intrinsics_file).");
-  if (auto* reader = dynamic_cast<formats::ConfigReader*>(&c)) read_intrinsics(reader->map(), s);
+  c.note("calibration_file: cal.yaml   # or an rsd-calibration/1 file (docs/formats/calibration-v1.md): intrinsics,");
+  c.note("    line delay, readout, and the IMU's time offset, gyro bias and scale, rotation (rsd --calibration FILE)");
+  c.note("The intrinsics of a real camera are required (camera, intrinsics_file or calibration_file).");
+  auto* reader = dynamic_cast<formats::ConfigReader*>(&c);
+  if (reader) read_intrinsics(reader->map(), s);
   for (const drivers::Driver& d : drivers::all_drivers())
     c.section(d.name.c_str(), [&](formats::ConfigSection& sub) { d.visit(sub, s.settings[d.name]); }, d.summary.c_str());
+  // After the drivers' sections: a calibration's row timing replaces theirs.
+  if (reader && reader->map().has("calibration_file")) {
+    formats::YamlMap& m = reader->map();
+    std::filesystem::path file = m.text("calibration_file", "");
+    if (file.is_relative()) file = std::filesystem::path(m.file()).parent_path() / file;
+    use_calibration(s, formats::read_calibration(file.string()));
+  }
   if (!driver) return;
   if (s.driver == "replay")
     c.check(!s.settings_of<drivers::ReplayConfig>("replay").file.empty(), "driver", "'replay' needs replay.file: the LCM log to play");
   c.check(!driver->real_camera || s.camera.has_value(), "driver",
-          "'" + s.driver + "' needs the camera's intrinsics: add source.camera {width, height, fx, fy, cx, cy, distortion} or "
-          "source.intrinsics_file (Kalibr camchain or ROS camera_info)");
+          "'" + s.driver + "' needs the camera's intrinsics: add source.camera {width, height, fx, fy, cx, cy, distortion}, "
+          "source.intrinsics_file (Kalibr camchain or ROS camera_info) or source.calibration_file");
 }
 
 std::unique_ptr<drivers::CameraSource> make_source(const SourceConfig& s) {
@@ -70,7 +93,8 @@ dsp::CameraModel camera_model(const SourceConfig& s, const drivers::FrameFormat&
                              "add source.camera or source.intrinsics_file");
   const dsp::CameraModel& c = s.camera ? *s.camera : *recorded;
   if (c.width != f.width || c.height != f.height)
-    throw std::runtime_error("source.camera is " + std::to_string(c.width) + "x" + std::to_string(c.height) +
+    throw std::runtime_error((s.camera ? s.camera_origin : std::string("the recorded intrinsics")) + " says " +
+                             std::to_string(c.width) + "x" + std::to_string(c.height) + "," +
                              " but the camera delivers " + std::to_string(f.width) + "x" + std::to_string(f.height));
   return c;
 }

@@ -11,6 +11,7 @@
 
 #include "drivers/camera_source.hpp"
 #include "dsp/geometry/camera_model.hpp"
+#include "formats/calibration_v1.hpp"
 #include "formats/config_section.hpp"
 
 namespace rsd::daemon {
@@ -20,6 +21,8 @@ struct SourceConfig {
   std::string driver = "sim";
   std::map<std::string, std::any> settings;  // by driver name: that driver's config struct
   std::optional<dsp::CameraModel> camera;    // intrinsics of a real camera (source.camera)
+  std::string camera_origin = "source.camera";  // where `camera` came from, for messages
+  std::optional<formats::Calibration> calibration;  // source.calibration_file or rsd --calibration
 
   // A driver's settings as its own type (drivers::ReplayConfig for "replay", ...).
   template <class C>
@@ -27,6 +30,11 @@ struct SourceConfig {
   template <class C>
   const C& settings_of(const std::string& name) const { return std::any_cast<const C&>(settings.at(name)); }
 };
+
+// Takes a calibration file's intrinsics and row timing (the IMU part is the velocity input's:
+// daemon/config.hpp). Throws ConfigError naming the file when the intrinsics are also given
+// by source.camera or source.intrinsics_file.
+void use_calibration(SourceConfig& s, formats::Calibration cal);
 
 // Reads (formats::ConfigReader) or prints (formats::DefaultsPrinter) the section.
 void visit_source(formats::ConfigSection& c, SourceConfig& s);

@@ -52,12 +52,16 @@ void VelocityInput::on_velocity(const lcm_recv_buf_t* rbuf, const char*, void* u
 }
 
 void VelocityInput::accept(const rsd::velocity_t& m) {
-  if (m.frame == rsd::velocity_t::FRAME_CAMERA)
-    push(m.utime, Eigen::Matrix3d::Identity(), m.angular_velocity, m.linear_velocity, m.has_linear);
-  else if (m.frame == rsd::velocity_t::FRAME_IMU)
-    push(m.utime, cfg_.imu_to_camera, m.angular_velocity, m.linear_velocity, m.has_linear);
-  else
+  const int64_t utime = m.utime - std::llround(cfg_.imu_time_offset_s * 1e6);  // onto the camera clock
+  if (m.frame == rsd::velocity_t::FRAME_CAMERA) {
+    push(utime, Eigen::Matrix3d::Identity(), m.angular_velocity, m.linear_velocity, m.has_linear);
+  } else if (m.frame == rsd::velocity_t::FRAME_IMU) {
+    double w[3];
+    for (int i = 0; i < 3; ++i) w[i] = cfg_.gyro_scale[i] * (m.angular_velocity[i] - cfg_.gyro_bias_rad_s[i]);
+    push(utime, cfg_.imu_to_camera, w, m.linear_velocity, m.has_linear);
+  } else {
     malformed_.fetch_add(1);  // a frame this version does not know
+  }
 }
 
 void VelocityInput::deliver(const rsd::velocity_t& m) {

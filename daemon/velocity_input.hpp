@@ -30,6 +30,13 @@ struct VelocityInputConfig {
   Eigen::Matrix3d imu_to_camera = Eigen::Matrix3d::Identity();
   Eigen::Matrix3d body_to_camera = Eigen::Matrix3d::Identity();
   bool gyro_only = false;  // every sample has_linear = false (linear velocity zeroed)
+  // The motion sensor's calibration (docs/formats/calibration-v1.md), applied to messages
+  // received (not to a source's own camera-clock truth): a sample stamped t on the IMU clock
+  // belongs to camera time t - imu_time_offset_s (t_imu = t_cam + offset); FRAME_IMU rates are
+  // corrected, w_true = diag(gyro_scale) (w_measured - gyro_bias_rad_s), before the rotation.
+  double imu_time_offset_s = 0;
+  Eigen::Vector3d gyro_bias_rad_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro_scale = Eigen::Vector3d::Ones();
 };
 
 // Whether m is a proper rotation (orthonormal, determinant +1) to within tol.

@@ -15,6 +15,7 @@
 
 #include "drivers/camera_source.hpp"
 #include "dsp/geometry/camera_model.hpp"
+#include "dsp/geometry/row_timing.hpp"
 #include "formats/config_section.hpp"
 
 namespace rsd::drivers {
@@ -32,9 +33,10 @@ struct Driver {
   std::function<std::optional<dsp::CameraModel>(const std::any&)> own_camera = [](const std::any&) {
     return std::optional<dsp::CameraModel>();
   };
-  // A line delay calibrated elsewhere (an intrinsics file from Kalibr): used unless the
-  // section sets its own.
-  std::function<void(std::any&, double)> use_line_delay = [](std::any&, double) {};
+  // Row timing calibrated elsewhere (an intrinsics file from Kalibr, a calibration file):
+  // `force` replaces the section's own; otherwise it is used only where the section has none.
+  std::function<void(std::any&, double line_delay_s, std::optional<dsp::Readout>, bool force)> use_row_timing =
+      [](std::any&, double, std::optional<dsp::Readout>, bool) {};
 };
 
 // A driver whose settings are `Config` and whose source is `Source(const Config&)`.
@@ -47,11 +49,15 @@ Driver make_driver(std::string name, std::string summary, bool real_camera, void
   d.defaults = [] { return std::any(Config{}); };
   d.visit = [visit](formats::ConfigSection& s, std::any& c) { visit(s, std::any_cast<Config&>(c)); };
   d.make = [](const std::any& c) -> std::unique_ptr<CameraSource> { return std::make_unique<Source>(std::any_cast<const Config&>(c)); };
-  if constexpr (requires(Config x) { x.line_delay_s = 0.0; }) {
+  if constexpr (requires(Config x) {
+                  x.line_delay_s = 0.0;
+                  x.readout = dsp::Readout::TopToBottom;
+                }) {
     if (real_camera)
-      d.use_line_delay = [](std::any& c, double s) {
+      d.use_row_timing = [](std::any& c, double s, std::optional<dsp::Readout> readout, bool force) {
         auto& x = std::any_cast<Config&>(c);
-        if (x.line_delay_s == 0) x.line_delay_s = s;
+        if (force || x.line_delay_s == 0) x.line_delay_s = s;
+        if (readout && force) x.readout = *readout;
       };
   }
   return d;

@@ -20,11 +20,13 @@ namespace {
 
 const test::TempDir& g_tmp = test::register_temp_dir("rsd_test_config_");
 
-daemon::Config load(const std::string& name, const std::string& text) {
+std::string put(const std::string& name, const std::string& text) {
   const std::string path = g_tmp.path(name);
   std::ofstream(path) << text;
-  return daemon::load_config(path);
+  return path;
 }
+
+daemon::Config load(const std::string& name, const std::string& text) { return daemon::load_config(put(name, text)); }
 
 std::string error_of(const std::string& text) {
   try {
@@ -87,6 +89,56 @@ TEST(Config, EachDriverReadsItsOwnSection) {
   EXPECT_EQ(c.source.settings_of<drivers::ReplayConfig>("replay").speed, 0.0);  // fast
   ASSERT_TRUE(c.source.camera.has_value());
   EXPECT_EQ(c.source.camera->width, 320);
+}
+
+// source.calibration_file: the camera's intrinsics, the drivers' row timing (replacing their
+// own), the velocity input's IMU corrections; intrinsics given twice are refused.
+TEST(Config, ACalibrationFileReachesCameraDriversAndVelocityInput) {
+  put("cal.yaml", R"(cam0:
+  camera_model: pinhole
+  intrinsics: [300, 301, 159.5, 119.5]
+  distortion_model: radtan
+  distortion_coeffs: [0.01, 0, 0, 0]
+  resolution: [320, 240]
+  T_cam_imu:
+  - [0, -1, 0, 0]
+  - [1, 0, 0, 0]
+  - [0, 0, 1, 0]
+  - [0, 0, 0, 1]
+  timeshift_cam_imu: 0.0123
+  rsd:
+    format: rsd-calibration/1
+    line_delay_s: 5.0e-05
+    readout: bottom_to_top
+    gyro_bias_rad_s: [0.001, 0.002, 0.003]
+    gyro_scale: [1.01, 1, 1]
+)");
+  const daemon::Config c = load("with-cal.yaml", "source:\n  driver: aravis\n  calibration_file: cal.yaml\n"
+                                                 "  aravis: {camera: Fake_1, line_delay_s: 1.0e-05}\n");
+  ASSERT_TRUE(c.source.camera.has_value());
+  EXPECT_EQ(c.source.camera->fy, 301);
+  EXPECT_EQ(c.source.camera->dist.k1, 0.01);
+  const auto& a = c.source.settings_of<drivers::AravisConfig>("aravis");
+  EXPECT_EQ(a.line_delay_s, 5e-5);  // the calibration's, over the section's own
+  EXPECT_EQ(a.readout, dsp::Readout::BottomToTop);
+  EXPECT_EQ(c.velocity_input.imu_time_offset_s, 0.0123);
+  EXPECT_EQ(c.velocity_input.gyro_bias_rad_s, Eigen::Vector3d(0.001, 0.002, 0.003));
+  EXPECT_EQ(c.velocity_input.gyro_scale, Eigen::Vector3d(1.01, 1, 1));
+  EXPECT_EQ(c.velocity_input.imu_to_camera * Eigen::Vector3d::UnitX(), Eigen::Vector3d(0, 1, 0));
+  // The camera delivering another size is refused, naming the calibration.
+  try {
+    daemon::camera_model(c.source, {640, 480, dsp::PixelFormat::Mono8});
+    FAIL() << "a calibration for another resolution must be refused";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("cal.yaml (cam0) says 320x240, but the camera delivers 640x480"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_NE(error_of("source:\n  driver: aravis\n  camera: {width: 320, height: 240, fx: 300}\n  calibration_file: cal.yaml\n")
+                .find("cal.yaml: the calibration's intrinsics and source.camera both give the camera: keep one"),
+            std::string::npos);
+  EXPECT_NE(error_of("source:\n  calibration_file: cal.yaml\nvelocity:\n  imu_to_camera: [1, 0, 0, 0, 0, -1, 0, 1, 0]\n")
+                .find("cal.yaml: the calibration's T_cam_imu and velocity.imu_to_camera both rotate the IMU: keep one"),
+            std::string::npos);
 }
 
 TEST(Config, BadValuesNameFileLineAndKey) {

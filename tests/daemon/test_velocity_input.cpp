@@ -110,6 +110,28 @@ TEST_F(VelocityInputTest, ImuFrameIsRotatedIntoCameraAxes) {
   EXPECT_TRUE(s.has_linear);
 }
 
+// A calibration's IMU part: bias, then scale, then the rotation; the IMU clock's offset moves
+// the sample onto the camera clock (t_imu = t_cam + offset). Worked by hand: w - b = (0.1, 0.2,
+// 0.3), scaled (0.11, 0.2, 0.27), rotated by 90 degrees about z (-0.2, 0.11, 0.27), at 100 ms
+// - 12 ms on the camera clock.
+TEST_F(VelocityInputTest, ImuCalibrationCorrectsBiasScaleRotationAndClock) {
+  VelocityInputConfig cfg;
+  cfg.imu_to_camera = rot_z90();
+  cfg.gyro_bias_rad_s = {0.01, 0.02, 0.03};
+  cfg.gyro_scale = {1.1, 1.0, 0.9};
+  cfg.imu_time_offset_s = 0.012;
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_, cfg);
+  publish("RSD_VELOCITY", velocity(100000, rsd::velocity_t::FRAME_IMU, 0.11, 0.22, 0.33, 1.0, 2.0, 3.0));
+  drain();
+  ASSERT_EQ(buffer_.count(), 1u);
+  const auto s = at(88000);
+  EXPECT_NEAR(s.w[0], -0.2, 1e-12);
+  EXPECT_NEAR(s.w[1], 0.11, 1e-12);
+  EXPECT_NEAR(s.w[2], 0.27, 1e-12);
+  EXPECT_NEAR(s.v[0], -2.0, 1e-12);  // linear velocity: rotated only
+  EXPECT_NEAR(s.v[1], 1.0, 1e-12);
+}
+
 TEST_F(VelocityInputTest, CameraFrameIgnoresImuRotation) {
   VelocityInputConfig cfg;
   cfg.imu_to_camera = rot_z90();
