@@ -51,17 +51,20 @@ void VelocityInput::on_velocity(const lcm_recv_buf_t* rbuf, const char*, void* u
   self->accept(m);
 }
 
+void VelocityInput::push_imu(int64_t utime_imu, const double* w_measured, const double* v, bool has_linear) {
+  double w[3];
+  for (int i = 0; i < 3; ++i) w[i] = cfg_.gyro_scale[i] * (w_measured[i] - cfg_.gyro_bias_rad_s[i]);
+  push(utime_imu - std::llround(cfg_.imu_time_offset_s * 1e6), cfg_.imu_to_camera, w, v, has_linear);
+}
+
 void VelocityInput::accept(const rsd::velocity_t& m) {
-  const int64_t utime = m.utime - std::llround(cfg_.imu_time_offset_s * 1e6);  // onto the camera clock
-  if (m.frame == rsd::velocity_t::FRAME_CAMERA) {
-    push(utime, Eigen::Matrix3d::Identity(), m.angular_velocity, m.linear_velocity, m.has_linear);
-  } else if (m.frame == rsd::velocity_t::FRAME_IMU) {
-    double w[3];
-    for (int i = 0; i < 3; ++i) w[i] = cfg_.gyro_scale[i] * (m.angular_velocity[i] - cfg_.gyro_bias_rad_s[i]);
-    push(utime, cfg_.imu_to_camera, w, m.linear_velocity, m.has_linear);
-  } else {
+  if (m.frame == rsd::velocity_t::FRAME_CAMERA)  // onto the camera clock
+    push(m.utime - std::llround(cfg_.imu_time_offset_s * 1e6), Eigen::Matrix3d::Identity(), m.angular_velocity,
+         m.linear_velocity, m.has_linear);
+  else if (m.frame == rsd::velocity_t::FRAME_IMU)
+    push_imu(m.utime, m.angular_velocity, m.linear_velocity, m.has_linear);
+  else
     malformed_.fetch_add(1);  // a frame this version does not know
-  }
 }
 
 void VelocityInput::deliver(const rsd::velocity_t& m) {
@@ -73,13 +76,16 @@ void VelocityInput::deliver(const drivers::VelocitySample& s) {
   source_feeds_.store(true);
   // On the time line of rsd.velocity_t (us), so that a replay of the published samples
   // reproduces the live run.
-  push(s.t_ns / 1000, Eigen::Matrix3d::Identity(), s.w, s.v, s.has_linear);
+  if (s.imu_frame)
+    push_imu(s.t_ns / 1000, s.w, s.v, s.has_linear);
+  else
+    push(s.t_ns / 1000, Eigen::Matrix3d::Identity(), s.w, s.v, s.has_linear);
 }
 
 rsd::velocity_t VelocityInput::to_message(const drivers::VelocitySample& s) {
   rsd::velocity_t m{};
   m.utime = s.t_ns / 1000;
-  m.frame = rsd::velocity_t::FRAME_CAMERA;
+  m.frame = s.imu_frame ? rsd::velocity_t::FRAME_IMU : rsd::velocity_t::FRAME_CAMERA;
   for (int i = 0; i < 3; ++i) m.angular_velocity[i] = s.w[i], m.linear_velocity[i] = s.v[i];
   m.has_linear = s.has_linear;
   return m;

@@ -61,7 +61,8 @@ class VelocityInput {
   // messages on the velocity channel are ignored (counted): they are the source's own
   // samples echoed by LCM, and two time lines cannot share the buffer.
   void deliver(const rsd::velocity_t& m);
-  // A source's sample in camera axes (the simulator's truth), straight into the buffer.
+  // A source's sample: camera truth straight into the buffer, an IMU measurement (imu_frame)
+  // through the calibration.
   void deliver(const drivers::VelocitySample& s);
   // The same for bot_core.pose_t on the pose channel (a replayed log's, the lcm source's).
   void deliver(const bot_core::pose_t& m);
@@ -75,6 +76,8 @@ class VelocityInput {
   static void on_pose(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
   void accept(const rsd::velocity_t& m);
   void push(int64_t utime, const Eigen::Matrix3d& r, const double* w, const double* v, bool has_linear);
+  // A motion-sensor measurement (IMU axes and clock) through the calibration.
+  void push_imu(int64_t utime_imu, const double* w_measured, const double* v, bool has_linear);
   lcm_t* lcm_;
   std::string channel_;
   VelocityBuffer& buffer_;

@@ -29,7 +29,11 @@ void visit_config(formats::ConfigSection& c, SimSourceConfig& s) {
   c.check(s.velocity_rate_hz > 0, "velocity_rate_hz", "must be positive");
   c.value("velocity_noise", s.velocity_noise);
   c.value("velocity_latency_s", s.velocity_latency_s);
-  c.value("gyro_bias_rad_s", s.gyro_bias);
+  c.value("gyro_bias_rad_s", s.gyro_bias, "hidden rig physics, IMU axes: w_measured = w_imu / gyro_scale + bias");
+  c.value("gyro_scale", s.gyro_scale);
+  c.check((s.gyro_scale.array() > 0).all(), "gyro_scale", "must be positive");
+  c.value("imu_mount_rotation_rad", s.imu_mount_rotation_rad, "rotation vector r: w_camera = Exp(r) w_imu");
+  c.value("imu_time_offset_s", s.imu_time_offset_s, "IMU stamps = camera clock + offset");
   c.value("publish_velocity", s.publish_velocity);
   c.value("realtime", s.realtime);
   c.value("noise_grey", s.noise_grey);

@@ -1,5 +1,6 @@
 #include "drivers/sim_source.hpp"
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <ctime>
 #include <thread>
@@ -83,16 +84,23 @@ void SimSource::start() {
 void SimSource::emit_velocity_until(double t_s) {
   if (!sink_ || !cfg_.publish_velocity) return;
   std::normal_distribution<double> n(0, 1);
+  const Eigen::Vector3d r = cfg_.imu_mount_rotation_rad;
+  const Eigen::Matrix3d R_imu_to_cam =
+      r.norm() > 0 ? Eigen::AngleAxisd(r.norm(), r.normalized()).toRotationMatrix() : Eigen::Matrix3d::Identity();
+  const bool imu_frame = r.norm() > 0 || cfg_.gyro_scale != Eigen::Vector3d::Ones() || cfg_.imu_time_offset_s != 0 ||
+                         cfg_.gyro_bias != Eigen::Vector3d::Zero();
   for (; next_velocity_s_ <= t_s - cfg_.velocity_latency_s; next_velocity_s_ += 1.0 / cfg_.velocity_rate_hz) {
     const double t = next_velocity_s_, h = 1e-5;
     const Eigen::Matrix3d Ra = motion_->at(t - h).linear().transpose(), Rb = motion_->at(t + h).linear().transpose();
     const Eigen::Vector3d w = dsp::log_so3(Ra.transpose() * Rb) / (2 * h);  // body rate, camera axes
     const Eigen::Vector3d v = motion_->at(t).linear() * cfg_.velocity;      // velocity in camera axes
     VelocitySample s;
-    s.t_ns = t0_ns_ + static_cast<int64_t>(std::llround(t * 1e9));
+    s.imu_frame = imu_frame;
+    s.t_ns = t0_ns_ + static_cast<int64_t>(std::llround((t + cfg_.imu_time_offset_s) * 1e9));
+    const Eigen::Vector3d w_imu = R_imu_to_cam.transpose() * w, v_imu = R_imu_to_cam.transpose() * v;
     for (int i = 0; i < 3; ++i) {
-      s.w[i] = w[i] + cfg_.gyro_bias[i] + cfg_.velocity_noise * n(rng_);
-      s.v[i] = v[i];
+      s.w[i] = w_imu[i] / cfg_.gyro_scale[i] + cfg_.gyro_bias[i] + cfg_.velocity_noise * n(rng_);
+      s.v[i] = v_imu[i];
     }
     s.has_linear = true;
     sink_(s);

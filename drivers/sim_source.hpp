@@ -36,7 +36,14 @@ struct SimSourceConfig {
   // The velocity feed.
   double velocity_rate_hz = 200;
   double velocity_noise = 0, velocity_latency_s = 0;
+  // Rig physics the daemon is not told unless a calibration says so. The gyro measures in the
+  // IMU's axes, w_camera = R w_imu with R = Exp(imu_mount_rotation_rad), as
+  // w_measured = w_imu / gyro_scale + gyro_bias, stamped on the IMU clock: t_imu = t_camera +
+  // imu_time_offset_s. Any of them set: samples go out as IMU measurements (FRAME_IMU).
   Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro_scale = Eigen::Vector3d::Ones();
+  Eigen::Vector3d imu_mount_rotation_rad = Eigen::Vector3d::Zero();
+  double imu_time_offset_s = 0;
   bool publish_velocity = true;
   bool realtime = true;  // false: frames as fast as they render (tests, replays of sims)
   unsigned seed = 1;

@@ -28,5 +28,9 @@ struct VelocitySample {
   double w[3] = {0, 0, 0};  // rad/s, camera axes
   double v[3] = {0, 0, 0};  // m/s, camera axes
   bool has_linear = false;
+  // The motion sensor's own measurement: rates in its axes, stamped on its clock. The daemon's
+  // velocity input applies the calibration (clock offset, bias, scale, rotation) to it, as to
+  // an rsd.velocity_t in FRAME_IMU. false: already the camera's motion on the camera clock.
+  bool imu_frame = false;
 };
 }  // namespace rsd::dsp
