@@ -23,6 +23,25 @@ dsp::DepthModel FrameRectifier::depth_model() const {
   return dsp::DepthModel::at_infinity();
 }
 
+bool FrameRectifier::knots(const drivers::FrameMeta& meta, const VelocityBuffer& velocity, bool translate,
+                           dsp::IntegratedMotion::Knot* out) const {
+  // Frame time t is first_row_ns + t s, as row_time() counts it; the knots span every row's
+  // exposure, and the motion holds the end rates beyond them.
+  const double a = std::min(timing_.row_time(0), timing_.row_time(timing_.height - 1));
+  const double b = std::max(timing_.row_time(0), timing_.row_time(timing_.height - 1)) + meta.exposure_s;
+  for (int k = 0; k < kKnots; ++k) {
+    const double t = a + (b - a) * k / (kKnots - 1);
+    VelocityEstimate e;
+    if (velocity.at(meta.first_row_ns + static_cast<int64_t>(t * 1e9), e) != VelocityStatus::Ok) return false;
+    out[k].t = t;
+    for (int i = 0; i < 3; ++i) {
+      out[k].w[i] = e.sample.w[i];
+      out[k].v[i] = translate ? e.sample.v[i] : 0.0;
+    }
+  }
+  return b > a;
+}
+
 RectifyResult FrameRectifier::process(const dsp::ImageView& src, const dsp::ImageView& dst, const drivers::FrameMeta& meta,
                                       const VelocityBuffer& velocity) {
   RectifyResult r;
@@ -52,7 +71,12 @@ RectifyResult FrameRectifier::process(const dsp::ImageView& src, const dsp::Imag
   }
   r.velocity_age_s = est.age_s;
   const dsp::DepthModel depth = translate ? depth_model() : dsp::DepthModel::at_infinity();
-  const dsp::RectifyReport rep = rect_->rectify(src, dst, tw, depth, r.reference_time_s);
+  // Every row's orientation from the rates integrated up to its time; one rate held for the
+  // frame only when the buffer cannot cover every row.
+  dsp::IntegratedMotion::Knot k[kKnots];
+  const dsp::RectifyReport rep = knots(meta, velocity, translate, k)
+                                     ? rect_->rectify(src, dst, dsp::IntegratedMotion(k, kKnots), depth, r.reference_time_s)
+                                     : rect_->rectify(src, dst, tw, depth, r.reference_time_s);
   r.rectified = rep.rectified;
   r.reason = rep.rectified ? "" : "no rolling-shutter solution for this motion";
   dsp::ApplicabilityOptions opt;

@@ -50,6 +50,11 @@ class FrameRectifier {
 
  private:
   dsp::DepthModel depth_model() const;
+  // The camera's own rates read from the buffer at kKnots times across the frame's rows
+  // (interpolated between samples), for the integrated motion; false if any has no valid sample.
+  static constexpr int kKnots = 9;
+  bool knots(const drivers::FrameMeta& meta, const VelocityBuffer& velocity, bool translate,
+             dsp::IntegratedMotion::Knot* out) const;
   RectifyConfig cfg_;
   dsp::CameraModel cam_;
   dsp::RowTiming timing_;

@@ -123,7 +123,9 @@ CaptureStatus SimSource::capture(const dsp::ImageView& dst, FrameMeta& meta, std
   meta.first_row_ns = t0_ns_ + static_cast<int64_t>(std::llround(t_frame * 1e9));
   meta.sequence = frame_++;
   meta.exposure_s = timing_.exposure_s;
-  emit_velocity_until(t_frame + timing_.frame_readout_s() + timing_.exposure_s);
+  // Through the frame's last row and one sample beyond: every row's rate is then bracketed
+  // by samples the frame's consumers already have.
+  emit_velocity_until(t_frame + timing_.frame_readout_s() + timing_.exposure_s + 1.0 / cfg_.velocity_rate_hz);
   return CaptureStatus::Frame;
 }
 

@@ -52,6 +52,68 @@ Eigen::Affine3d ScrewMotion::at(double t) const {
   return g;
 }
 
+namespace {
+
+// Rates linear over [0, dt] from (w0, v0) to (w1, v1): the pose change over [0, s], the rates'
+// mean over [0, s] taken as constant (the screw motion, exact for constant rates; second order
+// otherwise, and exact in angle about a fixed axis). dQ/dt = Q [w]x, dP/dt = Q v.
+void advance(const Eigen::Matrix3d& Q, const Eigen::Vector3d& P, const Eigen::Vector3d& w0, const Eigen::Vector3d& w1,
+             const Eigen::Vector3d& v0, const Eigen::Vector3d& v1, double dt, double s, Eigen::Matrix3d& Qo,
+             Eigen::Vector3d& Po) {
+  const double a = dt > 0 ? s / dt : 0.0;
+  const Eigen::Vector3d w_mean = w0 + 0.5 * a * (w1 - w0), v_mean = v0 + 0.5 * a * (v1 - v0);
+  const Eigen::Affine3d g = ScrewMotion(Twist{v_mean, w_mean}).at(s);
+  Po = P + Q * g.translation();
+  Qo = Q * g.linear();
+}
+
+}  // namespace
+
+IntegratedMotion::IntegratedMotion(const Knot* knots, int n) : n_(n) {
+  if (n < 1 || n > kMaxKnots) throw std::invalid_argument("IntegratedMotion: 1 to 32 knots");
+  for (int k = 0; k < n; ++k) {
+    knots_[k] = knots[k];
+    if (k > 0 && !(knots_[k].t > knots_[k - 1].t)) throw std::invalid_argument("IntegratedMotion: knot times must increase");
+  }
+  at_knot_[0] = {Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
+  for (int k = 0; k + 1 < n; ++k) {
+    const Knot &a = knots_[k], &b = knots_[k + 1];
+    const double dt = b.t - a.t;
+    advance(at_knot_[k].Q, at_knot_[k].P, a.w, b.w, a.v, b.v, dt, dt, at_knot_[k + 1].Q, at_knot_[k + 1].P);
+  }
+  origin_ = pose(0.0);
+}
+
+IntegratedMotion::Pose IntegratedMotion::pose(double t) const {
+  Pose out;
+  if (t <= knots_[0].t) {  // before the first knot: its rates held
+    const Knot& a = knots_[0];
+    advance(at_knot_[0].Q, at_knot_[0].P, a.w, a.w, a.v, a.v, 0.0, t - a.t, out.Q, out.P);
+    return out;
+  }
+  int k = 0;
+  while (k + 1 < n_ && knots_[k + 1].t < t) ++k;
+  const Knot& a = knots_[k];
+  if (k + 1 == n_) {  // after the last knot: its rates held
+    advance(at_knot_[k].Q, at_knot_[k].P, a.w, a.w, a.v, a.v, 0.0, t - a.t, out.Q, out.P);
+    return out;
+  }
+  const Knot& b = knots_[k + 1];
+  advance(at_knot_[k].Q, at_knot_[k].P, a.w, b.w, a.v, b.v, b.t - a.t, t - a.t, out.Q, out.P);
+  return out;
+}
+
+Eigen::Affine3d IntegratedMotion::at(double t) const {
+  const Pose p = pose(t);
+  // Relative to the camera at t = 0; a static point X maps to Q^T (X - P).
+  const Eigen::Matrix3d Q = origin_.Q.transpose() * p.Q;
+  const Eigen::Vector3d P = origin_.Q.transpose() * (p.P - origin_.P);
+  Eigen::Affine3d g = Eigen::Affine3d::Identity();
+  g.linear() = Q.transpose();
+  g.translation() = -Q.transpose() * P;
+  return g;
+}
+
 SampledTrajectory::SampledTrajectory(std::vector<Sample> samples) : samples_(std::move(samples)) {
   if (samples_.empty()) throw std::invalid_argument("SampledTrajectory: no samples");
   for (size_t i = 1; i < samples_.size(); ++i)

@@ -53,6 +53,35 @@ class ScrewMotion final : public CameraMotion {
   Twist tw_;
 };
 
+// The camera's own velocities sampled over a frame (camera axes, as a gyro gives them), linear
+// in time between samples and held beyond them, integrated: each row gets the orientation the
+// rates accumulate up to its time, not one rate held for the whole frame. The reference is the
+// camera at t = 0, as for the twist models (at() with constant rates equals
+// ScrewMotion(-w, -v) to second order in the step). Fixed capacity: building it allocates nothing.
+class IntegratedMotion final : public CameraMotion {
+ public:
+  static constexpr int kMaxKnots = 32;
+  struct Knot {
+    double t = 0;
+    Eigen::Vector3d w = Eigen::Vector3d::Zero();  // the camera's own angular velocity, rad/s
+    Eigen::Vector3d v = Eigen::Vector3d::Zero();  // its velocity, m/s, camera axes
+  };
+  // `n` knots (1..kMaxKnots) at increasing times.
+  IntegratedMotion(const Knot* knots, int n);
+  Eigen::Affine3d at(double t) const override;
+
+ private:
+  struct Pose {
+    Eigen::Matrix3d Q;  // camera-at-t axes in the reference
+    Eigen::Vector3d P;  // camera-at-t position in the reference
+  };
+  Pose pose(double t) const;  // relative to the first knot
+  Knot knots_[kMaxKnots];
+  Pose at_knot_[kMaxKnots];
+  int n_;
+  Pose origin_;  // the pose at t = 0
+};
+
 // A pose over time, sampled: world -> camera transforms at increasing times; position
 // interpolated linearly and orientation by slerp (as recording-v1 prescribes).
 class SampledTrajectory final : public CameraMotion {

@@ -6,9 +6,11 @@ payloads of the rectified images and frame infos in OUT, in order, with their ch
 event timestamps (wall clock) are left out. Passes when the hash equals EXPECTED.
 
 tests/data/reference-sim-96x72.lcmlog: 8 frames of the simulated camera (96 x 72, default
-motion) and their velocity, recorded by rsd before the refactor of issue 12; EXPECTED is what
-that rsd published for them. A change to the rectifier's numbers changes the hash: then
-check the change, and update the expected hash in tests/daemon/CMakeLists.txt with a reason.
+motion) and their velocity, recorded by rsd before the refactor of issue 12; EXPECTED was what
+that rsd published for them, unchanged through the refactor, then updated once on purpose
+(rows rectified with the gyro integrated across the readout). A change to the rectifier's
+numbers changes the hash: then check the change, and update the expected hash in
+tests/daemon/CMakeLists.txt with a reason.
 
 Usage: replay_digest.py RSD LOG OUT EXPECTED
 """

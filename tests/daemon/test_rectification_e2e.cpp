@@ -2,7 +2,7 @@
 // out of the rectifier where a global-shutter camera at the reference time would have seen
 // the scene. Features are tracked (OpenCV, pyramidal Lucas-Kanade) from the global-shutter
 // render into the raw and into the rectified frame: the raw frame is off by pixels, the
-// rectified one agrees to well under half a pixel RMS.
+// rectified one agrees to a few hundredths of a pixel RMS.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
@@ -77,7 +77,9 @@ TEST(RectificationEndToEnd, RectifiedFeaturesMatchTheGlobalShutterRender) {
     const double rect_rms = rms_shift(as_mat(gs), as_mat(out), n_rect);
     EXPECT_GT(n_rect, 50);
     EXPECT_GT(raw_rms, 3.0) << "frame " << k;   // the rolling shutter moved features by pixels
-    EXPECT_LT(rect_rms, 0.5) << "frame " << k;  // rectification puts them back
+    // Rectification puts them back: every row's orientation integrated from the gyro (one rate
+    // held for the frame left 0.065-0.091 px on these frames, 5-8 times more).
+    EXPECT_LT(rect_rms, 0.04) << "frame " << k;
     RecordProperty("frame" + std::to_string(k) + "_raw_rms_px", std::to_string(raw_rms));
     RecordProperty("frame" + std::to_string(k) + "_rectified_rms_px", std::to_string(rect_rms));
     ++checked;

@@ -69,3 +69,53 @@ TEST(CameraMotion, SampledTrajectoryInterpolatesLinearAndSlerp) {
   EXPECT_LT((traj.at(9).matrix() - traj.at(1).matrix()).norm(), 1e-15);
   EXPECT_THROW(SampledTrajectory({}), std::invalid_argument);
 }
+
+// IntegratedMotion with constant rates is the screw motion of the negated twist (the scene's
+// twist in camera axes): exactly for the rotation, to the midpoint rule's second order for the
+// translation (steps of 4 ms here: far below 1e-9 m).
+TEST(IntegratedMotion, ConstantRatesAreTheScrewMotion) {
+  const Vector3d w(0.3, -1.2, 0.8), v(0.5, 0.1, -2.0);
+  IntegratedMotion::Knot k[9];
+  for (int i = 0; i < 9; ++i) k[i] = {-0.004 + 0.004 * i, w, v};
+  const IntegratedMotion m(k, 9);
+  const ScrewMotion s(Twist{-v, -w});
+  for (double t : {-0.02, -0.003, 0.0, 0.0101, 0.027, 0.05}) {
+    const Eigen::Affine3d a = m.at(t), b = s.at(t);
+    EXPECT_LT((a.linear() - b.linear()).norm(), 1e-12) << t;
+    EXPECT_LT((a.translation() - b.translation()).norm(), 1e-9) << t;
+  }
+  EXPECT_LT((m.at(0).matrix() - Eigen::Matrix4d::Identity()).norm(), 1e-15);  // the reference: t = 0
+}
+
+// About a fixed axis the rotation angle is the integral of the rate, linear here: exact.
+TEST(IntegratedMotion, RateLinearInTimeAboutOneAxisIntegratesExactly) {
+  const double a = 0.7, b = 40.0;  // rad/s, rad/s^2
+  IntegratedMotion::Knot k[5];
+  for (int i = 0; i < 5; ++i) {
+    const double t = 0.01 * i;
+    k[i] = {t, Vector3d(0, 0, a + b * t), Vector3d::Zero()};
+  }
+  const IntegratedMotion m(k, 5);
+  for (double t : {0.0, 0.005, 0.013, 0.04}) {
+    const double angle = a * t + 0.5 * b * t * t;  // camera turned by this; the scene by minus it
+    const Eigen::Matrix3d want = Eigen::AngleAxisd(-angle, Vector3d::UnitZ()).toRotationMatrix();
+    EXPECT_LT((m.at(t).linear() - want).norm(), 1e-12) << t;
+  }
+}
+
+// A rate whose axis turns: against a brute-force integration with 20000 steps.
+TEST(IntegratedMotion, TurningAxisAgainstFineIntegration) {
+  auto w = [](double t) { return Vector3d(1.5 * std::cos(30 * t), 1.5 * std::sin(30 * t), 0.4); };
+  IntegratedMotion::Knot k[IntegratedMotion::kMaxKnots];
+  const int n = 17;
+  for (int i = 0; i < n; ++i) k[i] = {0.002 * i, w(0.002 * i), Vector3d::Zero()};
+  const IntegratedMotion m(k, n);
+  Eigen::Matrix3d Q = Eigen::Matrix3d::Identity();  // camera axes in the reference
+  const double T = 0.03;
+  const int steps = 20000;
+  for (int i = 0; i < steps; ++i) Q = Q * exp_so3(w((i + 0.5) * T / steps) * (T / steps));
+  EXPECT_LT((m.at(T).linear() - Q.transpose()).norm(), 2e-5);
+  // One rate held for the frame (what a single twist does) is far off.
+  EXPECT_GT((ScrewMotion(Twist{Vector3d::Zero(), -w(0.5 * T)}).at(T).linear() - Q.transpose()).norm(), 1e-3);
+  EXPECT_THROW(IntegratedMotion(k, 0), std::invalid_argument);
+}
