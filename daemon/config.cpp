@@ -107,8 +107,9 @@ Config load_config(const std::string& file) {
   return c;
 }
 
-void use_calibration_file(Config& c, const std::string& file) {
-  formats::Calibration cal = formats::read_calibration(file);
+void use_calibration_file(Config& c, const std::string& file) { apply_calibration(c, formats::read_calibration(file)); }
+
+void apply_calibration(Config& c, formats::Calibration cal) {
   // The command line's calibration replaces what the configuration says of the same things.
   c.source.camera.reset();
   c.source.camera_origin = "source.camera";

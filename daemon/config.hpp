@@ -27,6 +27,8 @@ struct Config {
   // rsd --record FILE: raw frames with their timing, velocity and outputs into one LCM log.
   std::string record_file;
   bool record_append = false;  // after a SIGHUP reload: continue the recording
+  // rsd --output-dir / --output-video (replays only): rectified frames to files as well.
+  FrameFilesConfig output;
 };
 
 // Throws formats::ConfigError naming file, line and key.
@@ -35,6 +37,8 @@ Config load_config(const std::string& file);
 // configuration: intrinsics, row timing, and the IMU's rotation, clock offset, bias and scale
 // replace what the configuration (or its own calibration_file) says of them.
 void use_calibration_file(Config& c, const std::string& file);
+// The same for a calibration in memory (an images recording's nominal model, for one).
+void apply_calibration(Config& c, formats::Calibration cal);
 std::string default_config_yaml();
 
 }  // namespace rsd::daemon

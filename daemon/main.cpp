@@ -6,16 +6,20 @@
 //   rsd --print-default-config   print every key with its default
 //   rsd --record FILE            also write raw frames, velocity and outputs to an LCM log
 //   rsd --replay LOG [--speed N|fast] [--loop]   play a recorded log through the pipeline
+//   rsd --replay DIR [--output-dir OUT] [--output-video FILE]   play an images recording
 //   rsd --calibration CAL        apply an rsd-calibration/1 file (intrinsics, row timing, IMU)
 #include <CLI/CLI.hpp>
 #include <unistd.h>
 
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 
 #include "daemon/service.hpp"
-#include "formats/yaml_map.hpp"
+#include "drivers/recording_replay_source.hpp"
 #include "drivers/replay_source.hpp"
+#include "formats/recording_v1.hpp"
+#include "formats/yaml_map.hpp"
 
 namespace {
 
@@ -26,22 +30,66 @@ void on_signal(int sig) {
   else g_flags.stop = true;
 }
 
-// --replay/--speed/--loop on top of the configuration (the log's own intrinsics are used
-// unless the configuration gives source.camera).
-bool apply_replay_options(rsd::daemon::Config& cfg, const std::string& file, const std::string& speed, bool loop) {
-  if (!file.empty()) {
+// What the command line says beyond the configuration.
+struct CommandLine {
+  std::string config_file, calibration_file, record_file, replay, speed;
+  bool loop = false;
+  rsd::daemon::FrameFilesConfig output;
+};
+
+// --replay LOG (an LCM log) or DIR (an images recording), --speed, --loop on top of the
+// configuration. A log's own intrinsics are used unless the configuration gives source.camera.
+bool apply_replay_options(rsd::daemon::Config& cfg, const CommandLine& cl) {
+  using rsd::drivers::RecordingReplayConfig;
+  using rsd::drivers::ReplayConfig;
+  if (!cl.replay.empty() && std::filesystem::is_directory(cl.replay)) {
+    cfg.source.driver = "recording";
+    cfg.source.settings_of<RecordingReplayConfig>("recording").dir = cl.replay;
+  } else if (!cl.replay.empty()) {
     cfg.source.driver = "replay";
-    cfg.source.settings_of<rsd::drivers::ReplayConfig>("replay").file = file;
+    cfg.source.settings_of<ReplayConfig>("replay").file = cl.replay;
   }
-  if (!speed.empty() && !rsd::drivers::parse_speed(speed, cfg.source.settings_of<rsd::drivers::ReplayConfig>("replay").speed)) {
-    std::fprintf(stderr, "rsd: --speed: expected a positive factor or fast, not '%s'\n", speed.c_str());
+  const bool lcm_log = cfg.source.driver == "replay", recording = cfg.source.driver == "recording";
+  if (!cl.speed.empty()) {
+    double& speed = recording ? cfg.source.settings_of<RecordingReplayConfig>("recording").speed
+                              : cfg.source.settings_of<ReplayConfig>("replay").speed;
+    if (!rsd::drivers::parse_speed(cl.speed, speed)) {
+      std::fprintf(stderr, "rsd: --speed: expected a positive factor or fast, not '%s'\n", cl.speed.c_str());
+      return false;
+    }
+  }
+  if (cl.loop) cfg.source.settings_of<ReplayConfig>("replay").loop = true;
+  if ((!cl.speed.empty() && !lcm_log && !recording) || (cl.loop && !lcm_log)) {
+    std::fprintf(stderr, "rsd: %s\n", cl.loop ? "--loop applies to LCM log replays (--replay LOG)"
+                                              : "--speed applies to replays (--replay LOG or DIR)");
     return false;
   }
-  if (loop) cfg.source.settings_of<rsd::drivers::ReplayConfig>("replay").loop = true;
-  if ((!speed.empty() || loop) && cfg.source.driver != "replay") {
-    std::fprintf(stderr, "rsd: --speed and --loop apply to replays (--replay LOG or source.driver: replay)\n");
+  if ((!cl.output.dir.empty() || !cl.output.video.empty()) && !lcm_log && !recording) {
+    std::fprintf(stderr, "rsd: --output-dir and --output-video apply to replays (--replay DIR or LOG): a live camera never "
+                         "waits on a disk\n");
     return false;
   }
+  cfg.output = cl.output;
+  return true;
+}
+
+// rsd --replay DIR without a calibration: the recording's own camera, timing and motion
+// extrinsics are the nominal calibration.
+void use_recording_nominal(rsd::daemon::Config& cfg) {
+  if (cfg.source.driver != "recording" || cfg.source.calibration || cfg.source.camera) return;
+  const std::string dir = cfg.source.settings_of<rsd::drivers::RecordingReplayConfig>("recording").dir;
+  const rsd::formats::ImagesRecording rec = rsd::formats::read_images_recording(dir);
+  rsd::daemon::apply_calibration(cfg, rsd::formats::calibration_of(rec.rec.nominal, dir + "/recording.yaml"));
+}
+
+// The configuration the command line asks for (ConfigError, RecordingError on bad files).
+bool make_config(const CommandLine& cl, rsd::daemon::Config& out) {
+  rsd::daemon::Config cfg = cl.config_file.empty() ? rsd::daemon::Config() : rsd::daemon::load_config(cl.config_file);
+  if (!cl.calibration_file.empty()) rsd::daemon::use_calibration_file(cfg, cl.calibration_file);
+  if (!apply_replay_options(cfg, cl)) return false;
+  use_recording_nominal(cfg);
+  cfg.record_file = cl.record_file;
+  out = std::move(cfg);
   return true;
 }
 
@@ -51,12 +99,11 @@ int main(int argc, char** argv) {
   CLI::App app{"rsd: rolling-shutter camera daemon. Captures frames, stamps every row with its capture time,\n"
                "rectifies the rolling-shutter distortion with the current velocity, and publishes images,\n"
                "frame info and health over LCM. Without --config it runs the built-in simulated camera."};
-  std::string config_file;
-  bool check = false, print_default = false, quiet = false, progress = false, loop = false;
-  std::string record_file, replay_file, speed, calibration_file;
+  CommandLine cl;
+  bool check = false, print_default = false, quiet = false, progress = false;
   rsd::daemon::RunLimits limits;
-  app.add_option("--config,-c", config_file, "YAML configuration (see --print-default-config)")->check(CLI::ExistingFile);
-  app.add_option("--calibration", calibration_file,
+  app.add_option("--config,-c", cl.config_file, "YAML configuration (see --print-default-config)")->check(CLI::ExistingFile);
+  app.add_option("--calibration", cl.calibration_file,
                  "an rsd-calibration/1 file (docs/formats/calibration-v1.md) over the configuration: intrinsics, line delay,\n"
                  "readout, and the IMU's rotation, time offset, gyro bias and scale")
       ->check(CLI::ExistingFile);
@@ -65,11 +112,17 @@ int main(int argc, char** argv) {
   app.add_option("--frames", limits.max_frames, "stop after publishing this many frames (0: run until stopped)");
   app.add_option("--duration", limits.max_seconds, "stop after this many seconds (0: run until stopped)");
   app.add_flag("--quiet,-q", quiet, "no live status line, progress bar or closing summary on stderr");
-  app.add_option("--record", record_file, "record raw frames (with per-row timing), velocity and outputs to this LCM log");
-  app.add_option("--replay", replay_file, "replay this LCM log (source.driver: replay) instead of the configured camera")
-      ->check(CLI::ExistingFile);
-  app.add_option("--speed", speed, "replay speed: 1 real time (default), N times, or fast (no waiting, no drops)");
-  app.add_flag("--loop", loop, "replay: start again at the end of the log");
+  app.add_option("--record", cl.record_file, "record raw frames (with per-row timing), velocity and outputs to this LCM log");
+  app.add_option("--replay", cl.replay,
+                 "replay instead of the configured camera: an LCM log (source.driver: replay), or an images recording\n"
+                 "directory (rsd-recording/1 with images.csv or a video, and its gyro or trajectory; source.driver:\n"
+                 "recording), whose recording.yaml is the nominal calibration unless --calibration is given")
+      ->check(CLI::ExistingPath);
+  app.add_option("--speed", cl.speed, "replay speed: 1 real time (default), N times, or fast (no waiting, no drops)");
+  app.add_flag("--loop", cl.loop, "replay of an LCM log: start again at the end of the log");
+  app.add_option("--output-dir", cl.output.dir,
+                 "replays: also write every rectified frame as OUT/<frame>.png (frame number zero-padded to 6 digits)");
+  app.add_option("--output-video", cl.output.video, "replays: also write the rectified frames as a video (.avi, .mp4, .mov, .mkv)");
   app.add_flag("--progress", progress, "replay: show the progress bar even when stderr is not a terminal");
   CLI11_PARSE(app, argc, argv);
   limits.status_line = !quiet;
@@ -80,16 +133,16 @@ int main(int argc, char** argv) {
   }
   rsd::daemon::Config cfg;
   try {
-    if (!config_file.empty()) cfg = rsd::daemon::load_config(config_file);
-    if (!calibration_file.empty()) rsd::daemon::use_calibration_file(cfg, calibration_file);
+    if (!make_config(cl, cfg)) return 2;
   } catch (const rsd::formats::ConfigError& e) {
     std::fprintf(stderr, "rsd: configuration error: %s\n", e.what());
     return 2;
+  } catch (const rsd::formats::RecordingError& e) {
+    std::fprintf(stderr, "rsd: --replay: %s\n", e.what());
+    return 2;
   }
-  if (!apply_replay_options(cfg, replay_file, speed, loop)) return 2;
-  cfg.record_file = record_file;
   if (check) {
-    std::printf("rsd: %s is valid\n", config_file.empty() ? "the default configuration" : config_file.c_str());
+    std::printf("rsd: %s is valid\n", cl.config_file.empty() ? "the default configuration" : cl.config_file.c_str());
     return 0;
   }
   std::signal(SIGINT, on_signal);
@@ -106,16 +159,12 @@ int main(int argc, char** argv) {
     // SIGHUP: read the configuration again; a broken file keeps the running one. The
     // command line's replay and recording stay, and the recording continues.
     try {
-      if (!config_file.empty() || !calibration_file.empty()) {
-        rsd::daemon::Config next;
-        if (!config_file.empty()) next = rsd::daemon::load_config(config_file);
-        if (!calibration_file.empty()) rsd::daemon::use_calibration_file(next, calibration_file);
-        apply_replay_options(next, replay_file, speed, loop);
-        next.record_file = record_file;
+      rsd::daemon::Config next;
+      if (make_config(cl, next)) {
         cfg = next;
+        std::fprintf(stderr, "rsd: configuration reloaded\n");
       }
-      std::fprintf(stderr, "rsd: configuration reloaded\n");
-    } catch (const rsd::formats::ConfigError& e) {
+    } catch (const std::exception& e) {
       std::fprintf(stderr, "rsd: reload refused, keeping the running configuration: %s\n", e.what());
     }
     cfg.record_append = true;

@@ -177,6 +177,14 @@ void Pipeline::publish_frame(Out& o, uint64_t seq) {
   info.pinhole_sufficient = o.result.pinhole_sufficient;
   info.drops_total = static_cast<int64_t>(stats_.drops.load(std::memory_order_relaxed));
   pub_.publish_info();
+  if (files_ && !output_failed_.load()) {
+    try {
+      files_->write(o.image.view(), o.meta.sequence);
+    } catch (const std::exception& e) {
+      output_error_ = e.what();
+      output_failed_ = true;
+    }
+  }
 }
 
 void Pipeline::publish_loop() {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "daemon/drop_oldest_queue.hpp"
+#include "daemon/frame_files.hpp"
 #include "daemon/frame_rectifier.hpp"
 #include "daemon/lcm_publisher.hpp"
 #include "daemon/latency_stats.hpp"
@@ -51,6 +52,11 @@ class Pipeline {
   std::string camera_error() const;
   // The source reported the end of its stream and every frame has been published.
   bool finished() const { return finished_.load(); }
+  // Rectified frames also to files (rsd --output-dir/--output-video), written by the publishing
+  // thread; set before start(). A write that fails stops the output: output_error() says why.
+  void set_frame_files(FrameFiles* files) { files_ = files; }
+  bool output_failed() const { return output_failed_.load(); }
+  std::string output_error() const { return output_failed_.load() ? output_error_ : std::string(); }
 
  private:
   struct Raw {
@@ -88,6 +94,9 @@ class Pipeline {
   std::atomic<bool> running_{false}, capture_done_{false}, rectify_done_{false};
   std::atomic<bool> camera_lost_{false}, end_of_stream_{false}, finished_{false};
   std::string camera_error_;  // written by the capture thread before camera_lost_ is set
+  FrameFiles* files_ = nullptr;
+  std::atomic<bool> output_failed_{false};
+  std::string output_error_;  // written by the publishing thread before output_failed_ is set
   std::thread capture_, rectify_, publish_;
 };
 

@@ -49,6 +49,7 @@ struct Session {
   std::unique_ptr<VelocityInput> velocity_in;
   std::unique_ptr<FrameRectifier> rectifier;
   std::unique_ptr<Pipeline> pipeline;
+  std::unique_ptr<FrameFiles> files;  // rsd --output-dir / --output-video
   std::vector<uint8_t> pose_buf = std::vector<uint8_t>(512);
   int reconnects = 0;
   // Counters of the pipelines before a reconnect: health and limits count since start.
@@ -72,6 +73,7 @@ struct Session {
   }
   drivers::CameraSource& active() { return recording ? static_cast<drivers::CameraSource&>(*recording) : *source; }
   drivers::MessageSource* messages() const { return dynamic_cast<drivers::MessageSource*>(source.get()); }
+  drivers::Playback* playback() const { return dynamic_cast<drivers::Playback*>(source.get()); }
   drivers::ReplaySource* replay() const { return dynamic_cast<drivers::ReplaySource*>(source.get()); }
 
   // After the camera has opened: LCM, the velocity input and the rectifier.
@@ -108,15 +110,23 @@ struct Session {
     if (recording) recording->set_camera(cam);
     rectifier = std::make_unique<FrameRectifier>(cfg.rectify, cam, source->timing(), source->format());
     PipelineConfig pc = cfg.pipeline;
-    if (replay() && replay()->config().speed <= 0) pc.lossless = true;  // every frame, reproducibly
+    if (playback() && playback()->fast()) pc.lossless = true;  // every frame, reproducibly
+    const bool to_files = !cfg.output.dir.empty() || !cfg.output.video.empty();
+    if (to_files) pc.lossless = true;  // every frame into the files
+    if (to_files && !files) {
+      FrameFilesConfig fc = cfg.output;
+      fc.fps = source->timing().frame_rate_hz;
+      files = std::make_unique<FrameFiles>(fc, source->format().width, source->format().height);
+    }
     pipeline = std::make_unique<Pipeline>(pc, active(), *rectifier, *pub, velocity);
+    pipeline->set_frame_files(files.get());
     active().start();
     pipeline->start();
   }
 };
 
 // "\rrsd: replay [#######.............]  35%  120 frames  84.2 fps" on stderr.
-void print_progress(const drivers::ReplaySource& r, double seconds) {
+void print_progress(const drivers::Playback& r, double seconds) {
   constexpr int kWidth = 30;
   const double p = r.progress();
   char bar[kWidth + 1];
@@ -124,21 +134,6 @@ void print_progress(const drivers::ReplaySource& r, double seconds) {
   bar[kWidth] = '\0';
   std::fprintf(stderr, "\rrsd: replay [%s] %3.0f%%  %llu frames  %.1f fps   ", bar, 100 * p,
                static_cast<unsigned long long>(r.frames()), seconds > 0 ? static_cast<double>(r.frames()) / seconds : 0.0);
-}
-
-std::string replay_summary(const drivers::ReplaySource& r, double seconds) {
-  char text[512];
-  std::snprintf(text, sizeof text, "replayed %llu frames from %s in %.2f s (%.1f fps), %llu velocity messages",
-                static_cast<unsigned long long>(r.frames()), r.config().file.c_str(), seconds,
-                seconds > 0 ? static_cast<double>(r.frames()) / seconds : 0.0,
-                static_cast<unsigned long long>(r.velocity_messages()));
-  std::string s = text;
-  if (r.ignored()) s += ", " + std::to_string(r.ignored()) + " recorded outputs ignored";
-  if (r.passes()) s += ", looped " + std::to_string(r.passes()) + " times";
-  const formats::LcmLogReader* rd = r.reader();
-  if (rd && rd->skipped_total()) s += "; skipped " + std::to_string(rd->skipped_total()) + " events: " + rd->skip_summary();
-  else s += "; nothing skipped";
-  return s;
 }
 
 void report_health(Session& s, const char* state, double dt, uint64_t& last_in, uint64_t& last_out, bool line,
@@ -185,7 +180,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   const auto t_start = Clock::now();
   auto t_health = t_start, t_progress = t_start;
   uint64_t last_in = 0, last_out = 0;
-  const bool progress = limits.progress && s.replay();
+  const bool progress = limits.progress && s.playback();
   const bool line = limits.status_line && !progress;
   while (!flags.stop.load() && !flags.reload.load()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -193,8 +188,14 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
     const auto now = Clock::now();
     if (limits.max_frames && s.frames_out() >= limits.max_frames) break;
     if (s.pipeline->finished()) break;  // a replay has played its log to the end
+    if (s.pipeline->output_failed()) {
+      s.pipeline->stop();
+      s.active().stop();
+      s.velocity_in->stop();
+      throw std::runtime_error(s.pipeline->output_error());
+    }
     if (progress && now - t_progress >= std::chrono::milliseconds(200)) {
-      print_progress(*s.replay(), std::chrono::duration<double>(now - t_start).count());
+      print_progress(*s.playback(), std::chrono::duration<double>(now - t_start).count());
       t_progress = now;
     }
     if (limits.max_seconds > 0 && now - t_start >= std::chrono::duration<double>(limits.max_seconds)) break;
@@ -221,7 +222,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   s.active().stop();
   s.velocity_in->stop();
   const double seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
-  if (progress) print_progress(*s.replay(), seconds);
+  if (progress) print_progress(*s.playback(), seconds);
   report_health(s, "stopped", std::max(1e-3, std::chrono::duration<double>(Clock::now() - t_health).count()), last_in,
                 last_out, line, sd);
   if (line || progress) std::fprintf(stderr, "\n");
@@ -229,11 +230,19 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   out.frames_out = s.frames_out();
   out.reconnects = s.reconnects;
   out.seconds = seconds;
-  if (const drivers::ReplaySource* r = s.replay()) {
-    out.replayed = r->frames();
-    out.skipped = r->reader() ? r->reader()->skipped_total() : 0;
-    out.skips = r->reader() ? r->reader()->skip_summary() : std::string();
-    if (limits.status_line) std::fprintf(stderr, "rsd: %s\n", replay_summary(*r, seconds).c_str());
+  if (const drivers::Playback* p = s.playback()) {
+    out.replayed = p->frames();
+    if (const drivers::ReplaySource* r = s.replay(); r && r->reader()) {
+      out.skipped = r->reader()->skipped_total();
+      out.skips = r->reader()->skip_summary();
+    }
+    if (limits.status_line) std::fprintf(stderr, "rsd: %s\n", p->summary(seconds).c_str());
+  }
+  if (s.files && limits.status_line) {
+    std::string where = cfg.output.dir.empty() ? "" : cfg.output.dir + "/";
+    if (!cfg.output.video.empty()) where += (where.empty() ? "" : " and ") + cfg.output.video;
+    std::fprintf(stderr, "rsd: wrote %llu rectified frames to %s\n", static_cast<unsigned long long>(s.files->written()),
+                 where.c_str());
   }
   if (s.recorder) {
     s.recorder->flush();

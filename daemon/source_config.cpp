@@ -51,7 +51,7 @@ SourceConfig::SourceConfig() {
 }
 
 void visit_source(formats::ConfigSection& c, SourceConfig& s) {
-  c.value("driver", s.driver, "sim, aravis, v4l2, libcamera, replay (a recorded log) or lcm (frames over LCM)");
+  c.value("driver", s.driver, "sim, aravis, v4l2, libcamera, replay (a recorded log), recording (an images recording) or lcm (frames over LCM)");
   const drivers::Driver* driver = drivers::find_driver(s.driver);
   c.check(driver != nullptr, "driver", "must be " + drivers::driver_names());
   c.note("camera: {width: 1280, height: 720, fx: 900, fy: 900, cx: 639.5, cy: 359.5, distortion: [0, 0, 0, 0]}");

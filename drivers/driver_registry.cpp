@@ -3,6 +3,7 @@
 #include "drivers/aravis_source.hpp"
 #include "drivers/lcm_source.hpp"
 #include "drivers/libcamera_source.hpp"
+#include "drivers/recording_replay_source.hpp"
 #include "drivers/replay_source.hpp"
 #include "drivers/sim_source.hpp"
 #include "drivers/v4l2_source.hpp"
@@ -11,7 +12,8 @@ namespace rsd::drivers {
 
 const std::vector<Driver>& all_drivers() {
   static const std::vector<Driver> drivers = {sim_driver(),       aravis_driver(), v4l2_driver(),
-                                              libcamera_driver(), replay_driver(), lcm_driver()};
+                                              libcamera_driver(), replay_driver(), recording_driver(),
+                                              lcm_driver()};
   return drivers;
 }
 

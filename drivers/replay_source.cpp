@@ -1,5 +1,7 @@
 #include "drivers/replay_source.hpp"
 
+#include <cstdio>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -77,6 +79,22 @@ void ReplaySource::start() {
   pacer_.reset();
   pending_ = false;
   frames_this_pass_ = 0;
+}
+
+std::string ReplaySource::summary(double seconds) const {
+  const ReplaySource& r = *this;
+  char text[512];
+  std::snprintf(text, sizeof text, "replayed %llu frames from %s in %.2f s (%.1f fps), %llu velocity messages",
+                static_cast<unsigned long long>(r.frames()), r.config().file.c_str(), seconds,
+                seconds > 0 ? static_cast<double>(r.frames()) / seconds : 0.0,
+                static_cast<unsigned long long>(r.velocity_messages()));
+  std::string s = text;
+  if (r.ignored()) s += ", " + std::to_string(r.ignored()) + " recorded outputs ignored";
+  if (r.passes()) s += ", looped " + std::to_string(r.passes()) + " times";
+  const formats::LcmLogReader* rd = r.reader();
+  if (rd && rd->skipped_total()) s += "; skipped " + std::to_string(rd->skipped_total()) + " events: " + rd->skip_summary();
+  else s += "; nothing skipped";
+  return s;
 }
 
 double ReplaySource::progress() const {

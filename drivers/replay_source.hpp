@@ -19,6 +19,7 @@
 
 #include "formats/lcm_log.hpp"
 #include "drivers/message_source.hpp"
+#include "drivers/playback.hpp"
 #include "drivers/driver.hpp"
 #include "formats/image_t_codec.hpp"
 
@@ -54,7 +55,7 @@ class ReplayPacer {
 // Parses "fast" / "max" (0) or a positive factor; false otherwise.
 bool parse_speed(const std::string& text, double& speed);
 
-class ReplaySource final : public MessageSource {
+class ReplaySource final : public MessageSource, public Playback {
  public:
   explicit ReplaySource(ReplayConfig cfg);
   std::string name() const override { return "replay"; }
@@ -70,8 +71,10 @@ class ReplaySource final : public MessageSource {
 
   const ReplayConfig& config() const { return cfg_; }
   // For a progress bar and the closing summary (read from another thread: approximate).
-  double progress() const;
-  uint64_t frames() const { return frames_.load(std::memory_order_relaxed); }
+  double progress() const override;
+  uint64_t frames() const override { return frames_.load(std::memory_order_relaxed); }
+  bool fast() const override { return cfg_.speed <= 0; }
+  std::string summary(double seconds) const override;
   uint64_t ignored() const { return ignored_; }
   uint64_t passes() const { return passes_; }
   const formats::LcmLogReader* reader() const { return reader_.get(); }

@@ -137,4 +137,19 @@ void write_calibration(const std::string& file, const Calibration& c) {
   if (!out) throw std::runtime_error(file + ": cannot write the calibration");
 }
 
+Calibration calibration_of(const dsp::NominalModel& n, const std::string& source) {
+  Calibration c;
+  c.cam = n.cam;
+  c.imu_to_camera = n.imu_to_camera;
+  c.timeshift_cam_imu_s = n.time.time_offset_s;  // t_imu = t_cam + offset, as time_offset_s
+  c.line_delay_s = n.time.line_delay_s;
+  c.readout = n.time.readout;
+  c.drift_ppm = n.time.drift_ppm;
+  c.lever_arm_m = n.lever_arm;
+  c.source = source;
+  c.has_rsd_block = true;
+  c.file = source;
+  return c;
+}
+
 }  // namespace rsd::formats

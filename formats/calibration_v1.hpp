@@ -16,6 +16,7 @@
 
 #include "dsp/geometry/camera_model.hpp"
 #include "dsp/geometry/row_timing.hpp"
+#include "dsp/observation/recording.hpp"
 
 namespace rsd::formats {
 
@@ -40,6 +41,10 @@ struct Calibration {
   bool has_rsd_block = false;  // false: a file Kalibr wrote
   std::string file;            // the file read, for messages
 };
+
+// A nominal model (an observation recording's header) as a calibration: its camera, row timing,
+// imu_to_camera, time offset, drift and lever arm; no gyro bias, unit scale.
+Calibration calibration_of(const dsp::NominalModel& nominal, const std::string& source);
 
 // Reads and checks a calibration file.
 Calibration read_calibration(const std::string& file);

@@ -15,6 +15,7 @@
 
 #include "formats/intrinsics_file.hpp"
 #include "formats/nominal_sections.hpp"
+#include "formats/target_spec.hpp"
 #include "formats/yaml_map.hpp"
 
 namespace rsd::formats {
@@ -52,6 +53,7 @@ class CsvWriter {
  private:
   static std::string field(double v) { return num(v); }
   static std::string field(int v) { return std::to_string(v); }
+  static std::string field(const std::string& v) { return v; }
   fs::path path_;
   std::ofstream out_;
 };
@@ -139,6 +141,7 @@ class CsvReader {
     if (r.ec != std::errc() || r.ptr != s.data() + s.size() || !std::isfinite(v)) fail(i, "'" + s + "' is not a finite number");
     return v;
   }
+  const std::string& text(size_t i) const { return fields_[i]; }
   int integer(size_t i) const {
     int v;
     const std::string& s = fields_[i];
@@ -207,7 +210,54 @@ void read_motion(YamlMap m, Recording& r, std::string& file) {
 
 struct Files {
   std::string motion, observations, points, frames;
+  bool images = false;
+  std::string video;
+  std::optional<dsp::TargetSpec> target;
 };
+
+// observations.target of an images recording: {type: checkerboard, cols, rows, square_m} or
+// {type: aprilgrid, cols, rows, tag_m, spacing}, checked as the command line's --target is.
+dsp::TargetSpec read_target(YamlMap t) {
+  const std::string type = one_of(t, "type", {"checkerboard", "aprilgrid"});
+  require(t, {"cols", "rows", type == "checkerboard" ? "square_m" : "tag_m"});
+  const int cols = t.integer("cols", 0), rows = t.integer("rows", 0);
+  std::string text = type + ":" + std::to_string(cols) + "x" + std::to_string(rows) + ":";
+  if (type == "checkerboard") text += num(t.number("square_m"));
+  else text += num(t.number("tag_m")) + ":" + num(t.number("spacing", 0.3));
+  t.finish();
+  try {
+    return parse_target(text);
+  } catch (const std::invalid_argument& e) {
+    t.fail("type", e.what());
+  }
+}
+
+void read_observations_header(YamlMap o, Recording& r, Files& files) {
+  const std::string kind = one_of(o, "kind", {"landmarks", "matches", "images"});
+  files.images = kind == "images";
+  if (files.images) {
+    // What the pictures make: matches with a gyro, landmarks of a known target with a trajectory.
+    r.kind = r.motion == dsp::MotionKind::Gyro ? dsp::ObservationKind::Matches : dsp::ObservationKind::Landmarks;
+    if (o.has("video") == o.has("file")) o.fail("file", "an images recording gives either file (images.csv) or video, not both or neither");
+    if (o.has("video")) files.video = o.text("video", "");
+    if (r.kind == dsp::ObservationKind::Landmarks) {
+      if (!o.has("target") || !o.has("points"))
+        o.fail(o.has("points") ? "target" : "points", "is missing: an images recording with trajectory motion needs the target "
+                                                     "to detect (target:) and its corners' coordinates (points:)");
+      files.target = read_target(o.map("target"));
+    }
+  } else {
+    r.kind = kind == "landmarks" ? dsp::ObservationKind::Landmarks : dsp::ObservationKind::Matches;
+    require(o, {"file"});
+  }
+  if (o.has("video") && !files.images) o.fail("video", "applies to images recordings only (kind: images)");
+  if (o.has("target") && !files.target) o.fail("target", "applies to images recordings with trajectory motion only");
+  if (o.has("file")) files.observations = o.text("file", "");
+  if (r.kind == dsp::ObservationKind::Landmarks) {
+    require(o, {"points"});
+    files.points = o.text("points", "");
+  }
+}
 
 Files read_header(const fs::path& dir, Recording& r) {
   const std::string f = (dir / "recording.yaml").string();
@@ -224,14 +274,7 @@ Files read_header(const fs::path& dir, Recording& r) {
     read_timing_section(timing, r.nominal);
     require(timing, {"frame_rate_hz"});
     read_motion(y.map("motion"), r, files.motion);
-    YamlMap o = y.map("observations");
-    r.kind = one_of(o, "kind", {"landmarks", "matches"}) == "landmarks" ? dsp::ObservationKind::Landmarks : dsp::ObservationKind::Matches;
-    require(o, {"file"});
-    files.observations = o.text("file", "");
-    if (r.kind == dsp::ObservationKind::Landmarks) {
-      require(o, {"points"});
-      files.points = o.text("points", "");
-    }
+    read_observations_header(y.map("observations"), r, files);
     require(y, {"frames"});
     files.frames = y.text("frames", "");
     if (y.has("noise_px")) r.noise_px = y.number("noise_px");
@@ -280,7 +323,7 @@ void read_motion(const fs::path& path, Recording& r) {
   }
 }
 
-void read_landmarks(const fs::path& points, const fs::path& obs, Recording& r, const std::map<int, double>& frames) {
+std::map<int, size_t> read_points(const fs::path& points, Recording& r) {
   std::map<int, size_t> ids;
   CsvReader p(points, {"id", "x", "y", "z"});
   while (p.next()) {
@@ -288,6 +331,11 @@ void read_landmarks(const fs::path& points, const fs::path& obs, Recording& r, c
     if (!ids.emplace(id, r.points.size()).second) p.fail(0, "point " + std::to_string(id) + " appears twice");
     r.points.push_back({id, {p.number(1), p.number(2), p.number(3)}});
   }
+  return ids;
+}
+
+void read_landmarks(const fs::path& points, const fs::path& obs, Recording& r, const std::map<int, double>& frames) {
+  const std::map<int, size_t> ids = read_points(points, r);
   CsvReader o(obs, {"frame", "id", "u", "v"});
   while (o.next()) {
     const int f = o.integer(0), id = o.integer(1);
@@ -305,6 +353,40 @@ void read_matches(const fs::path& path, Recording& r, const std::map<int, double
     if (!frames.count(b)) m.fail(3, "frame " + std::to_string(b) + " is not in frames.csv");
     r.matches.push_back({a, {m.number(1), m.number(2)}, b, {m.number(4), m.number(5)}});
   }
+}
+
+// images.csv: one picture per frame of frames.csv, in the frames' order.
+std::vector<std::string> read_image_list(const fs::path& dir, const fs::path& path, const Recording& r) {
+  std::map<int, std::string> by_frame;
+  CsvReader c(path, {"frame", "file"});
+  std::map<int, double> frames;
+  for (const dsp::FrameStamp& f : r.frames) frames.emplace(f.frame, f.t);
+  while (c.next()) {
+    const int f = c.integer(0);
+    if (!frames.count(f)) c.fail(0, "frame " + std::to_string(f) + " is not in frames.csv");
+    // The file's own field, as written (no quoting in the format: a comma cannot occur).
+    const std::string file = c.text(1);
+    if (file.empty()) c.fail(1, "is empty");
+    if (!by_frame.emplace(f, (dir / file).string()).second) c.fail(0, "frame " + std::to_string(f) + " appears twice");
+  }
+  std::vector<std::string> files;
+  for (const dsp::FrameStamp& f : r.frames) {
+    const auto it = by_frame.find(f.frame);
+    if (it == by_frame.end())
+      throw RecordingError(path.string() + ": frame " + std::to_string(f.frame) + " of frames.csv has no picture");
+    files.push_back(it->second);
+  }
+  return files;
+}
+
+Recording read_common(const fs::path& dir, Files& files) {
+  if (!fs::is_directory(dir)) throw RecordingError(dir.string() + ": not a directory");
+  Recording r;
+  files = read_header(dir, r);
+  std::map<int, double> frames;
+  read_frames(dir / files.frames, r, frames);
+  read_motion(dir / files.motion, r);
+  return r;
 }
 
 }  // namespace
@@ -341,17 +423,87 @@ void write_recording(const std::string& dir_name, const Recording& r) {
 
 Recording read_recording(const std::string& dir_name) {
   const fs::path dir(dir_name);
-  if (!fs::is_directory(dir)) throw RecordingError(dir_name + ": not a directory");
-  Recording r;
-  const Files files = read_header(dir, r);
+  Files files;
+  Recording r = read_common(dir, files);
+  if (files.images)
+    throw RecordingError((dir / "recording.yaml").string() + ": observations.kind is images: the observations are still to be "
+                         "made from the pictures (rsd-extract " + dir_name + " OUT, or a tool that reads images recordings)");
   std::map<int, double> frames;
-  read_frames(dir / files.frames, r, frames);
-  read_motion(dir / files.motion, r);
+  for (const dsp::FrameStamp& f : r.frames) frames.emplace(f.frame, f.t);
   if (r.kind == dsp::ObservationKind::Landmarks)
     read_landmarks(dir / files.points, dir / files.observations, r, frames);
   else
     read_matches(dir / files.observations, r, frames);
   return r;
+}
+
+bool is_images_recording(const std::string& dir) {
+  try {
+    YamlMap y = YamlMap::load((fs::path(dir) / "recording.yaml").string());
+    return y.has("observations") && y.map("observations").text("kind", "") == "images";
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+ImagesRecording read_images_recording(const std::string& dir_name) {
+  const fs::path dir(dir_name);
+  Files files;
+  ImagesRecording out;
+  out.rec = read_common(dir, files);
+  if (!files.images)
+    throw RecordingError((dir / "recording.yaml").string() + ": observations.kind is " + dsp::to_string(out.rec.kind) +
+                         ", not images: this recording holds observations, not pictures");
+  if (files.video.empty()) out.files = read_image_list(dir, dir / files.observations, out.rec);
+  else {
+    out.video = (dir / files.video).string();
+    if (!fs::exists(out.video)) throw RecordingError((dir / "recording.yaml").string() + ": observations.video: " + out.video + " does not exist");
+    for (const dsp::FrameStamp& f : out.rec.frames) {
+      if (f.frame < 0) throw RecordingError((dir / files.frames).string() + ": frame " + std::to_string(f.frame) + ": a video's frames are numbered from 0");
+      out.files.push_back(std::to_string(f.frame));
+    }
+  }
+  if (out.rec.kind == dsp::ObservationKind::Landmarks) {
+    read_points(dir / files.points, out.rec);
+    out.target = files.target;
+  }
+  return out;
+}
+
+void write_images_recording(const std::string& dir_name, const ImagesRecording& r) {
+  const fs::path dir(dir_name);
+  dsp::Recording header = r.rec;
+  header.matches.clear(), header.observations.clear();
+  write_recording(dir_name, header);  // the files of the matches or landmarks kind are replaced below
+  fs::remove(dir / "matches.csv"), fs::remove(dir / "observations.csv");
+  if (header.kind == dsp::ObservationKind::Matches) fs::remove(dir / "points.csv");
+  YAML::Node y = YAML::LoadFile((dir / "recording.yaml").string());
+  y["observations"] = YAML::Node();
+  y["observations"]["kind"] = "images";
+  if (!r.video.empty()) y["observations"]["video"] = fs::absolute(r.video).lexically_relative(fs::absolute(dir)).string();
+  else y["observations"]["file"] = "images.csv";
+  if (header.kind == dsp::ObservationKind::Landmarks) {
+    y["observations"]["points"] = "points.csv";
+    if (r.target) {
+      const dsp::TargetSpec& t = *r.target;
+      const bool board = t.kind == dsp::TargetKind::Checkerboard;
+      y["observations"]["target"]["type"] = board ? "checkerboard" : "aprilgrid";
+      y["observations"]["target"]["cols"] = t.cols;
+      y["observations"]["target"]["rows"] = t.rows;
+      y["observations"]["target"][board ? "square_m" : "tag_m"] = num(t.spacing_m);
+      if (!board) y["observations"]["target"]["spacing"] = num(t.tag_spacing);
+    }
+  }
+  std::ofstream out(dir / "recording.yaml");
+  out << y << '\n';
+  if (!out) throw RecordingError((dir / "recording.yaml").string() + ": write failed");
+  if (r.video.empty()) {
+    CsvWriter w(dir / "images.csv", "frame,file");
+    for (size_t i = 0; i < r.rec.frames.size() && i < r.files.size(); ++i) {
+      // Paths as the reader gives them (usable from here), written relative to the directory.
+      w.row(r.rec.frames[i].frame, fs::absolute(r.files[i]).lexically_relative(fs::absolute(dir)).string());
+    }
+  }
 }
 
 }  // namespace rsd::formats

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "tools/common/cli_util.hpp"
+#include "tools/common/picture_observations.hpp"
 #include "tools/report/diagnosis_calibration.hpp"
 #include "tools/report/diagnosis_report.hpp"
 #include "dsp/diagnosis/diagnosis.hpp"
@@ -32,6 +33,9 @@ constexpr const char* kDescription =
     "REPORT_DIR gets index.md (verdict, effects with 1-sigma uncertainties, held-out RMS\n"
     "before and after, located signals) and PNG figures of the residual against row, radius\n"
     "and time and over the image, before and after.\n\n"
+    "An images recording (observations.kind: images: pictures and a gyro or trajectory) is diagnosed\n"
+    "from observations made from its pictures, as rsd-extract makes them: tracked features with a\n"
+    "gyro, the target's corners with a trajectory.\n\n"
     "--write-calibration CAL writes what the diagnosis found (the nominal model with every named\n"
     "effect applied, with the fit's sigmas) as an rsd-calibration/1 file for rsd and the tools.\n\n"
     "Example: rsd-diagnose rec/ --json diagnosis.json --report report/ --write-calibration cal.yaml\n"
@@ -80,7 +84,7 @@ void write_file(const std::string& path, const std::string& text) {
 int run(int argc, char** argv) {
   Options o;
   CLI::App app(kDescription, "rsd-diagnose");
-  app.add_option("DIR", o.dir, "Recording directory (holds recording.yaml)")->required()->check(CLI::ExistingDirectory);
+  app.add_option("DIR", o.dir, "Recording directory (holds recording.yaml); an images recording's observations are made from its pictures")->required()->check(CLI::ExistingDirectory);
   app.add_option("--json", o.json, "Write the diagnosis JSON (rsd-diagnosis/1) here")->required();
   app.add_option("--report", o.report, "Write index.md into this directory (created if missing)");
   app.add_option("--write-calibration", o.calibration,
@@ -92,7 +96,10 @@ int run(int argc, char** argv) {
   require_writable(o.json, "--json");
   if (!o.calibration.empty()) require_writable(o.calibration, "--write-calibration");
   std::cerr << "rsd-diagnose: reading " << o.dir << "\n";
-  const Recording rec = formats::read_recording(o.dir);
+  // An images recording's observations are made from its pictures, as rsd-extract makes them.
+  const Recording rec = formats::is_images_recording(o.dir)
+                            ? observations_from_pictures(formats::read_images_recording(o.dir), rsd::dsp::TrackOptions{})
+                            : formats::read_recording(o.dir);
   // The model is built first so that an unsupported recording fails before the long part.
   const DiagnosisModel model(rec);
   std::cerr << "rsd-diagnose: diagnosing " << model.size() << " observations...\n";

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "tools/common/cli_util.hpp"
+#include "formats/image_file.hpp"
 #include "formats/image_t_codec.hpp"
 #include "formats/intrinsics_file.hpp"
 #include "formats/lcm_log.hpp"
@@ -27,6 +29,7 @@
 #include "dsp/core/statistics.hpp"
 #include "dsp/features/feature_tracks.hpp"
 #include "tools/common/frame_sources.hpp"
+#include "tools/common/picture_observations.hpp"
 #include "formats/recording_v1.hpp"
 #include "formats/target_spec.hpp"
 #include "formats/nominal_sections.hpp"
@@ -54,16 +57,22 @@ constexpr const char* kDescription =
     "--nominal, then the intrinsics file (Kalibr line_delay, timeshift_cam_imu), then the log's\n"
     "metadata (line_delay_ns, readout), then global shutter. The frame rate defaults to the log's\n"
     "median frame interval. To test whether a sensor is really what a simulation assumed, state\n"
-    "that assumption, e.g. --assume-global-shutter.\n\n"
-    "Example:\n"
+    "that assumption, e.g. --assume-global-shutter.\n"
+    "With --images it writes an images recording instead: the frames as PNG files and the motion.\n"
+    "Given an images recording directory (a phone's frames and gyro, say), it makes the observations\n"
+    "from the pictures, with the recording's own recording.yaml as the nominal model.\n\n"
+    "Examples:\n"
     "  rsd-extract run.lcmlog rec/ --nominal nominal.yaml --assume-global-shutter \\\n"
     "      --target checkerboard:9x7:0.05 && rsd-diagnose rec/ --json diagnosis.json\n"
+    "  rsd-extract run.lcmlog pictures/ --nominal nominal.yaml --images\n"
+    "  rsd-extract pictures/ rec/\n"
     "Exit status: 0 on success, 2 on bad arguments, 1 on other errors. See docs/extract.md.";
 
 struct Options {
   std::string log, out, nominal, intrinsics, intrinsics_camera, kind = "auto", target;
   std::string image_channel = "RSD_RAW", velocity_channel = "RSD_VELOCITY", pose_channel = "RSD_POSE";
   bool global_shutter = false;
+  bool images = false;  // write an images recording (the pictures) instead of observations
   std::optional<double> line_delay_s, frame_rate_hz, time_offset_s, noise_px;
   std::string readout, imu_to_camera, lever_arm;
   TrackOptions track;
@@ -176,92 +185,28 @@ Nominal nominal_model(const Options& o, const MotionLog& s) {
 
 // ---------------------------------------------------------------- pass 2: observations
 
-cv::Mat grey8(const dsp::Image& img, double& scale16) {
-  const cv::Mat m(img.height, img.width,
-                  img.format == dsp::PixelFormat::Mono8 ? CV_8UC1 : img.format == dsp::PixelFormat::Rgb8 ? CV_8UC3 : CV_16UC1,
-                  const_cast<uint8_t*>(img.data.data()), static_cast<size_t>(img.stride()));
-  cv::Mat g;
-  if (m.type() == CV_8UC1) g = m.clone();
-  else if (m.type() == CV_8UC3) cv::cvtColor(m, g, cv::COLOR_RGB2GRAY);
-  else {
-    // One scale for the whole log (from the first frame's maximum): LK assumes constant brightness.
-    if (scale16 <= 0) {
-      double mx = 0;
-      cv::minMaxLoc(m, nullptr, &mx);
-      scale16 = mx > 0 ? 255.0 / mx : 1.0 / 256;
-    }
-    m.convertTo(g, CV_8U, scale16);
-  }
-  return g;
-}
-
-// Frames whose whole readout the motion covers (at the nominal time offset): outside it the
-// motion would be extrapolated, and the diagnosis would blame the camera for it.
-std::vector<bool> covered(const MotionLog& s, const Nominal& n, bool by_gyro) {
-  const double t0 = by_gyro ? s.gyro.front().t : s.poses.front().t;
-  const double t1 = by_gyro ? s.gyro.back().t : s.poses.back().t;
-  std::vector<bool> ok;
-  for (const formats::LogFrame& f : s.frames) {
-    const double tm = f.t + n.model.time.time_offset_s;
-    ok.push_back(tm >= t0 && tm + 1.0 / n.model.frame_rate_hz <= t1);
-  }
-  return ok;
-}
-
-void progress(size_t k, size_t n, const std::string& what) {
-  std::fprintf(stderr, "\rrsd-extract: frame %zu/%zu, %s", k + 1, n, what.c_str());
-  if (k + 1 == n) std::fprintf(stderr, "\n");
-}
-
-struct Pass2 {
+// The log's frames, read a second time, as pictures for tools/common/picture_observations.
+struct LogPictures {
   std::unique_ptr<FrameSource> src;
-  double scale16 = 0;
-  cv::Mat next(const Options& o, size_t k) {
-    std::optional<SourceFrame> f = src->next();
-    if (!f) throw std::runtime_error(o.log + ": frame " + std::to_string(k) + " on " + o.image_channel + " vanished on the second read");
-    return grey8(f->image, scale16);
+  PictureFrames frames;
+  LogPictures(const Options& o, const MotionLog& s, const std::vector<bool>& ok)
+      : src(open_frame_source({o.log}, FrameSourceOptions{o.image_channel, 0})) {
+    frames.what = o.log + " (" + o.image_channel + ")";
+    frames.usable = ok;
+    for (size_t k = 0; k < s.frames.size(); ++k) frames.numbers.push_back(static_cast<int>(k));
+    frames.next = [this]() -> std::optional<dsp::Image> {
+      std::optional<SourceFrame> f = src->next();
+      if (!f) return std::nullopt;
+      return std::move(f->image);
+    };
   }
 };
 
-void extract_matches(const Options& o, const MotionLog& s, const std::vector<bool>& ok, dsp::Recording& rec) {
-  Pass2 p{open_frame_source({o.log}, FrameSourceOptions{o.image_channel, 0})};
-  cv::Mat prev;
-  int lost = 0, fb = 0, unlike = 0, pairs = 0;
-  for (size_t k = 0; k < s.frames.size(); ++k) {
-    cv::Mat cur = p.next(o, k);
-    if (ok[k] && k > 0 && ok[k - 1] && !prev.empty()) {
-      const PairTracks t = track_pair(prev, cur, o.track);
-      for (size_t i = 0; i < t.a.size(); ++i)
-        rec.matches.push_back({static_cast<int>(k - 1), t.a[i], static_cast<int>(k), t.b[i]});
-      lost += t.lost, fb += t.fb_rejected, unlike += t.ncc_rejected, ++pairs;
-    }
-    prev = cur;
-    progress(k, s.frames.size(), std::to_string(rec.matches.size()) + " matches");
-  }
-  std::printf("rsd-extract: %zu matches over %d consecutive frame pairs (%.0f per pair); dropped %d lost tracks, %d "
-              "failing the %.2f px forward-backward check and %d whose patches correlate below %.2f\n",
-              rec.matches.size(), pairs, pairs ? double(rec.matches.size()) / pairs : 0.0, lost, fb, o.track.max_fb_error_px,
-              unlike, o.track.min_ncc);
-  if (rec.matches.empty()) throw std::runtime_error(o.log + ": no features could be tracked between consecutive frames");
-}
-
-void extract_landmarks(const Options& o, const TargetSpec& target, const MotionLog& s, const std::vector<bool>& ok,
-                       dsp::Recording& rec) {
-  Pass2 p{open_frame_source({o.log}, FrameSourceOptions{o.image_channel, 0})};
-  int seen = 0;
-  for (size_t k = 0; k < s.frames.size(); ++k) {
-    const cv::Mat img = p.next(o, k);
-    if (ok[k]) {
-      const std::vector<CornerObservation> c = detect_target(img, target);
-      for (const CornerObservation& ob : c) rec.observations.push_back({static_cast<int>(k), ob.id, ob.px});
-      seen += !c.empty();
-    }
-    progress(k, s.frames.size(), "target in " + std::to_string(seen) + " frames");
-  }
-  rec.points = target_points(target);
-  std::printf("rsd-extract: target %s in %d of %zu frames, %zu corner observations of %zu points\n", o.target.c_str(), seen,
-              s.frames.size(), rec.observations.size(), rec.points.size());
-  if (rec.observations.empty()) throw std::runtime_error(o.log + ": the target " + o.target + " was not found in any frame on " + o.image_channel);
+std::vector<bool> covered(const MotionLog& s, const Nominal& n, bool by_gyro) {
+  std::vector<double> t;
+  for (const formats::LogFrame& f : s.frames) t.push_back(f.t);
+  return covered_by_motion(t, by_gyro ? s.gyro.front().t : s.poses.front().t, by_gyro ? s.gyro.back().t : s.poses.back().t,
+                           n.model);
 }
 
 // ---------------------------------------------------------------- the run
@@ -281,7 +226,50 @@ dsp::ObservationKind choose_kind(const Options& o, const MotionLog& s) {
   return dsp::ObservationKind::Matches;
 }
 
+// --images: the usable frames as PNG files under OUT/frames, with images.csv, instead of
+// observations: an images recording that rsd --replay, rsd-extract and rsd-diagnose read.
+void write_pictures(const Options& o, LogPictures& pictures, const std::optional<TargetSpec>& target, dsp::Recording& rec) {
+  formats::ImagesRecording out;
+  out.rec = rec;
+  out.target = target;
+  if (rec.kind == dsp::ObservationKind::Landmarks) out.rec.points = target_points(*target);
+  const std::filesystem::path dir = std::filesystem::path(o.out) / "frames";
+  std::filesystem::create_directories(dir);
+  PictureFrames& f = pictures.frames;
+  for (size_t k = 0; k < f.numbers.size(); ++k) {
+    std::optional<dsp::Image> img = f.next();
+    if (!img) throw std::runtime_error(o.log + ": frame " + std::to_string(k) + " vanished on the second read");
+    if (!f.usable[k]) continue;
+    char name[32];
+    std::snprintf(name, sizeof name, "%06d.png", f.numbers[k]);
+    formats::write_png((dir / name).string(), img->view());
+    out.files.push_back((dir / name).string());
+    std::fprintf(stderr, "\rrsd-extract: frame %zu/%zu written", k + 1, f.numbers.size());
+  }
+  std::fprintf(stderr, "\n");
+  formats::write_images_recording(o.out, out);
+  std::printf("rsd-extract: wrote an images recording (%zu frames as PNG, %zu %s samples) to %s\n", out.files.size(),
+              rec.motion == dsp::MotionKind::Gyro ? rec.gyro.size() : rec.trajectory.size(), dsp::to_string(rec.motion),
+              o.out.c_str());
+}
+
+// rsd-extract DIR OUT: an images recording's observations, made from its pictures.
+int run_on_recording(const Options& o) {
+  if (!o.nominal.empty() || !o.intrinsics.empty() || o.global_shutter || o.line_delay_s || o.frame_rate_hz || o.time_offset_s ||
+      !o.readout.empty() || !o.imu_to_camera.empty() || !o.lever_arm.empty() || !o.target.empty() || o.images)
+    throw UsageError(o.log + " is an images recording: its recording.yaml is the nominal model and names the target; "
+                     "the nominal-model options, --target and --images apply to LCM logs");
+  std::fprintf(stderr, "rsd-extract: reading the images recording %s\n", o.log.c_str());
+  const formats::ImagesRecording r = formats::read_images_recording(o.log);
+  dsp::Recording rec = observations_from_pictures(r, o.track);
+  if (o.noise_px) rec.noise_px = o.noise_px;
+  formats::write_recording(o.out, rec);
+  std::printf("rsd-extract: wrote a %s recording (%zu frames) to %s\n", dsp::to_string(rec.kind), rec.frames.size(), o.out.c_str());
+  return 0;
+}
+
 int run(const Options& o) {
+  if (std::filesystem::is_directory(o.log)) return run_on_recording(o);
   std::optional<TargetSpec> target;
   if (!o.target.empty()) {
     try {
@@ -324,8 +312,13 @@ int run(const Options& o) {
   if (rec.frames.size() < s.frames.size())
     std::fprintf(stderr, "rsd-extract: %zu of %zu frames lie outside the motion's time span and are left out\n",
                  s.frames.size() - rec.frames.size(), s.frames.size());
-  if (kind == dsp::ObservationKind::Matches) extract_matches(o, s, ok, rec);
-  else extract_landmarks(o, *target, s, ok, rec);
+  LogPictures pictures(o, s, ok);
+  if (o.images) {
+    write_pictures(o, pictures, target, rec);
+    return 0;
+  }
+  if (kind == dsp::ObservationKind::Matches) make_matches(pictures.frames, o.track, rec);
+  else make_landmarks(pictures.frames, *target, o.target, rec);
   formats::write_recording(o.out, rec);
   std::printf("rsd-extract: wrote a %s recording (%zu frames, %zu %s samples) to %s\n", dsp::to_string(kind), rec.frames.size(),
               kind == dsp::ObservationKind::Matches ? rec.gyro.size() : rec.trajectory.size(), dsp::to_string(rec.motion), o.out.c_str());
@@ -337,7 +330,8 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   Options o;
   CLI::App app(kDescription, "rsd-extract");
-  app.add_option("LOG", o.log, "LCM log with raw frames and motion")->required()->check(CLI::ExistingFile);
+  app.add_option("INPUT", o.log, "LCM log with raw frames and motion, or an images recording directory")
+      ->required()->check(CLI::ExistingPath);
   app.add_option("OUTDIR", o.out, "Observation recording directory to write (created)")->required();
   app.add_option("--nominal", o.nominal, "YAML with recording.yaml's camera: / timing: / motion: keys (a recording.yaml will do)")
       ->check(CLI::ExistingFile);
@@ -345,6 +339,9 @@ int main(int argc, char** argv) {
   app.add_option("--intrinsics-camera", o.intrinsics_camera, "Kalibr camera (cam0, cam1, ...) in --intrinsics");
   app.add_option("--kind", o.kind, "matches, landmarks, or auto: landmarks when --target is given and the log has poses")
       ->check(CLI::IsMember({"auto", "matches", "landmarks"}))->capture_default_str();
+  app.add_flag("--images", o.images,
+               "write an images recording instead (the frames as PNG under OUTDIR/frames, images.csv, the motion):\n"
+               "what rsd --replay DIR, rsd-extract DIR and rsd-diagnose DIR read");
   app.add_option("--target", o.target, "checkerboard:COLSxROWS:SQUARE_M (inner corners) or aprilgrid:COLSxROWS:TAG_M[:SPACING]");
   app.add_flag("--assume-global-shutter", o.global_shutter, "nominal line delay 0 (whatever the log or files say)");
   app.add_option("--line-delay", o.line_delay_s, "nominal line delay, s")->check(CLI::NonNegativeNumber);

@@ -142,7 +142,7 @@ TEST(Config, ACalibrationFileReachesCameraDriversAndVelocityInput) {
 }
 
 TEST(Config, BadValuesNameFileLineAndKey) {
-  EXPECT_NE(error_of("source:\n  driver: webcam\n").find("bad.yaml:2:11: 'source.driver' must be sim, aravis, v4l2, libcamera, replay or lcm"),
+  EXPECT_NE(error_of("source:\n  driver: webcam\n").find("bad.yaml:2:11: 'source.driver' must be sim, aravis, v4l2, libcamera, replay, recording or lcm"),
             std::string::npos)
       << error_of("source:\n  driver: webcam\n");
   EXPECT_NE(error_of("source:\n  sim: {readout: sideways}\n").find("'source.sim.readout' must be top_to_bottom or bottom_to_top"),

@@ -28,13 +28,11 @@ void add_sigma(formats::Calibration& c, const dsp::Diagnosis& d, const std::stri
 formats::Calibration calibration_from(const dsp::NominalModel& nominal, const dsp::Diagnosis& d, const std::string& source) {
   using dsp::Param;
   const dsp::ModelParams& p = d.fitted;  // full values: the nominal where no effect was named
-  formats::Calibration c;
-  c.cam = nominal.cam;
+  formats::Calibration c = formats::calibration_of(nominal, source);
   c.cam.fx = p[Param::Fx];
   c.cam.fy = p[Param::Fy];
   c.cam.dist.k1 = p[Param::K1];
   c.cam.dist.k2 = p[Param::K2];
-  c.imu_to_camera = nominal.imu_to_camera;
   c.timeshift_cam_imu_s = p[Param::TimeOffset];  // t_imu = t_cam + offset, as time_offset_s
   c.line_delay_s = p[Param::LineDelay];
   c.readout = p.flip_readout ? (nominal.time.readout == dsp::Readout::TopToBottom ? dsp::Readout::BottomToTop
@@ -43,7 +41,6 @@ formats::Calibration calibration_from(const dsp::NominalModel& nominal, const ds
   c.drift_ppm = p[Param::Drift];
   c.gyro_bias_rad_s = {p[Param::BiasX], p[Param::BiasY], p[Param::BiasZ]};
   c.lever_arm_m = {p[Param::LeverX], p[Param::LeverY], p[Param::LeverZ]};
-  c.source = source;
   add_sigma(c, d, "line_delay_s", {"line_delay_s"});
   add_sigma(c, d, "timeshift_cam_imu", {"time_offset_s"});
   add_sigma(c, d, "drift_ppm", {"drift_ppm"});

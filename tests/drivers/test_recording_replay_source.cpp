@@ -1,0 +1,148 @@
+// The images-recording source (rsd --replay DIR): pictures out as frames with frames.csv's
+// stamps and numbers, the recording's row timing (or a calibration's), and the motion handed
+// to the velocity input ahead of each frame: every sample its readout needs, none far beyond.
+// A trajectory becomes body rates: checked against a screw motion with known rates.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <Eigen/Geometry>
+#include <filesystem>
+
+#include "drivers/recording_replay_source.hpp"
+#include "formats/image_file.hpp"
+#include "formats/video_file.hpp"
+
+using namespace rsd;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / ("rsd-test-recsrc-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p;
+}
+
+Eigen::Quaterniond exp_q(const Eigen::Vector3d& r) {
+  return r.norm() > 0 ? Eigen::Quaterniond(Eigen::AngleAxisd(r.norm(), r.normalized())) : Eigen::Quaterniond::Identity();
+}
+
+// Four 32x24 frames at 20 Hz starting at t = 100 s, numbered 7..10, in a video; a 1 kHz gyro
+// from 99.9 s; line delay 1 ms (a 24 ms readout); nominal offset 5 ms.
+fs::path gyro_video_recording() {
+  const fs::path dir = temp_dir("video");
+  formats::ImagesRecording r;
+  r.rec.kind = dsp::ObservationKind::Matches;
+  r.rec.motion = dsp::MotionKind::Gyro;
+  r.rec.nominal.cam.width = 32, r.rec.nominal.cam.height = 24;
+  r.rec.nominal.cam.fx = r.rec.nominal.cam.fy = 30, r.rec.nominal.cam.cx = 15.5, r.rec.nominal.cam.cy = 11.5;
+  r.rec.nominal.frame_rate_hz = 20;
+  r.rec.nominal.time.line_delay_s = 1e-3;
+  r.rec.nominal.time.time_offset_s = 0.005;
+  r.video = (dir / "capture.avi").string();
+  formats::VideoWriter w(r.video, 32, 24, 20);
+  for (int k = 0; k < 12; ++k) {
+    dsp::Image img(32, 24, dsp::PixelFormat::Mono8);
+    img.data.assign(img.data.size(), static_cast<uint8_t>(10 * k));
+    w.write(img.view());
+  }
+  for (int k = 0; k < 4; ++k) {
+    r.rec.frames.push_back({7 + k, 100.0 + 0.05 * k});
+    r.files.push_back(std::to_string(7 + k));  // the video's frames 7..10
+  }
+  for (int k = 0; k < 400; ++k) r.rec.gyro.push_back({99.9 + 1e-3 * k, {0.1, 0.2, 0.3 + 1e-3 * k}});
+  formats::write_images_recording(dir.string(), r);
+  return dir;
+}
+
+}  // namespace
+
+TEST(BodyRates, ScrewMotionGivesItsBodyRatesAndVelocity) {
+  const Eigen::Vector3d w(0.3, -0.2, 0.5), v_world(1.0, 0.5, -0.25);
+  const Eigen::Quaterniond q0 = exp_q({0.1, 0.2, 0.3});
+  std::vector<dsp::PoseSample> poses;
+  for (int k = 0; k <= 20; ++k) {
+    const double t = 0.01 * k;
+    poses.push_back({t, v_world * t, q0 * exp_q(w * t)});  // R(t) = R0 Exp(w t): constant body rate
+  }
+  poses.push_back({0.2, v_world * 0.2, q0 * exp_q(w * 0.2)});  // a repeated stamp is skipped
+  const std::vector<drivers::VelocitySample> s = drivers::body_rates(poses);
+  ASSERT_EQ(s.size(), 20u);
+  for (const drivers::VelocitySample& x : s) {
+    EXPECT_TRUE(x.imu_frame);
+    EXPECT_TRUE(x.has_linear);
+    const double t = x.t_ns * 1e-9;
+    const Eigen::Vector3d v_body = (q0 * exp_q(w * t)).conjugate() * v_world;
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(x.w[i], w[i], 1e-9);
+      EXPECT_NEAR(x.v[i], v_body[i], 1e-4);  // the midpoint rotation of a 10 ms step
+    }
+  }
+}
+
+TEST(RecordingReplaySource, PlaysPicturesWithStampsNumbersAndMotionAhead) {
+  const fs::path dir = gyro_video_recording();
+  drivers::RecordingReplayConfig cfg;
+  cfg.dir = dir.string();
+  cfg.speed = 0;
+  drivers::RecordingReplaySource src(cfg);
+  std::vector<drivers::VelocitySample> motion;
+  src.set_velocity_sink([&](const drivers::VelocitySample& s) { motion.push_back(s); });
+  src.open();
+  EXPECT_EQ(src.format().width, 32);
+  EXPECT_EQ(src.format().format, dsp::PixelFormat::Rgb8);  // decoded video
+  EXPECT_DOUBLE_EQ(src.timing().line_delay_s, 1e-3);
+  EXPECT_DOUBLE_EQ(src.timing().frame_rate_hz, 20);
+  EXPECT_TRUE(src.fast());
+  src.start();
+  dsp::Image img(32, 24, dsp::PixelFormat::Rgb8);
+  drivers::FrameMeta meta;
+  for (int k = 0; k < 4; ++k) {
+    ASSERT_EQ(src.capture(img.view(), meta, std::chrono::milliseconds(100)), drivers::CaptureStatus::Frame);
+    EXPECT_EQ(meta.sequence, static_cast<uint64_t>(7 + k));
+    EXPECT_EQ(meta.first_row_ns, std::llround((100.0 + 0.05 * k) * 1e9));
+    EXPECT_NEAR(img.data[0], 10 * (7 + k), 4);  // the video's frame 7 + k (Motion-JPEG: a few levels)
+    // Motion up to the last row (24 ms) + the nominal offset (5 ms) + the lead (50 ms), no more.
+    const double until = 100.0 + 0.05 * k + 0.024 + 0.005 + 0.05;
+    ASSERT_FALSE(motion.empty());
+    EXPECT_TRUE(motion.back().imu_frame);
+    EXPECT_LE(motion.back().t_ns * 1e-9, until + 1e-9);
+    EXPECT_GT(motion.back().t_ns * 1e-9, until - 1.001e-3);
+  }
+  EXPECT_EQ(src.capture(img.view(), meta, std::chrono::milliseconds(100)), drivers::CaptureStatus::EndOfStream);
+  EXPECT_EQ(motion.size(), 400u);  // the rest at the end: nothing lost
+  EXPECT_EQ(src.frames(), 4u);
+  EXPECT_DOUBLE_EQ(src.progress(), 1.0);
+}
+
+TEST(RecordingReplaySource, CalibratedRowTimingReplacesTheNominal) {
+  const fs::path dir = gyro_video_recording();
+  const drivers::Driver d = drivers::recording_driver();
+  std::any cfg = d.defaults();
+  std::any_cast<drivers::RecordingReplayConfig&>(cfg).dir = dir.string();
+  d.use_row_timing(cfg, 1.1e-3, dsp::Readout::BottomToTop, true);
+  auto src = d.make(cfg);
+  src->open();
+  EXPECT_DOUBLE_EQ(src->timing().line_delay_s, 1.1e-3);
+  EXPECT_EQ(src->timing().readout, dsp::Readout::BottomToTop);
+}
+
+TEST(RecordingReplaySource, RecordingsOfObservationsAreRefusedByName) {
+  const fs::path dir = temp_dir("obs");
+  dsp::Recording r;
+  r.kind = dsp::ObservationKind::Matches;
+  r.motion = dsp::MotionKind::Gyro;
+  r.frames = {{0, 0.0}};
+  r.gyro = {{0, {0, 0, 0}}, {1, {0, 0, 0}}};
+  formats::write_recording(dir.string(), r);
+  drivers::RecordingReplayConfig cfg;
+  cfg.dir = dir.string();
+  drivers::RecordingReplaySource src(cfg);
+  try {
+    src.open();
+    FAIL() << "a matches recording played as pictures";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("observations.kind is matches, not images"), std::string::npos) << e.what();
+  }
+}

@@ -1,0 +1,141 @@
+#include "tools/common/picture_observations.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+#include <cstdio>
+#include <memory>
+#include <set>
+#include <stdexcept>
+
+#include "drivers/images_source.hpp"
+#include "dsp/features/target_observations.hpp"
+
+namespace rsd::tools {
+
+std::vector<bool> covered_by_motion(const std::vector<double>& frame_t, double motion_t0, double motion_t1,
+                                    const dsp::NominalModel& nominal) {
+  std::vector<bool> ok;
+  for (const double t : frame_t) {
+    const double tm = t + nominal.time.time_offset_s;
+    ok.push_back(tm >= motion_t0 && tm + 1.0 / nominal.frame_rate_hz <= motion_t1);
+  }
+  return ok;
+}
+
+cv::Mat grey8(const dsp::Image& img, double& scale16) {
+  const cv::Mat m(img.height, img.width,
+                  img.format == dsp::PixelFormat::Mono8 ? CV_8UC1 : img.format == dsp::PixelFormat::Rgb8 ? CV_8UC3 : CV_16UC1,
+                  const_cast<uint8_t*>(img.data.data()), static_cast<size_t>(img.stride()));
+  cv::Mat g;
+  if (m.type() == CV_8UC1) g = m.clone();
+  else if (m.type() == CV_8UC3) cv::cvtColor(m, g, cv::COLOR_RGB2GRAY);
+  else {
+    if (scale16 <= 0) {
+      double mx = 0;
+      cv::minMaxLoc(m, nullptr, &mx);
+      scale16 = mx > 0 ? 255.0 / mx : 1.0 / 256;
+    }
+    m.convertTo(g, CV_8U, scale16);
+  }
+  return g;
+}
+
+namespace {
+
+void progress(size_t k, size_t n, const std::string& what) {
+  std::fprintf(stderr, "\rrsd: frame %zu/%zu, %s   ", k + 1, n, what.c_str());
+  if (k + 1 == n) std::fprintf(stderr, "\n");
+}
+
+cv::Mat next_grey(PictureFrames& f, size_t k, double& scale16) {
+  std::optional<dsp::Image> img = f.next();
+  if (!img) throw std::runtime_error(f.what + ": frame " + std::to_string(f.numbers[k]) + " could not be read");
+  return grey8(*img, scale16);
+}
+
+}  // namespace
+
+void make_matches(PictureFrames& f, const dsp::TrackOptions& opt, dsp::Recording& rec) {
+  cv::Mat prev;
+  double scale16 = 0;
+  int lost = 0, fb = 0, unlike = 0, pairs = 0;
+  const size_t n = f.numbers.size();
+  for (size_t k = 0; k < n; ++k) {
+    cv::Mat cur = next_grey(f, k, scale16);
+    if (f.usable[k] && k > 0 && f.usable[k - 1] && !prev.empty()) {
+      const dsp::PairTracks t = dsp::track_pair(prev, cur, opt);
+      for (size_t i = 0; i < t.a.size(); ++i) rec.matches.push_back({f.numbers[k - 1], t.a[i], f.numbers[k], t.b[i]});
+      lost += t.lost, fb += t.fb_rejected, unlike += t.ncc_rejected, ++pairs;
+    }
+    prev = cur;
+    progress(k, n, std::to_string(rec.matches.size()) + " matches");
+  }
+  std::printf("rsd: %zu matches over %d consecutive frame pairs (%.0f per pair); dropped %d lost tracks, %d failing the "
+              "%.2f px forward-backward check and %d whose patches correlate below %.2f\n",
+              rec.matches.size(), pairs, pairs ? double(rec.matches.size()) / pairs : 0.0, lost, fb, opt.max_fb_error_px, unlike,
+              opt.min_ncc);
+  if (rec.matches.empty()) throw std::runtime_error(f.what + ": no features could be tracked between consecutive frames");
+}
+
+void make_landmarks(PictureFrames& f, const dsp::TargetSpec& target, const std::string& target_name, dsp::Recording& rec) {
+  if (rec.points.empty()) rec.points = dsp::target_points(target);
+  std::set<int> ids;
+  for (const dsp::Landmark& p : rec.points) ids.insert(p.id);
+  double scale16 = 0;
+  int seen = 0, unknown = 0;
+  const size_t n = f.numbers.size();
+  for (size_t k = 0; k < n; ++k) {
+    const cv::Mat img = next_grey(f, k, scale16);
+    if (f.usable[k]) {
+      const std::vector<dsp::CornerObservation> c = dsp::detect_target(img, target);
+      for (const dsp::CornerObservation& ob : c)
+        if (ids.count(ob.id)) rec.observations.push_back({f.numbers[k], ob.id, ob.px});
+        else ++unknown;
+      seen += !c.empty();
+    }
+    progress(k, n, "target in " + std::to_string(seen) + " frames");
+  }
+  std::printf("rsd: target %s in %d of %zu frames, %zu corner observations of %zu points\n", target_name.c_str(), seen, n,
+              rec.observations.size(), rec.points.size());
+  if (unknown) std::printf("rsd: %d detected corners have no point in points.csv and were left out\n", unknown);
+  if (rec.observations.empty()) throw std::runtime_error(f.what + ": the target " + target_name + " was not found in any frame");
+}
+
+dsp::Recording observations_from_pictures(const formats::ImagesRecording& r, const dsp::TrackOptions& opt) {
+  dsp::Recording rec = r.rec;
+  drivers::ImagesConfig ic;
+  if (r.video.empty()) ic.files = r.files;
+  else {
+    ic.video = r.video;
+    for (const std::string& k : r.files) ic.video_frames.push_back(std::stol(k));
+  }
+  drivers::ImagesSource src(ic);
+  src.open();
+  src.start();
+  dsp::Image buf(src.format().width, src.format().height, src.format().format);
+  PictureFrames f;
+  f.what = r.video.empty() ? "the recording's pictures" : r.video;
+  f.next = [&]() -> std::optional<dsp::Image> {
+    drivers::FrameMeta meta;
+    if (src.capture(buf.view(), meta, std::chrono::milliseconds(0)) != drivers::CaptureStatus::Frame) return std::nullopt;
+    return buf;
+  };
+  std::vector<double> t;
+  for (const dsp::FrameStamp& s : rec.frames) f.numbers.push_back(s.frame), t.push_back(s.t);
+  const bool gyro = rec.motion == dsp::MotionKind::Gyro;
+  f.usable = covered_by_motion(t, gyro ? rec.gyro.front().t : rec.trajectory.front().t,
+                               gyro ? rec.gyro.back().t : rec.trajectory.back().t, rec.nominal);
+  if (rec.kind == dsp::ObservationKind::Matches) make_matches(f, opt, rec);
+  else make_landmarks(f, *r.target, "of recording.yaml", rec);
+  // Only the frames observed: the rest lie outside the motion.
+  std::vector<dsp::FrameStamp> kept;
+  for (size_t k = 0; k < rec.frames.size(); ++k)
+    if (f.usable[k]) kept.push_back(rec.frames[k]);
+  if (kept.size() < rec.frames.size())
+    std::fprintf(stderr, "rsd: %zu of %zu frames lie outside the motion's time span and are left out\n",
+                 rec.frames.size() - kept.size(), rec.frames.size());
+  rec.frames = kept;
+  return rec;
+}
+
+}  // namespace rsd::tools

@@ -1,0 +1,50 @@
+// Pictures to observations: features tracked between consecutive frames (matches, for a gyro)
+// or a known target's corners detected in every frame (landmarks, for a trajectory). The one
+// path by which rsd-extract (from an LCM log or an images recording) and rsd-diagnose (from
+// an images recording) make observations, so that both see the same ones.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dsp/core/image.hpp"
+#include "dsp/features/feature_tracks.hpp"
+#include "dsp/observation/recording.hpp"
+#include "dsp/sim/calibration_target.hpp"
+#include "formats/recording_v1.hpp"
+
+namespace rsd::tools {
+
+struct PictureFrames {
+  std::function<std::optional<dsp::Image>()> next;  // the next picture, in frame order
+  std::vector<int> numbers;                          // each picture's frame number
+  std::vector<bool> usable;                          // whether the motion covers its readout
+  std::string what;                                  // for messages: the log or the recording
+};
+
+// Frames whose whole readout the motion spans at the nominal time offset: outside it the
+// motion would be extrapolated, and a diagnosis would blame the camera for it.
+std::vector<bool> covered_by_motion(const std::vector<double>& frame_t, double motion_t0, double motion_t1,
+                                    const dsp::NominalModel& nominal);
+
+// 8-bit grey for tracking and detection; 16-bit pictures are scaled by one factor for the
+// whole sequence (from the first frame's maximum: tracking assumes constant brightness).
+cv::Mat grey8(const dsp::Image& img, double& scale16);
+
+// Appends the matches between consecutive usable frames to rec.matches; prints a summary.
+// Throws std::runtime_error when nothing could be tracked.
+void make_matches(PictureFrames& frames, const dsp::TrackOptions& opt, dsp::Recording& rec);
+// Appends the target's corners seen in usable frames to rec.observations and sets rec.points.
+// Throws std::runtime_error when the target is nowhere.
+void make_landmarks(PictureFrames& frames, const dsp::TargetSpec& target, const std::string& target_name,
+                    dsp::Recording& rec);
+
+// An images recording with its observations made from its pictures: matches with a gyro,
+// landmarks of its target with a trajectory. Frames the motion does not cover are left out.
+dsp::Recording observations_from_pictures(const formats::ImagesRecording& r, const dsp::TrackOptions& opt);
+
+}  // namespace rsd::tools
