@@ -84,7 +84,8 @@ void visit_config(formats::ConfigSection& c, Config& cfg) {
   c.section("lcm", [&](formats::ConfigSection& s) { visit_lcm(s, cfg); });
 }
 
-// The IMU part of a calibration: the velocity input's rotation, clock offset, bias and scale.
+// The IMU part of a calibration: the velocity input's rotation, clock offset and drift, bias,
+// scale and lever arm.
 void use_imu_calibration(Config& c, const formats::Calibration& cal) {
   VelocityInputConfig& in = c.velocity_input;
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
@@ -94,6 +95,8 @@ void use_imu_calibration(Config& c, const formats::Calibration& cal) {
   in.imu_time_offset_s = cal.timeshift_cam_imu_s;
   in.gyro_bias_rad_s = cal.gyro_bias_rad_s;
   in.gyro_scale = cal.gyro_scale;
+  in.drift_ppm = cal.drift_ppm;
+  in.lever_arm_m = cal.lever_arm_m;
 }
 
 }  // namespace

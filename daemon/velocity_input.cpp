@@ -2,6 +2,7 @@
 
 #include <bot_core/pose_t.hpp>
 
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <chrono>
 #include <cmath>
@@ -51,16 +52,32 @@ void VelocityInput::on_velocity(const lcm_recv_buf_t* rbuf, const char*, void* u
   self->accept(m);
 }
 
+int64_t VelocityInput::camera_utime(int64_t utime_motion) {
+  const int64_t shifted = utime_motion - std::llround(cfg_.imu_time_offset_s * 1e6);
+  if (cfg_.drift_ppm == 0) return shifted;
+  // t_m - offset = t_cam + d (t_cam - T0)  =>  t_cam = T0 + (t_m - offset - T0) / (1 + d).
+  {
+    std::lock_guard<std::mutex> lock(writer_);  // the source's and the LCM thread may both be first
+    if (!t0_us_) t0_us_ = shifted;
+  }
+  return *t0_us_ + std::llround(static_cast<double>(shifted - *t0_us_) / (1.0 + cfg_.drift_ppm * 1e-6));
+}
+
+void VelocityInput::at_camera_origin(const double* w, const double* v, double* out) const {
+  const Eigen::Vector3d c = Eigen::Vector3d(v[0], v[1], v[2]) + Eigen::Vector3d(w[0], w[1], w[2]).cross(cfg_.lever_arm_m);
+  for (int i = 0; i < 3; ++i) out[i] = c[i];
+}
+
 void VelocityInput::push_imu(int64_t utime_imu, const double* w_measured, const double* v, bool has_linear) {
-  double w[3];
+  double w[3], vc[3];
   for (int i = 0; i < 3; ++i) w[i] = cfg_.gyro_scale[i] * (w_measured[i] - cfg_.gyro_bias_rad_s[i]);
-  push(utime_imu - std::llround(cfg_.imu_time_offset_s * 1e6), cfg_.imu_to_camera, w, v, has_linear);
+  at_camera_origin(w, v, vc);
+  push(camera_utime(utime_imu), cfg_.imu_to_camera, w, vc, has_linear);
 }
 
 void VelocityInput::accept(const rsd::velocity_t& m) {
   if (m.frame == rsd::velocity_t::FRAME_CAMERA)  // onto the camera clock
-    push(m.utime - std::llround(cfg_.imu_time_offset_s * 1e6), Eigen::Matrix3d::Identity(), m.angular_velocity,
-         m.linear_velocity, m.has_linear);
+    push(camera_utime(m.utime), Eigen::Matrix3d::Identity(), m.angular_velocity, m.linear_velocity, m.has_linear);
   else if (m.frame == rsd::velocity_t::FRAME_IMU)
     push_imu(m.utime, m.angular_velocity, m.linear_velocity, m.has_linear);
   else
@@ -104,12 +121,16 @@ void VelocityInput::on_pose(const lcm_recv_buf_t* rbuf, const char*, void* user)
     self->malformed_.fetch_add(1);
     return;
   }
-  self->push(m.utime, self->cfg_.body_to_camera, m.rotation_rate, m.vel, true);
+  double v[3];
+  self->at_camera_origin(m.rotation_rate, m.vel, v);
+  self->push(m.utime, self->cfg_.body_to_camera, m.rotation_rate, v, true);
 }
 
 void VelocityInput::deliver(const bot_core::pose_t& m) {
   source_feeds_pose_.store(true);
-  push(m.utime, cfg_.body_to_camera, m.rotation_rate, m.vel, true);
+  double v[3];
+  at_camera_origin(m.rotation_rate, m.vel, v);
+  push(m.utime, cfg_.body_to_camera, m.rotation_rate, v, true);
 }
 
 void VelocityInput::start() {

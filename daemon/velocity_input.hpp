@@ -16,6 +16,7 @@
 #include <Eigen/Core>
 #include <atomic>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -37,6 +38,13 @@ struct VelocityInputConfig {
   double imu_time_offset_s = 0;
   Eigen::Vector3d gyro_bias_rad_s = Eigen::Vector3d::Zero();
   Eigen::Vector3d gyro_scale = Eigen::Vector3d::Ones();
+  // The camera clock's rate error (the recording's time model): t_motion = t_cam + offset +
+  // drift_ppm 1e-6 (t_cam - T0). T0 is the first sample's camera time (the recording format's
+  // first frame, which it precedes by a fraction of a second: drift x that gap is microseconds).
+  double drift_ppm = 0;
+  // The camera's origin in the motion sensor's (body's) axes: a body moving at v and turning at
+  // w carries the camera at v + w x lever_arm_m, before the rotation into camera axes.
+  Eigen::Vector3d lever_arm_m = Eigen::Vector3d::Zero();
 };
 
 // Whether m is a proper rotation (orthonormal, determinant +1) to within tol.
@@ -76,6 +84,10 @@ class VelocityInput {
   static void on_pose(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
   void accept(const rsd::velocity_t& m);
   void push(int64_t utime, const Eigen::Matrix3d& r, const double* w, const double* v, bool has_linear);
+  // A motion-clock stamp on the camera clock, through the offset and drift.
+  int64_t camera_utime(int64_t utime_motion);
+  // A body's linear velocity carried to the camera's origin (the lever arm).
+  void at_camera_origin(const double* w, const double* v, double* out) const;
   // A motion-sensor measurement (IMU axes and clock) through the calibration.
   void push_imu(int64_t utime_imu, const double* w_measured, const double* v, bool has_linear);
   lcm_t* lcm_;
@@ -87,6 +99,7 @@ class VelocityInput {
   std::atomic<bool> running_{false};
   std::atomic<uint64_t> malformed_{0}, ignored_{0};
   std::atomic<bool> source_feeds_{false}, source_feeds_pose_{false};
+  std::optional<int64_t> t0_us_;  // camera time of the first sample (the drift's reference)
   formats::LcmLogWriter* record_ = nullptr;
   std::mutex writer_;  // the source's thread and the LCM thread (pose_t) both push
   std::thread thread_;

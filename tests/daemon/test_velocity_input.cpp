@@ -132,6 +132,48 @@ TEST_F(VelocityInputTest, ImuCalibrationCorrectsBiasScaleRotationAndClock) {
   EXPECT_NEAR(s.v[1], 1.0, 1e-12);
 }
 
+// Clock drift: t_imu = t_cam + offset + d (t_cam - T0), T0 the first sample's camera time. With
+// d = 500 ppm and a 10 ms offset, an IMU stamp 2 s after the first is 2 s / 1.0005 later on the
+// camera clock: 1999.0005 ms (to the microsecond).
+TEST_F(VelocityInputTest, ClockDriftStretchesTheImuTimeLine) {
+  VelocityInputConfig cfg;
+  cfg.imu_time_offset_s = 0.010;
+  cfg.drift_ppm = 500;
+  VelocityBuffer buffer(VelocityLimits{20, 100, 5.0});  // samples 2 s apart still interpolate
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer, cfg);
+  publish("RSD_VELOCITY", velocity(1'010'000, rsd::velocity_t::FRAME_IMU, 0.1, 0, 0, 0, 0, 0, false));
+  publish("RSD_VELOCITY", velocity(3'010'000, rsd::velocity_t::FRAME_IMU, 0.3, 0, 0, 0, 0, 0, false));
+  drain();
+  ASSERT_EQ(buffer.count(), 2u);
+  auto w_at = [&](int64_t us) {
+    VelocityEstimate e;
+    EXPECT_EQ(buffer.at(us * 1000, e), VelocityStatus::Ok);
+    return e.sample.w[0];
+  };
+  const int64_t t1 = 1'000'000 + std::llround(2e6 / 1.0005);  // 2'999'000 us
+  EXPECT_NEAR(w_at(1'000'000), 0.1, 1e-12);
+  EXPECT_NEAR(w_at(t1), 0.3, 1e-9);  // the second sample sits exactly there
+  // Half way between the two on the stretched time line: the mean of the two rates. Without the
+  // drift the second sample would sit 1 ms later, and the rate here would be 0.1999.
+  EXPECT_NEAR(w_at(1'000'000 + (t1 - 1'000'000) / 2), 0.2, 1e-6);
+}
+
+// The lever arm: a body turning at 1 rad/s about z carries a camera 0.5 m along its x axis at
+// 0.5 m/s along y, on top of the body's own velocity; then the rotation into camera axes.
+TEST_F(VelocityInputTest, LeverArmCarriesTheBodyVelocityToTheCamera) {
+  VelocityInputConfig cfg;
+  cfg.lever_arm_m = {0.5, 0, 0};
+  cfg.imu_to_camera = rot_z90();
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_, cfg);
+  publish("RSD_VELOCITY", velocity(1000, rsd::velocity_t::FRAME_IMU, 0, 0, 1.0, 1.0, 0, 0));
+  drain();
+  const auto s = at(1000);
+  // body: v + w x l = (1, 0.5, 0); rotated by 90 degrees about z: (-0.5, 1, 0).
+  EXPECT_NEAR(s.v[0], -0.5, 1e-12);
+  EXPECT_NEAR(s.v[1], 1.0, 1e-12);
+  EXPECT_NEAR(s.v[2], 0.0, 1e-12);
+}
+
 TEST_F(VelocityInputTest, CameraFrameIgnoresImuRotation) {
   VelocityInputConfig cfg;
   cfg.imu_to_camera = rot_z90();
