@@ -14,6 +14,8 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "daemon/service.hpp"
 #include "drivers/recording_replay_source.hpp"
@@ -71,6 +73,13 @@ bool apply_replay_options(rsd::daemon::Config& cfg, const CommandLine& cl) {
   }
   cfg.output = cl.output;
   return true;
+}
+
+// A file's bytes ("" if it cannot be read): whether a SIGHUP changed the configuration.
+std::string file_text(const std::string& path) {
+  if (path.empty()) return "";
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 // rsd --replay DIR without a calibration: the recording's own camera, timing and motion
@@ -148,25 +157,34 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   std::signal(SIGHUP, on_signal);
+  // SIGHUP reads both files again: the calibration alone changed (or nothing did) -> applied
+  // between two frames; the configuration file changed -> the pipeline restarts with it; a bad
+  // file -> refused, the running configuration kept.
+  std::string config_text = file_text(cl.config_file);
+  rsd::daemon::Config restart_cfg;
+  const rsd::daemon::Reloader reloader = [&]() -> rsd::daemon::Reload {
+    rsd::daemon::Reload r;
+    try {
+      if (!make_config(cl, r.cfg)) return r.why = "the command line does not apply to the new configuration", r;
+    } catch (const std::exception& e) {
+      r.why = e.what();
+      return r;
+    }
+    const std::string text = file_text(cl.config_file);
+    r.kind = text == config_text ? rsd::daemon::Reload::Calibration : rsd::daemon::Reload::Restart;
+    if (r.kind == rsd::daemon::Reload::Restart) config_text = text, restart_cfg = r.cfg;
+    return r;
+  };
   for (;;) {
     try {
-      rsd::daemon::run_service(cfg, g_flags, limits);
+      rsd::daemon::run_service(cfg, g_flags, limits, {}, nullptr, reloader);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "rsd: error: %s\n", e.what());
       return 1;
     }
     if (!g_flags.reload.exchange(false) || g_flags.stop.load()) return 0;
-    // SIGHUP: read the configuration again; a broken file keeps the running one. The
-    // command line's replay and recording stay, and the recording continues.
-    try {
-      rsd::daemon::Config next;
-      if (make_config(cl, next)) {
-        cfg = next;
-        std::fprintf(stderr, "rsd: configuration reloaded\n");
-      }
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "rsd: reload refused, keeping the running configuration: %s\n", e.what());
-    }
-    cfg.record_append = true;
+    std::fprintf(stderr, "rsd: configuration reloaded: restarting the pipeline\n");
+    cfg = restart_cfg;
+    cfg.record_append = true;  // the recording continues
   }
 }

@@ -12,7 +12,7 @@ std::optional<uint32_t> push_dropping_oldest(DropOldestQueue& q, uint32_t slot, 
 
 Pipeline::Pipeline(PipelineConfig cfg, drivers::CameraSource& source, FrameRectifier& rectifier,
                    LcmPublisher& publisher, const VelocityBuffer& velocity)
-    : cfg_(cfg), source_(source), rectifier_(rectifier), pub_(publisher), velocity_(velocity),
+    : cfg_(cfg), source_(source), rectifier_(&rectifier), pub_(publisher), velocity_(velocity),
       to_rectify_(cfg.queue_depth), to_publish_(cfg.queue_depth), raw_free_(cfg.raw_slots), raw_free_late_(cfg.raw_slots), out_free_(cfg.out_slots) {
   // Each stage holds one slot while working on it; the queues hold the rest.
   if (cfg_.raw_slots < cfg_.queue_depth + 2 || cfg_.out_slots < cfg_.queue_depth + 2)
@@ -28,7 +28,7 @@ void Pipeline::start() {
   raw_.clear();
   out_.clear();
   for (size_t i = 0; i < cfg_.raw_slots; ++i) raw_.push_back({dsp::Image(f.width, f.height, f.format), {}, 0});
-  for (size_t i = 0; i < cfg_.out_slots; ++i) out_.push_back({dsp::Image(f.width, f.height, f.format), {}, 0, {}, -1});
+  for (size_t i = 0; i < cfg_.out_slots; ++i) out_.push_back({dsp::Image(f.width, f.height, f.format), {}, 0, {}, {}, -1});
   while (raw_free_.get()) {}
   while (raw_free_late_.get()) {}
   while (out_free_.get()) {}
@@ -141,7 +141,9 @@ void Pipeline::rectify_loop() {
     Out& o = out_[*out_slot];
     o.meta = r.meta;
     o.ready_ns = r.ready_ns;
-    o.result = rectifier_.process(r.image.view(), o.image.view(), r.meta, velocity_);
+    take_up_next_rectifier();
+    o.result = rectifier_->process(r.image.view(), o.image.view(), r.meta, velocity_);
+    o.timing = rectifier_->timing();
     (o.result.rectified ? stats_.rectified : stats_.unrectified).fetch_add(1, std::memory_order_relaxed);
     o.raw_slot = cfg_.publish_raw ? static_cast<int>(*in) : -1;
     if (!cfg_.publish_raw) raw_free_.put(*in);  // else the publisher returns it
@@ -155,8 +157,22 @@ void Pipeline::rectify_loop() {
   to_publish_.wake();
 }
 
+bool Pipeline::use_rectifier(FrameRectifier* next) {
+  FrameRectifier* expected = nullptr;
+  return next_rectifier_.compare_exchange_strong(expected, next);
+}
+
+// Between two frames, on the rectify thread: the old rectifier is retired for its owner.
+void Pipeline::take_up_next_rectifier() {
+  if (FrameRectifier* next = next_rectifier_.load(std::memory_order_acquire)) {
+    retired_.store(rectifier_, std::memory_order_release);
+    rectifier_ = next;
+    next_rectifier_.store(nullptr, std::memory_order_release);
+  }
+}
+
 void Pipeline::publish_frame(Out& o, uint64_t seq) {
-  const dsp::RowTiming t = rectifier_.timing();
+  const dsp::RowTiming& t = o.timing;
   ImageStamp s{o.meta.first_row_ns / 1000, static_cast<int64_t>(seq), t.line_delay_s, t.readout, o.meta.exposure_s,
                o.result.rectified};
   pub_.publish_image(false, o.image.view(), s);
@@ -201,8 +217,7 @@ void Pipeline::publish_loop() {
     if (o.raw_slot >= 0) {
       Raw& r = raw_[static_cast<size_t>(o.raw_slot)];
       pub_.publish_image(true, r.image.view(), {o.meta.first_row_ns / 1000, static_cast<int64_t>(seq),
-                                                rectifier_.timing().line_delay_s, rectifier_.timing().readout,
-                                                o.meta.exposure_s, false});
+                                                o.timing.line_delay_s, o.timing.readout, o.meta.exposure_s, false});
       raw_free_late_.put(static_cast<uint32_t>(o.raw_slot));
       o.raw_slot = -1;
     }

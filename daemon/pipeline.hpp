@@ -55,6 +55,13 @@ class Pipeline {
   // Rectified frames also to files (rsd --output-dir/--output-video), written by the publishing
   // thread; set before start(). A write that fails stops the output: output_error() says why.
   void set_frame_files(FrameFiles* files) { files_ = files; }
+  // A new rectifier (a calibration applied on SIGHUP): the rectify thread takes it up at the
+  // start of its next frame, so no frame is dropped or mixes two calibrations. Any thread; one
+  // at a time (false while an earlier one has not been taken up). The caller owns both and
+  // frees the old one once retired() returns it.
+  bool use_rectifier(FrameRectifier* next);
+  // The rectifier the rectify thread stopped using (once), or nullptr.
+  FrameRectifier* retired() { return retired_.exchange(nullptr); }
   bool output_failed() const { return output_failed_.load(); }
   std::string output_error() const { return output_failed_.load() ? output_error_ : std::string(); }
 
@@ -69,6 +76,7 @@ class Pipeline {
     drivers::FrameMeta meta;
     int64_t ready_ns = 0;
     RectifyResult result;
+    dsp::RowTiming timing;  // the row timing the frame was rectified with (published with it)
     int raw_slot = -1;  // with publish_raw: the raw frame travelling with this one
   };
   void capture_loop();
@@ -77,10 +85,12 @@ class Pipeline {
   uint32_t raw_slot_for_capture();
   std::optional<uint32_t> hand_over(DropOldestQueue& q, uint32_t slot);
   void publish_frame(Out& o, uint64_t seq);
+  void take_up_next_rectifier();
 
   PipelineConfig cfg_;
   drivers::CameraSource& source_;
-  FrameRectifier& rectifier_;
+  FrameRectifier* rectifier_;  // the rectify thread's own (swapped by it alone)
+  std::atomic<FrameRectifier*> next_rectifier_{nullptr}, retired_{nullptr};
   LcmPublisher& pub_;
   const VelocityBuffer& velocity_;
   std::vector<Raw> raw_;

@@ -40,7 +40,7 @@ bool open_with_backoff(drivers::CameraSource& src, StopFlags& flags, SystemdNoti
 // Everything one run needs. The camera is opened first (it fixes the frame format), then
 // the publisher and the rectifier are sized for it once.
 struct Session {
-  const Config& cfg;
+  Config cfg;  // in effect: a SIGHUP calibration replaces its calibration parts
   std::unique_ptr<formats::LcmLogWriter> recorder;  // rsd --record (outlives its writers)
   std::unique_ptr<drivers::CameraSource> source;
   std::unique_ptr<RecordingSource> recording;       // the source, recorded
@@ -48,6 +48,8 @@ struct Session {
   VelocityBuffer velocity;
   std::unique_ptr<VelocityInput> velocity_in;
   std::unique_ptr<FrameRectifier> rectifier;
+  std::unique_ptr<FrameRectifier> next_rectifier;  // a SIGHUP calibration, until the pipeline takes it up
+  int calibrations_applied = 0;
   std::unique_ptr<Pipeline> pipeline;
   std::unique_ptr<FrameFiles> files;  // rsd --output-dir / --output-video
   std::vector<uint8_t> pose_buf = std::vector<uint8_t>(512);
@@ -103,12 +105,45 @@ struct Session {
     velocity_in->start();
   }
 
-  void start_pipeline() {
+  // The camera and row timing a configuration's calibration gives this source.
+  std::pair<dsp::CameraModel, dsp::RowTiming> geometry(const Config& c) const {
     const drivers::MessageSource* m = messages();
     const dsp::CameraModel cam =
-        camera_model(cfg.source, source->format(), m ? m->recorded_camera() : std::optional<dsp::CameraModel>());
+        camera_model(c.source, source->format(), m ? m->recorded_camera() : std::optional<dsp::CameraModel>());
+    dsp::RowTiming timing = source->timing();
+    if (const auto& cal = c.source.calibration; cal && cal->has_rsd_block && cal->line_delay_s > 0)
+      timing.line_delay_s = cal->line_delay_s, timing.readout = cal->readout;
+    return {cam, timing};
+  }
+
+  // SIGHUP: `next`'s calibration from the next frame on; "" or why it is refused.
+  std::string apply_calibration(const Config& next) {
+    if (next_rectifier) return "the previous calibration is still being taken up; send SIGHUP again";
+    try {
+      const auto [cam, timing] = geometry(next);
+      next_rectifier = std::make_unique<FrameRectifier>(cfg.rectify, cam, timing, source->format());
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    velocity_in->set_calibration(next.velocity_input);
+    pipeline->use_rectifier(next_rectifier.get());
+    cfg.source.camera = next.source.camera;
+    cfg.source.camera_origin = next.source.camera_origin;
+    cfg.source.calibration = next.source.calibration;
+    cfg.velocity_input = next.velocity_input;
+    ++calibrations_applied;
+    return "";
+  }
+  // Frees the rectifier the pipeline stopped using once it has taken up the new one.
+  void collect_retired() {
+    if (next_rectifier && pipeline->retired()) rectifier = std::move(next_rectifier);
+  }
+
+  void start_pipeline() {
+    next_rectifier.reset();  // a stopped pipeline uses neither: the new one starts with cfg's
+    const auto [cam, timing] = geometry(cfg);
     if (recording) recording->set_camera(cam);
-    rectifier = std::make_unique<FrameRectifier>(cfg.rectify, cam, source->timing(), source->format());
+    rectifier = std::make_unique<FrameRectifier>(cfg.rectify, cam, timing, source->format());
     PipelineConfig pc = cfg.pipeline;
     if (playback() && playback()->fast()) pc.lossless = true;  // every frame, reproducibly
     const bool to_files = !cfg.output.dir.empty() || !cfg.output.video.empty();
@@ -164,10 +199,27 @@ void report_health(Session& s, const char* state, double dt, uint64_t& last_in, 
   if (line) std::fprintf(stderr, "\rrsd: %s   ", text);
 }
 
+// A SIGHUP with a reloader: refuse, apply between two frames, or ask the caller to restart.
+bool handle_reload(Session& s, StopFlags& flags, const Reloader& reloader, bool after_status_line, SystemdNotify& sd) {
+  flags.reload = false;
+  sd.reloading();
+  const Reload r = reloader();
+  if (r.kind == Reload::Restart) {  // READY again once the caller has restarted the service
+    flags.reload = true;
+    return false;
+  }
+  const std::string why = r.kind == Reload::Refused ? r.why : s.apply_calibration(r.cfg);
+  const char* nl = after_status_line ? "\n" : "";
+  if (!why.empty()) std::fprintf(stderr, "%srsd: reload refused, keeping the running calibration: %s\n", nl, why.c_str());
+  else std::fprintf(stderr, "%srsd: calibration reloaded: applied from the next frame\n", nl);
+  sd.ready();
+  return true;
+}
+
 }  // namespace
 
 void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, const SourceFactory& factory,
-                 RunSummary* summary) {
+                 RunSummary* summary, const Reloader& reloader) {
   SystemdNotify sd;
   Session s(cfg, factory);
   const auto deadline = limits.max_seconds > 0
@@ -182,9 +234,11 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   uint64_t last_in = 0, last_out = 0;
   const bool progress = limits.progress && s.playback();
   const bool line = limits.status_line && !progress;
-  while (!flags.stop.load() && !flags.reload.load()) {
+  while (!flags.stop.load()) {
+    if (flags.reload.load() && (!reloader || !handle_reload(s, flags, reloader, line || progress, sd))) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     sd.watchdog();
+    s.collect_retired();
     const auto now = Clock::now();
     if (limits.max_frames && s.frames_out() >= limits.max_frames) break;
     if (s.pipeline->finished()) break;  // a replay has played its log to the end
@@ -230,6 +284,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   out.frames_out = s.frames_out();
   out.reconnects = s.reconnects;
   out.seconds = seconds;
+  out.calibrations_applied = s.calibrations_applied;
   if (const drivers::Playback* p = s.playback()) {
     out.replayed = p->frames();
     if (const drivers::ReplaySource* r = s.replay(); r && r->reader()) {

@@ -28,6 +28,7 @@ struct RunSummary {
   uint64_t replayed = 0, skipped = 0;
   std::string skips;
   double seconds = 0;
+  int calibrations_applied = 0;  // SIGHUP calibrations taken up between two frames
 };
 
 // Makes the camera source; the default builds the configured driver. Tests substitute one.
@@ -40,10 +41,25 @@ struct StopFlags {
   std::atomic<bool> reload{false};
 };
 
-// Runs until asked to stop or to reload (flags.reload stays set for the caller to see).
+// What a SIGHUP asks for, once the caller has read its files again.
+struct Reload {
+  enum Kind {
+    Refused,      // a file is bad: keep running as before (`why` says what is wrong)
+    Calibration,  // only the calibration changed: apply `cfg`'s between two frames
+    Restart,      // the configuration changed: return, for the caller to run `cfg` afresh
+  } kind = Refused;
+  Config cfg;
+  std::string why;
+};
+using Reloader = std::function<Reload()>;
+
+// Runs until asked to stop or to reload. Without a reloader a SIGHUP returns at once (flags.reload
+// stays set for the caller to see); with one, the service asks it what to do: a new calibration
+// is applied from the next frame without stopping the pipeline (no frame dropped), a bad one is
+// refused and the running one kept, and a changed configuration returns with flags.reload set.
 // Throws on configuration errors found while wiring; a camera that cannot be opened is
 // retried with backoff until a stop, never an error.
 void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, const SourceFactory& factory = {},
-                 RunSummary* summary = nullptr);
+                 RunSummary* summary = nullptr, const Reloader& reloader = {});
 
 }  // namespace rsd::daemon

@@ -86,8 +86,11 @@ std::unique_ptr<drivers::CameraSource> make_source(const SourceConfig& s) {
 
 dsp::CameraModel camera_model(const SourceConfig& s, const drivers::FrameFormat& f,
                               const std::optional<dsp::CameraModel>& recorded) {
-  if (const drivers::Driver* d = drivers::find_driver(s.driver))
-    if (const auto own = d->own_camera(s.settings.at(s.driver))) return *own;
+  // What the daemon is told (source.camera, a calibration) comes first, even for the simulator,
+  // whose own camera is then the hidden truth the rectifier does not know.
+  if (!s.camera)
+    if (const drivers::Driver* d = drivers::find_driver(s.driver))
+      if (const auto own = d->own_camera(s.settings.at(s.driver))) return *own;
   if (!s.camera && !recorded)
     throw std::runtime_error("source '" + s.driver + "': the frames carry no intrinsics (only rsd --record writes them): "
                              "add source.camera or source.intrinsics_file");

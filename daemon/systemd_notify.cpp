@@ -2,6 +2,8 @@
 
 #include <systemd/sd-daemon.h>
 
+#include <string>
+
 namespace rsd::daemon {
 
 SystemdNotify::SystemdNotify() {
@@ -10,6 +12,11 @@ SystemdNotify::SystemdNotify() {
 }
 
 void SystemdNotify::ready() { sd_notify(0, "READY=1"); }
+
+void SystemdNotify::reloading() {
+  const auto us = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now().time_since_epoch());
+  sd_notify(0, ("RELOADING=1\nMONOTONIC_USEC=" + std::to_string(us.count())).c_str());
+}
 
 void SystemdNotify::status(const std::string& text) { sd_notify(0, ("STATUS=" + text).c_str()); }
 

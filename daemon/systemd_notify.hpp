@@ -1,4 +1,4 @@
-// Talks to systemd's service manager (Type=notify): READY, STATUS, WATCHDOG and STOPPING
+// Talks to systemd's service manager (Type=notify): READY, RELOADING, STATUS, WATCHDOG and STOPPING
 // through libsystemd's sd_notify. Outside systemd (no NOTIFY_SOCKET) every call is a no-op.
 #pragma once
 
@@ -11,6 +11,9 @@ class SystemdNotify {
  public:
   SystemdNotify();
   void ready();
+  // A reload has begun (SIGHUP); ready() says it has ended. Carries MONOTONIC_USEC, which
+  // Type=notify-reload services must send with RELOADING=1.
+  void reloading();
   void status(const std::string& text);
   void stopping();
   // Pets the watchdog if systemd asked for one (WatchdogSec), at most every half period.

@@ -33,8 +33,7 @@ void VelocityInput::push(int64_t utime, const Eigen::Matrix3d& r, const double* 
   s.t_ns = utime * 1000;
   s.has_linear = has_linear && !cfg_.gyro_only;
   for (int i = 0; i < 3; ++i) s.w[i] = wc[i], s.v[i] = s.has_linear ? vc[i] : 0.0;
-  std::lock_guard<std::mutex> lock(writer_);  // the buffer has one writer at a time
-  buffer_.push(s);  // rejects and counts insane samples
+  buffer_.push(s);  // rejects and counts insane samples (the caller holds writer_)
 }
 
 void VelocityInput::on_velocity(const lcm_recv_buf_t* rbuf, const char*, void* user) {
@@ -56,10 +55,7 @@ int64_t VelocityInput::camera_utime(int64_t utime_motion) {
   const int64_t shifted = utime_motion - std::llround(cfg_.imu_time_offset_s * 1e6);
   if (cfg_.drift_ppm == 0) return shifted;
   // t_m - offset = t_cam + d (t_cam - T0)  =>  t_cam = T0 + (t_m - offset - T0) / (1 + d).
-  {
-    std::lock_guard<std::mutex> lock(writer_);  // the source's and the LCM thread may both be first
-    if (!t0_us_) t0_us_ = shifted;
-  }
+  if (!t0_us_) t0_us_ = shifted;
   return *t0_us_ + std::llround(static_cast<double>(shifted - *t0_us_) / (1.0 + cfg_.drift_ppm * 1e-6));
 }
 
@@ -76,6 +72,7 @@ void VelocityInput::push_imu(int64_t utime_imu, const double* w_measured, const 
 }
 
 void VelocityInput::accept(const rsd::velocity_t& m) {
+  std::lock_guard<std::mutex> lock(writer_);
   if (m.frame == rsd::velocity_t::FRAME_CAMERA)  // onto the camera clock
     push(camera_utime(m.utime), Eigen::Matrix3d::Identity(), m.angular_velocity, m.linear_velocity, m.has_linear);
   else if (m.frame == rsd::velocity_t::FRAME_IMU)
@@ -91,12 +88,24 @@ void VelocityInput::deliver(const rsd::velocity_t& m) {
 
 void VelocityInput::deliver(const drivers::VelocitySample& s) {
   source_feeds_.store(true);
+  std::lock_guard<std::mutex> lock(writer_);
   // On the time line of rsd.velocity_t (us), so that a replay of the published samples
   // reproduces the live run.
   if (s.imu_frame)
     push_imu(s.t_ns / 1000, s.w, s.v, s.has_linear);
   else
     push(s.t_ns / 1000, Eigen::Matrix3d::Identity(), s.w, s.v, s.has_linear);
+}
+
+void VelocityInput::set_calibration(const VelocityInputConfig& c) {
+  std::lock_guard<std::mutex> lock(writer_);
+  cfg_.imu_to_camera = c.imu_to_camera;
+  cfg_.body_to_camera = c.body_to_camera;
+  cfg_.imu_time_offset_s = c.imu_time_offset_s;
+  cfg_.gyro_bias_rad_s = c.gyro_bias_rad_s;
+  cfg_.gyro_scale = c.gyro_scale;
+  cfg_.drift_ppm = c.drift_ppm;
+  cfg_.lever_arm_m = c.lever_arm_m;
 }
 
 rsd::velocity_t VelocityInput::to_message(const drivers::VelocitySample& s) {
@@ -121,6 +130,7 @@ void VelocityInput::on_pose(const lcm_recv_buf_t* rbuf, const char*, void* user)
     self->malformed_.fetch_add(1);
     return;
   }
+  std::lock_guard<std::mutex> lock(self->writer_);
   double v[3];
   self->at_camera_origin(m.rotation_rate, m.vel, v);
   self->push(m.utime, self->cfg_.body_to_camera, m.rotation_rate, v, true);
@@ -128,6 +138,7 @@ void VelocityInput::on_pose(const lcm_recv_buf_t* rbuf, const char*, void* user)
 
 void VelocityInput::deliver(const bot_core::pose_t& m) {
   source_feeds_pose_.store(true);
+  std::lock_guard<std::mutex> lock(writer_);
   double v[3];
   at_camera_origin(m.rotation_rate, m.vel, v);
   push(m.utime, cfg_.body_to_camera, m.rotation_rate, v, true);

@@ -75,6 +75,9 @@ class VelocityInput {
   // The same for bot_core.pose_t on the pose channel (a replayed log's, the lcm source's).
   void deliver(const bot_core::pose_t& m);
   uint64_t ignored() const { return ignored_.load(); }
+  // A new calibration (SIGHUP): the rotations and the IMU's clock, bias, scale and lever arm of
+  // `c`, for every sample from now on (the channels stay). Any thread.
+  void set_calibration(const VelocityInputConfig& c);
   // rsd --record: velocity and pose messages received over LCM (an IMU, a localiser) are
   // written to the recording as they arrive, unless they are a source's echo.
   void set_recorder(formats::LcmLogWriter* log) { record_ = log; }
@@ -101,7 +104,9 @@ class VelocityInput {
   std::atomic<bool> source_feeds_{false}, source_feeds_pose_{false};
   std::optional<int64_t> t0_us_;  // camera time of the first sample (the drift's reference)
   formats::LcmLogWriter* record_ = nullptr;
-  std::mutex writer_;  // the source's thread and the LCM thread (pose_t) both push
+  // The source's thread and the LCM thread (pose_t) both push, and set_calibration() changes
+  // cfg_'s calibration: every entry point holds this while it converts and pushes.
+  std::mutex writer_;
   std::thread thread_;
 };
 

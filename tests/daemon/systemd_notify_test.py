@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Runs rsd with NOTIFY_SOCKET pointing at a test socket and checks that READY=1, STATUS=,
-WATCHDOG=1 and STOPPING=1 arrive, that SIGHUP reloads (READY again), and that SIGTERM stops
-it within 500 ms."""
+WATCHDOG=1 and STOPPING=1 arrive, that SIGHUP reloads (RELOADING=1 with MONOTONIC_USEC, then
+READY again), and that SIGTERM stops it within 500 ms."""
 import os, signal, socket, subprocess, sys, tempfile, time
 
 rsd = sys.argv[1]
@@ -18,7 +18,7 @@ with tempfile.TemporaryDirectory() as d:
             got += sock.recv(4096).decode().split("\n")
         except socket.timeout:
             pass
-    # SIGHUP reloads: the service restarts its pipeline and says READY again.
+    # SIGHUP reloads: the service says RELOADING, applies what changed, and says READY again.
     ready_before = got.count("READY=1")
     proc.send_signal(signal.SIGHUP)
     deadline = time.time() + 20
@@ -27,7 +27,7 @@ with tempfile.TemporaryDirectory() as d:
             got += sock.recv(4096).decode().split("\n")
         except socket.timeout:
             pass
-    reloaded = got.count("READY=1") > ready_before
+    reloaded = got.count("READY=1") > ready_before and "RELOADING=1" in got and any(m.startswith("MONOTONIC_USEC=") for m in got)
     print("reloaded on SIGHUP:", reloaded)
     t0 = time.time()
     proc.send_signal(signal.SIGTERM)
