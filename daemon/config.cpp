@@ -42,6 +42,8 @@ void visit_rectification(formats::ConfigSection& c, RectifyConfig& r) {
   c.value("gyro_only", r.gyro_only);
   c.value("threshold_px", r.threshold_px, "pinhole model deemed sufficient below this correction");
   c.check(r.threshold_px > 0, "threshold_px", "must be positive");
+  c.value("imu_wait_ms", r.imu_wait_ms, "wait this long at most for IMU samples covering a frame's last row");
+  c.check(std::isfinite(r.imu_wait_ms) && r.imu_wait_ms >= 0 && r.imu_wait_ms <= 1000, "imu_wait_ms", "must be 0..1000 ms");
 }
 
 void visit_velocity(formats::ConfigSection& c, Config& cfg) {

@@ -2,6 +2,10 @@
 
 #include "dsp/analysis/applicability.hpp"
 
+#include <chrono>
+#include <cmath>
+#include <thread>
+
 namespace rsd::daemon {
 
 FrameRectifier::FrameRectifier(const RectifyConfig& cfg, const dsp::CameraModel& cam, const dsp::RowTiming& timing,
@@ -21,6 +25,21 @@ dsp::DepthModel FrameRectifier::depth_model() const {
     case DepthKind::Ground: return dsp::ground_plane(cfg_.camera_height_m);
   }
   return dsp::DepthModel::at_infinity();
+}
+
+void FrameRectifier::wait_for_samples(int64_t t_ns, const VelocityBuffer& velocity, RectifyResult& r) const {
+  using Clock = std::chrono::steady_clock;
+  if (velocity.newest_ns() < t_ns && cfg_.imu_wait_ms > 0) {
+    const Clock::time_point start = Clock::now();
+    const Clock::time_point until = start + std::chrono::microseconds(std::llround(cfg_.imu_wait_ms * 1e3));
+    while (velocity.newest_ns() < t_ns && Clock::now() < until) std::this_thread::sleep_for(std::chrono::microseconds(100));
+    r.imu_wait_s = std::chrono::duration<double>(Clock::now() - start).count();
+  }
+  const int64_t newest = velocity.newest_ns();
+  if (newest != INT64_MIN && newest < t_ns) {
+    r.extrapolated = true;
+    r.extrapolated_s = static_cast<double>(t_ns - newest) * 1e-9;
+  }
 }
 
 bool FrameRectifier::knots(const drivers::FrameMeta& meta, const VelocityBuffer& velocity, bool translate,
@@ -51,6 +70,10 @@ RectifyResult FrameRectifier::process(const dsp::ImageView& src, const dsp::Imag
     r.reason = "rectification disabled";
     return r;
   }
+  // The samples covering the last row's exposure may still be on their way: wait for them, up
+  // to the bound, and say when the motion beyond the newest one had to be held.
+  const double end_s = std::max(timing_.row_time(0), timing_.row_time(timing_.height - 1)) + meta.exposure_s;
+  wait_for_samples(meta.first_row_ns + static_cast<int64_t>(end_s * 1e9), velocity, r);
   // The velocity valid for this frame: at the middle of its readout.
   const int64_t t_mid = meta.first_row_ns + static_cast<int64_t>((0.5 * timing_.frame_readout_s() + 0.5 * meta.exposure_s) * 1e9);
   VelocityEstimate est;
@@ -79,11 +102,15 @@ RectifyResult FrameRectifier::process(const dsp::ImageView& src, const dsp::Imag
                                      : rect_->rectify(src, dst, tw, depth, r.reference_time_s);
   r.rectified = rep.rectified;
   r.reason = rep.rectified ? "" : "no rolling-shutter solution for this motion";
+  // The correction this frame needed: the map's own largest displacement (at the reference time
+  // the map was built for). The verdict checks the same reference on a coarse grid.
+  r.max_correction_px = rep.rectified ? rep.max_displacement_px : 0.0;
   dsp::ApplicabilityOptions opt;
   opt.threshold_px = cfg_.threshold_px;
   opt.grid_cols = 5, opt.grid_rows = 4;  // corners, edges and centre: enough for a verdict per frame
+  opt.reference = cfg_.reference == dsp::ReferenceRow::Middle ? dsp::CorrectionReference::MiddleRow
+                                                              : dsp::CorrectionReference::FrameStart;
   const auto bound = dsp::correction_bound(cam_, timing_, tw, translate ? cfg_.depth_m : 1e6, opt);
-  r.max_correction_px = bound.max_correction_px;
   r.pinhole_sufficient = bound.pinhole_sufficient;
   return r;
 }

@@ -26,6 +26,9 @@ struct RectifyConfig {
   int grid_px = 32;              // the map starts at this node spacing and refines itself to 0.05 px
   bool gyro_only = false;        // ignore linear velocity even when it is known
   double threshold_px = 1.0;     // the applicability verdict's threshold
+  // The longest the rectifier waits for the IMU samples covering a frame's last row (a live
+  // IMU's message may arrive a little after the frame); beyond it the newest rate is held.
+  double imu_wait_ms = 5.0;
 };
 
 struct RectifyResult {
@@ -33,6 +36,11 @@ struct RectifyResult {
   const char* reason = "";
   double w[3] = {0, 0, 0}, v[3] = {0, 0, 0};  // camera's own rates used, camera axes
   double velocity_age_s = 0;
+  // The motion past the newest sample was held: how far the frame's last row (with its
+  // exposure) reaches beyond it, and how long the rectifier waited for samples first.
+  bool extrapolated = false;
+  double extrapolated_s = 0;
+  double imu_wait_s = 0;
   double max_correction_px = 0;
   bool pinhole_sufficient = true;
   double reference_time_s = 0;
@@ -50,6 +58,8 @@ class FrameRectifier {
 
  private:
   dsp::DepthModel depth_model() const;
+  // Waits (up to imu_wait_ms) for a sample at or after t_ns; fills the wait and extrapolation.
+  void wait_for_samples(int64_t t_ns, const VelocityBuffer& velocity, RectifyResult& r) const;
   // The camera's own rates read from the buffer at kKnots times across the frame's rows
   // (interpolated between samples), for the integrated motion; false if any has no valid sample.
   static constexpr int kKnots = 9;

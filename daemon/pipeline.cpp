@@ -189,6 +189,9 @@ void Pipeline::publish_frame(Out& o, uint64_t seq) {
   info.unrectified_reason = o.result.reason;
   for (int i = 0; i < 3; ++i) info.angular_velocity[i] = o.result.w[i], info.linear_velocity[i] = o.result.v[i];
   info.velocity_age_s = o.result.velocity_age_s;
+  info.extrapolated = o.result.extrapolated;
+  info.extrapolated_s = o.result.extrapolated_s;
+  info.imu_wait_s = o.result.imu_wait_s;
   info.max_correction_px = o.result.max_correction_px;
   info.pinhole_sufficient = o.result.pinhole_sufficient;
   info.drops_total = static_cast<int64_t>(stats_.drops.load(std::memory_order_relaxed));

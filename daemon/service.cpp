@@ -105,6 +105,14 @@ struct Session {
     velocity_in->start();
   }
 
+  // A replay's samples come in their recorded order, before the frames they precede: waiting for
+  // more would make its output depend on thread timing.
+  RectifyConfig rectify_config() const {
+    RectifyConfig r = cfg.rectify;
+    if (playback()) r.imu_wait_ms = 0;
+    return r;
+  }
+
   // The camera and row timing a configuration's calibration gives this source.
   std::pair<dsp::CameraModel, dsp::RowTiming> geometry(const Config& c) const {
     const drivers::MessageSource* m = messages();
@@ -121,7 +129,7 @@ struct Session {
     if (next_rectifier) return "the previous calibration is still being taken up; send SIGHUP again";
     try {
       const auto [cam, timing] = geometry(next);
-      next_rectifier = std::make_unique<FrameRectifier>(cfg.rectify, cam, timing, source->format());
+      next_rectifier = std::make_unique<FrameRectifier>(rectify_config(), cam, timing, source->format());
     } catch (const std::exception& e) {
       return e.what();
     }
@@ -143,7 +151,7 @@ struct Session {
     next_rectifier.reset();  // a stopped pipeline uses neither: the new one starts with cfg's
     const auto [cam, timing] = geometry(cfg);
     if (recording) recording->set_camera(cam);
-    rectifier = std::make_unique<FrameRectifier>(cfg.rectify, cam, timing, source->format());
+    rectifier = std::make_unique<FrameRectifier>(rectify_config(), cam, timing, source->format());
     PipelineConfig pc = cfg.pipeline;
     if (playback() && playback()->fast()) pc.lossless = true;  // every frame, reproducibly
     const bool to_files = !cfg.output.dir.empty() || !cfg.output.video.empty();

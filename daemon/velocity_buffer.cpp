@@ -38,6 +38,7 @@ bool VelocityBuffer::push(const drivers::VelocitySample& s) {
   ring_[n % kCapacity] = s;
   last_t_ns_ = s.t_ns;
   count_.store(n + 1, std::memory_order_release);
+  newest_ns_.store(s.t_ns, std::memory_order_release);
   return true;
 }
 

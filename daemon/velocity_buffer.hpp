@@ -38,6 +38,9 @@ class VelocityBuffer {
   // the newest one, if t is after it but within max_age).
   VelocityStatus at(int64_t t_ns, VelocityEstimate& out) const;
 
+  // Reader: the newest accepted sample's time (INT64_MIN before the first); any thread.
+  int64_t newest_ns() const { return newest_ns_.load(std::memory_order_acquire); }
+
   uint64_t rejected() const { return rejected_.load(std::memory_order_relaxed); }
   uint64_t count() const { return count_.load(std::memory_order_acquire); }
 
@@ -48,6 +51,7 @@ class VelocityBuffer {
   std::atomic<uint64_t> count_{0};
   std::atomic<uint64_t> rejected_{0};
   int64_t last_t_ns_ = INT64_MIN;  // writer only
+  std::atomic<int64_t> newest_ns_{INT64_MIN};  // last_t_ns_, published for readers
 };
 
 }  // namespace rsd::daemon

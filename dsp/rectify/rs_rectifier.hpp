@@ -47,6 +47,10 @@ struct RectifyReport {
   double error_bound_px = 0;    // bound on the map error over every cell that is sampled
   int invalid_nodes = 0;        // nodes without a solution in the capture window (cells black)
   int unbounded_cells = 0;      // cells whose bound could not be estimated (invalid neighbours)
+  // The largest distance between an output pixel and the captured pixel it is sampled from,
+  // over the map's nodes inside both images: the largest correction this frame needed. With an
+  // output camera other than the source's it includes that change of camera.
+  double max_displacement_px = 0;
   bool within_tolerance() const { return error_bound_px <= tolerance_px; }
   double tolerance_px = 0.05;
 };
@@ -108,6 +112,7 @@ class Rectifier {
   void second_differences(Branch& b) const;
   RectifyReport solve_level();
   RectifyReport assess_level();
+  double max_node_displacement() const;
   double cell_bound(const Branch& b, int i, int j) const;
   int interpolate_row(int y);
   Affine cell_affine(int i, std::uint8_t mode) const;

@@ -114,7 +114,40 @@ RectifyReport Rectifier::build_map(const CameraMotion& motion, const DepthModel&
   }
   map_ready_ = true;
   rep.rectified = true;
+  rep.max_displacement_px = max_node_displacement();
   return rep;
+}
+
+// Over the nodes, and the image's last row and column (between nodes when the spacing does not
+// divide the size), where a correction usually peaks: the map there is the bilinear
+// interpolation of its four nodes, as the sampler uses it.
+double Rectifier::max_node_displacement() const {
+  const Level& L = levels_[level_];
+  const int s = L.spacing;
+  double worst = 0;
+  auto at = [&](double px, double py) {
+    const int i = std::min(static_cast<int>(px) / s, L.nx - 2), j = std::min(static_cast<int>(py) / s, L.ny - 2);
+    const double fx = px / s - i, fy = py / s - j;
+    const std::size_t n = static_cast<std::size_t>(j) * L.nx + i;
+    const std::size_t c[4] = {n, n + 1, n + L.nx, n + L.nx + 1};
+    const Branch& b = plane_ && rho_[c[0]] > 0 ? plane_b_ : inf_b_;  // the branch the model means
+    for (std::size_t k : c)
+      if (!b.ok[k]) return;
+    const double w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+    double x = 0, y = 0;
+    for (int k = 0; k < 4; ++k) x += w[k] * b.x[c[k]], y += w[k] * b.y[c[k]];
+    if (x < -0.5 || y < -0.5 || x > cam_.width - 0.5 || y > cam_.height - 0.5) return;  // black there
+    worst = std::max(worst, std::hypot(x - px, y - py));
+  };
+  const int last_x = out_.width - 1, last_y = out_.height - 1;
+  for (int y = 0;; y = std::min(y + s, last_y)) {
+    for (int x = 0;; x = std::min(x + s, last_x)) {
+      at(x, y);
+      if (x == last_x) break;
+    }
+    if (y == last_y) break;
+  }
+  return worst;
 }
 
 RectifyReport Rectifier::solve_level() {

@@ -153,6 +153,9 @@ TEST(Config, BadValuesNameFileLineAndKey) {
   EXPECT_NE(error_of("pipeline: {queue_depth: 0}\n").find("'pipeline.queue_depth' must be 1..64"), std::string::npos);
   EXPECT_NE(error_of("rectification: {depth: sky}\n").find("'rectification.depth' must be infinite, plane or ground"),
             std::string::npos);
+  EXPECT_NE(error_of("rectification: {imu_wait_ms: -1}\n").find("bad.yaml:1:30: 'rectification.imu_wait_ms' must be 0..1000 ms"),
+            std::string::npos)
+      << error_of("rectification: {imu_wait_ms: -1}\n");
   // A multicast URL is refused when read, never opened (spelled in two parts: no multicast
   // URL stands in the tests, so none can be used by mistake).
   const std::string multicast = std::string("udp") + "m://239.255.76.67:7667";

@@ -124,6 +124,27 @@ TEST(RsRectifier, MapMatchesTheExactInverseAtEveryPixel) {
   }
 }
 
+// The largest correction the map reports is the largest |exact source - output pixel| over the
+// image (the exact inverse at every pixel, computed the independent way), to within the spacing
+// of the nodes it is taken over: the edges and corners where it peaks lie within a node spacing.
+TEST(RsRectifier, ReportsTheLargestDisplacementOfTheMap) {
+  for (const Case& c : cases()) {
+    Rectifier rect(c.cam, c.timing, PixelFormat::Mono8);
+    const RectifyReport rep = rect.build_map(ScrewMotion(c.tw), c.depth, c.t_ref);
+    const ScrewMotion motion(c.tw);
+    double brute = 0;
+    for (int y = 0; y < c.cam.height; ++y)
+      for (int x = 0; x < c.cam.width; ++x) {
+        const RsProjection e = exact_source(c, motion, Vector2d(x, y));
+        if (e.ok() && c.cam.contains(e.pixel, 0.0)) brute = std::max(brute, (e.pixel - Vector2d(x, y)).norm());
+      }
+    std::printf("[ max ] %-24s map %.3f px  every pixel %.3f px\n", c.name, rep.max_displacement_px, brute);
+    EXPECT_GT(brute, 5.0) << c.name;  // a visible correction, not a trivially small one
+    EXPECT_LE(rep.max_displacement_px, brute + 0.05) << c.name;
+    EXPECT_GE(rep.max_displacement_px, 0.97 * brute - 0.05) << c.name;
+  }
+}
+
 TEST(RsRectifier, RefinesTheGridOnlyWhenTheBoundNeedsIt) {
   const CameraModel cam = camera(480, 360, 60);
   const RowTiming timing = RowTiming::full_frame(360, 30);
