@@ -129,9 +129,18 @@ void read_effect(YamlMap& effects, const std::string& name, const dsp::NominalMo
   } else if (name == "lever_arm") {
     e.lever_arm = vec3(m, "x", "y", "z");
     return;
+  } else if (name == "mount_rotation") {
+    e.mount_rotation = vec3(m, "rx", "ry", "rz");
+    return;
+  } else if (name == "gyro_scale") {
+    e.gyro_scale = vec3(m, "sx", "sy", "sz");
+    return;
+  } else if (name == "principal_point") {
+    e.principal_point = Eigen::Vector2d(m.number("cx"), m.number("cy"));
   } else {
     effects.fail(name, "is not an effect of recording-v1 (rolling_shutter, readout_direction, time_offset, "
-                       "clock_drift, lens_distortion, focal_length, gyro_bias, lever_arm)");
+                       "clock_drift, lens_distortion, focal_length, gyro_bias, lever_arm, mount_rotation, "
+                       "gyro_scale, principal_point)");
   }
   m.finish();
 }

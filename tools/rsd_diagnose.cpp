@@ -28,7 +28,8 @@ constexpr const char* kDescription =
     "rsd-diagnose: compares an observation recording (rsd-recording/1) with the nominal model its\n"
     "recording.yaml states, says where the residual lives, and names the effects that explain it\n"
     "(rolling_shutter, readout_direction, time_offset, clock_drift, lens_distortion,\n"
-    "focal_length, gyro_bias, lever_arm), fitted robustly and chosen by BIC. Every 5th frame\n"
+    "focal_length, gyro_bias, lever_arm, mount_rotation, gyro_scale, principal_point), fitted\n"
+    "robustly and chosen by BIC. Every 5th frame\n"
     "is held out of the fit and used to compare the nominal and the final model. With --report,\n"
     "REPORT_DIR gets index.md (verdict, effects with 1-sigma uncertainties, held-out RMS\n"
     "before and after, located signals) and PNG figures of the residual against row, radius\n"
@@ -111,7 +112,7 @@ int run(int argc, char** argv) {
   std::cerr << "rsd-diagnose: diagnosed in " << format_number(secs, 3) << " s\n";
   write_file(o.json, diagnosis_json(d));
   if (!o.calibration.empty()) {
-    formats::write_calibration(o.calibration, calibration_from(rec.nominal, d, "rsd-diagnose: " + o.dir + "/recording.yaml"));
+    formats::write_calibration(o.calibration, calibration_from(rec, d, "rsd-diagnose: " + o.dir + "/recording.yaml"));
     std::cerr << "rsd-diagnose: wrote the calibration to " << o.calibration << "\n";
   }
   if (!o.report.empty()) {

@@ -53,6 +53,21 @@ NamedEffect describe(const SelectedEffect& st, const ModelParams& p, const Nomin
       x << "the camera sits at (" << p[Param::LeverX] * 1e3 << ", " << p[Param::LeverY] * 1e3 << ", "
         << p[Param::LeverZ] * 1e3 << ") mm in body axes";
       break;
+    case Effect::MountRotation: {
+      out.params = {param(Param::MountX), param(Param::MountY), param(Param::MountZ)};
+      const double deg = Eigen::Vector3d(p[Param::MountX], p[Param::MountY], p[Param::MountZ]).norm() * 180 / M_PI;
+      x << "the camera is turned by " << deg << " degrees on its mount against the motion sensor";
+      break;
+    }
+    case Effect::GyroScale:
+      out.params = {param(Param::ScaleX), param(Param::ScaleY), param(Param::ScaleZ)};
+      x << "the gyro's scale is (" << p[Param::ScaleX] << ", " << p[Param::ScaleY] << ", " << p[Param::ScaleZ]
+        << ") of what it reads (IMU axes)";
+      break;
+    case Effect::PrincipalPoint:
+      out.params = {param(Param::Cx), param(Param::Cy)};
+      x << "the principal point is (" << p[Param::Cx] << ", " << p[Param::Cy] << ") px, not (" << n.cam.cx << ", " << n.cam.cy << ")";
+      break;
     case Effect::Count: break;
   }
   out.explains = x.str();

@@ -91,6 +91,14 @@ std::pair<double, double> bounds(Param p, const DiagnosisModel& m) {
     case Param::BiasX:
     case Param::BiasY:
     case Param::BiasZ: return {-1.0, 1.0};
+    case Param::MountX:
+    case Param::MountY:
+    case Param::MountZ: return {-0.5, 0.5};  // rad: a mount is not turned by more than ~30 degrees unknowingly
+    case Param::ScaleX:
+    case Param::ScaleY:
+    case Param::ScaleZ: return {0.5, 2.0};
+    case Param::Cx: return {0.0, n.cam.width - 1.0};
+    case Param::Cy: return {0.0, n.cam.height - 1.0};
     default: return {-2.0, 2.0};  // lever arm, metres
   }
 }

@@ -45,14 +45,14 @@ Eigen::Vector3d step(const Eigen::Vector3d& w0, const Eigen::Vector3d& s0, const
 }  // namespace
 
 GyroTrack::GyroTrack(const std::vector<GyroSample>& g, const Eigen::Vector3d& bias, const Eigen::Matrix3d& imu_to_camera,
-                     double max_interval)
-    : bias_(bias), imu_to_camera_t_(imu_to_camera.transpose()) {
+                     double max_interval, const Eigen::Vector3d& scale)
+    : bias_(bias), scale_(scale), imu_to_camera_t_(imu_to_camera.transpose()) {
   if (g.empty()) throw std::invalid_argument("gyro track: no gyro samples");
   const size_t n = g.size();
   knots_.resize(n);
   for (size_t i = 0; i < n; ++i) {
     knots_[i].t = g[i].t;
-    knots_[i].w = g[i].w - bias;
+    knots_[i].w = scale.cwiseProduct(g[i].w - bias);
   }
   // Slopes: the derivative of the parabola through each sample and its neighbours, second
   // order on an irregular grid (the plain central difference is only first order there):

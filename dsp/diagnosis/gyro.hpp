@@ -28,11 +28,14 @@ class GyroTrack {
   // "gyro_bias"); w_camera = imu_to_camera w_imu.
   // Intervals longer than `max_interval` are gaps: a slope next to one comes from the
   // other side only (a neighbour across a gap says nothing about the rate's slope here).
+  // `scale`: w_true = diag(scale) (w_measured - bias) (spec gyro_scale).
   GyroTrack(const std::vector<GyroSample>& gyro, const Eigen::Vector3d& bias, const Eigen::Matrix3d& imu_to_camera,
-            double max_interval = std::numeric_limits<double>::infinity());
+            double max_interval = std::numeric_limits<double>::infinity(),
+            const Eigen::Vector3d& scale = Eigen::Vector3d::Ones());
   // World-from-camera rotation R_c(t) on the motion clock; held at the ends.
   Eigen::Matrix3d camera_at(double t) const;
   const Eigen::Vector3d& bias() const { return bias_; }
+  const Eigen::Vector3d& scale() const { return scale_; }
   double t_begin() const { return knots_.front().t; }
   double t_end() const { return knots_.back().t; }
 
@@ -43,7 +46,7 @@ class GyroTrack {
     Eigen::Vector3d w, s;  // bias-free rate and its slope
   };
   std::vector<Knot> knots_;
-  Eigen::Vector3d bias_;
+  Eigen::Vector3d bias_, scale_;
   Eigen::Matrix3d imu_to_camera_t_;  // R_ic^T: R_c = R_imu R_ic^T
 };
 

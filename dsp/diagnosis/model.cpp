@@ -6,11 +6,16 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "dsp/geometry/camera_motion.hpp"
+
 namespace rsd::dsp {
 
 const char* param_name(Param p) {
   static constexpr const char* kNames[] = {"line_delay_s", "time_offset_s", "drift_ppm", "k1", "k2", "fx", "fy",
-                                           "x",            "y",             "z",         "bx", "by", "bz"};
+                                           "x",            "y",             "z",         "bx", "by", "bz",
+                                           "rx",           "ry",            "rz",        "sx", "sy", "sz",
+                                           "cx",           "cy"};
+  static_assert(sizeof kNames / sizeof kNames[0] == kParamCount);
   return kNames[static_cast<int>(p)];
 }
 
@@ -24,7 +29,10 @@ ModelParams nominal_params(const NominalModel& n) {
   p[Param::Fx] = n.cam.fx;
   p[Param::Fy] = n.cam.fy;
   for (int k = 0; k < 3; ++k) p.v[static_cast<int>(Param::LeverX) + k] = n.lever_arm[k];
-  return p;  // gyro bias: the nominal model has none
+  p[Param::ScaleX] = p[Param::ScaleY] = p[Param::ScaleZ] = 1.0;
+  p[Param::Cx] = n.cam.cx;
+  p[Param::Cy] = n.cam.cy;
+  return p;  // gyro bias and mount rotation: the nominal model has none
 }
 
 double param_scale(Param p, const NominalModel& n) {
@@ -39,8 +47,21 @@ double param_scale(Param p, const NominalModel& n) {
     case Param::BiasX:
     case Param::BiasY:
     case Param::BiasZ: return 1e-3;  // rad/s
+    case Param::MountX:
+    case Param::MountY:
+    case Param::MountZ: return 1e-3;  // rad
+    case Param::ScaleX:
+    case Param::ScaleY:
+    case Param::ScaleZ: return 1e-3;
+    case Param::Cx:
+    case Param::Cy: return 1.0;  // px
     default: return 0.01;  // lever arm, metres
   }
+}
+
+Eigen::Matrix3d mount_of(const ModelParams& p) {
+  const Eigen::Vector3d r(p[Param::MountX], p[Param::MountY], p[Param::MountZ]);
+  return r.isZero() ? Eigen::Matrix3d::Identity() : exp_so3(r);
 }
 
 LandmarkSetup landmark_setup(const NominalModel& n, const ModelParams& p) {
@@ -55,6 +76,9 @@ LandmarkSetup landmark_setup(const NominalModel& n, const ModelParams& p) {
   s.cam.fx = p[Param::Fx];
   s.cam.fy = p[Param::Fy];
   s.lever_arm = Eigen::Vector3d(p[Param::LeverX], p[Param::LeverY], p[Param::LeverZ]);
+  s.mount = mount_of(p);
+  s.cam.cx = p[Param::Cx];
+  s.cam.cy = p[Param::Cy];
   return s;
 }
 
@@ -151,21 +175,22 @@ DiagnosisModel::DiagnosisModel(const Recording& rec) : rec_(rec), tracks_(std::m
   }
 }
 
-const GyroTrack& DiagnosisModel::track(const Eigen::Vector3d& bias) const {
+const GyroTrack& DiagnosisModel::track(const Eigen::Vector3d& bias, const Eigen::Vector3d& scale) const {
   auto& v = tracks_->tracks;
   for (size_t k = 0; k < v.size(); ++k)
-    if (v[k]->bias() == bias) {
+    if (v[k]->bias() == bias && v[k]->scale() == scale) {
       std::rotate(v.begin(), v.begin() + k, v.begin() + k + 1);
       return *v.front();
     }
   if (v.size() >= 6) v.pop_back();
-  v.insert(v.begin(), std::make_unique<GyroTrack>(gyro_, bias, rec_.nominal.imu_to_camera, max_gap_));
+  v.insert(v.begin(), std::make_unique<GyroTrack>(gyro_, bias, rec_.nominal.imu_to_camera, max_gap_, scale));
   return *v.front();
 }
 
 namespace {
 
 Eigen::Vector3d bias_of(const ModelParams& p) { return {p[Param::BiasX], p[Param::BiasY], p[Param::BiasZ]}; }
+Eigen::Vector3d scale_of(const ModelParams& p) { return {p[Param::ScaleX], p[Param::ScaleY], p[Param::ScaleZ]}; }
 
 TimeModel with_t0(TimeModel tm, double t0) {
   tm.t0 = t0;
@@ -179,11 +204,12 @@ std::optional<Eigen::Vector2d> DiagnosisModel::landmark_residual(const ModelPara
   s.time = with_t0(s.time, t0_);
   const RowTiming rt = row_timing(s.time, s.cam.height);
   auto pixel_at = [&](double v) -> std::optional<Eigen::Vector2d> {
-    // X_c = R^T (X_w - p - R l) = R^T (X_w - p) - l: the camera axes are the body axes.
+    // X_c = M^T R^T (X_w - p - R l) = M^T (R^T (X_w - p) - l): the camera axes are the body
+    // axes turned by the mount M (spec mount_rotation: R_c = R Exp(r)).
     Eigen::Matrix3d R;
     Eigen::Vector3d p;
     body_->at(s.time.motion_time(o.T + rt.row_time(v)), R, p);
-    return s.cam.project(R.transpose() * (o.X - p) - s.lever_arm);
+    return s.cam.project(s.mount.transpose() * (R.transpose() * (o.X - p) - s.lever_arm));
   };
   auto px = fixed_point_row(pixel_at, o.px.y());
   if (!px) {
@@ -201,10 +227,12 @@ std::optional<Eigen::Vector2d> DiagnosisModel::match_residual(const ModelParams&
   const RowTiming rt = row_timing(tm, s.cam.height);
   const auto ray = s.cam.ray(o.px_a);
   if (!ray) return std::nullopt;
-  // Spec "Matches": the direction seen at frame_a's pixel, in world axes, at its row's time.
-  const Eigen::Vector3d d = track.camera_at(tm.motion_time(o.T + rt.row_time(o.px_a.y()))) * *ray;
+  // Spec "Matches": the direction seen at frame_a's pixel, in world axes, at its row's time. A
+  // mount rotation turns imu_to_camera into E R_nominal (E = Exp(r)): the camera's
+  // world-from-camera rotation becomes track.camera_at(t) E^T.
+  const Eigen::Vector3d d = track.camera_at(tm.motion_time(o.T + rt.row_time(o.px_a.y()))) * (s.mount.transpose() * *ray);
   auto pixel_at = [&](double v) {
-    return s.cam.project(track.camera_at(tm.motion_time(o.T_b + rt.row_time(v))).transpose() * d);
+    return s.cam.project(s.mount * (track.camera_at(tm.motion_time(o.T_b + rt.row_time(v))).transpose() * d));
   };
   const auto px = fixed_point_row(pixel_at, o.px.y());
   if (!px) return std::nullopt;
@@ -213,14 +241,14 @@ std::optional<Eigen::Vector2d> DiagnosisModel::match_residual(const ModelParams&
 
 std::optional<Eigen::Vector2d> DiagnosisModel::residual(const ModelParams& p, int i) const {
   if (rec_.kind == ObservationKind::Landmarks) return landmark_residual(p, obs_[i]);
-  return match_residual(p, track(bias_of(p)), obs_[i]);
+  return match_residual(p, track(bias_of(p), scale_of(p)), obs_[i]);
 }
 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx) const {
   std::vector<Eigen::Vector2d> out;
   out.reserve(idx.size());
   const Eigen::Vector2d nan = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
-  const GyroTrack* tr = rec_.kind == ObservationKind::Matches ? &track(bias_of(p)) : nullptr;
+  const GyroTrack* tr = rec_.kind == ObservationKind::Matches ? &track(bias_of(p), scale_of(p)) : nullptr;
   for (int i : idx) {
     const auto r = tr ? match_residual(p, *tr, obs_[i]) : landmark_residual(p, obs_[i]);
     out.push_back(r.value_or(nan));

@@ -30,7 +30,11 @@ namespace rsd::dsp {
 
 // The continuous parameters. Order is fixed; names are the spec's.
 enum class Param : int {
-  LineDelay, TimeOffset, Drift, K1, K2, Fx, Fy, LeverX, LeverY, LeverZ, BiasX, BiasY, BiasZ, Count
+  LineDelay, TimeOffset, Drift, K1, K2, Fx, Fy, LeverX, LeverY, LeverZ, BiasX, BiasY, BiasZ,
+  MountX, MountY, MountZ,  // mount_rotation: rotation vector r (rad)
+  ScaleX, ScaleY, ScaleZ,  // gyro_scale (1 nominal)
+  Cx, Cy,                  // principal_point (px)
+  Count
 };
 constexpr int kParamCount = static_cast<int>(Param::Count);
 using ParamMask = std::bitset<kParamCount>;
@@ -99,7 +103,7 @@ class DiagnosisModel {
   struct TrackCache;
   std::optional<Eigen::Vector2d> landmark_residual(const ModelParams& p, const Obs& o) const;
   std::optional<Eigen::Vector2d> match_residual(const ModelParams& p, const GyroTrack& track, const Obs& o) const;
-  const GyroTrack& track(const Eigen::Vector3d& bias) const;
+  const GyroTrack& track(const Eigen::Vector3d& bias, const Eigen::Vector3d& scale) const;
 
   const Recording& rec_;
   double t0_ = 0;  // T_0, the first frame's timestamp (spec "Time model")
@@ -113,5 +117,7 @@ class DiagnosisModel {
 
 // The camera and time model that `p` describes.
 LandmarkSetup landmark_setup(const NominalModel& n, const ModelParams& p);
+// Exp(r) of the mount rotation (the identity when r is zero).
+Eigen::Matrix3d mount_of(const ModelParams& p);
 
 }  // namespace rsd::dsp

@@ -11,7 +11,9 @@ namespace rsd::dsp {
 
 const char* effect_name(Effect e) {
   static constexpr const char* kNames[] = {"rolling_shutter", "time_offset",    "readout_direction", "clock_drift",
-                                           "lens_distortion", "focal_length", "gyro_bias",         "lever_arm"};
+                                           "lens_distortion", "focal_length", "gyro_bias",         "lever_arm",
+                                           "mount_rotation",  "gyro_scale",   "principal_point"};
+  static_assert(sizeof kNames / sizeof kNames[0] == static_cast<int>(Effect::Count));
   return kNames[static_cast<int>(e)];
 }
 
@@ -27,6 +29,9 @@ ParamMask effect_params(Effect e) {
     case Effect::FocalLength: set(Param::Fx), set(Param::Fy); break;
     case Effect::GyroBias: set(Param::BiasX), set(Param::BiasY), set(Param::BiasZ); break;
     case Effect::LeverArm: set(Param::LeverX), set(Param::LeverY), set(Param::LeverZ); break;
+    case Effect::MountRotation: set(Param::MountX), set(Param::MountY), set(Param::MountZ); break;
+    case Effect::GyroScale: set(Param::ScaleX), set(Param::ScaleY), set(Param::ScaleZ); break;
+    case Effect::PrincipalPoint: set(Param::Cx), set(Param::Cy); break;
     case Effect::Count: break;
   }
   return m;
@@ -38,6 +43,11 @@ std::vector<Effect> applicable_effects(const DiagnosisModel& m) {
     const Effect e = Effect(k);
     if (e == Effect::GyroBias && !m.has_gyro()) continue;
     if (e == Effect::LeverArm && m.has_gyro()) continue;
+    if (e == Effect::GyroScale && !m.has_gyro()) continue;
+    // The principal point is modelled and fitted, but not yet a candidate: against a lever arm
+    // across the optical axis (landmarks) and a mount rotation (both kinds) it explains nearly
+    // the same shift, and the selection does not compare such hypotheses head to head yet.
+    if (e == Effect::PrincipalPoint) continue;
     out.push_back(e);
   }
   return out;

@@ -11,7 +11,8 @@
 namespace rsd::dsp {
 
 enum class Effect : int {
-  RollingShutter, TimeOffset, ReadoutDirection, ClockDrift, LensDistortion, FocalLength, GyroBias, LeverArm, Count
+  RollingShutter, TimeOffset, ReadoutDirection, ClockDrift, LensDistortion, FocalLength, GyroBias, LeverArm,
+  MountRotation, GyroScale, PrincipalPoint, Count
 };
 const char* effect_name(Effect e);
 // The continuous parameters an effect frees (readout_direction: none, it is the flip).

@@ -79,9 +79,12 @@ class FrameMotion final : public CameraMotion {
   FrameMotion(const CameraMotion& world_to_body, const LandmarkSetup& s, double T_k)
       : body_(world_to_body), s_(s), T_k_(T_k) {}
   Eigen::Affine3d at(double t) const override {
-    // X_c = R^T (X_w - p - R l) = body(X_w) - l, since the camera axes are the body axes.
+    // X_c = M^T R^T (X_w - p - R l) = M^T (body(X_w) - l): the camera's axes are the body's
+    // turned by the mount M (the identity unless the spec's mount_rotation is in).
     Eigen::Affine3d g = body_.at(s_.time.motion_time(T_k_ + t));
     g.translation() -= s_.lever_arm;
+    g.linear() = s_.mount.transpose() * g.linear();
+    g.translation() = s_.mount.transpose() * g.translation();
     return g;
   }
 

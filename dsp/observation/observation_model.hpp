@@ -72,6 +72,8 @@ struct LandmarkSetup {
   CameraModel cam;
   TimeModel time;
   Eigen::Vector3d lever_arm = Eigen::Vector3d::Zero();
+  // The camera's axes in the body's (spec mount_rotation: R_c = R Exp(r), so mount = Exp(r)).
+  Eigen::Matrix3d mount = Eigen::Matrix3d::Identity();
 };
 struct Prediction {
   Eigen::Vector2d pixel;

@@ -23,6 +23,9 @@ std::vector<std::string> Effects::names() const {
   if (fxfy) n.push_back("focal_length");
   if (gyro_bias) n.push_back("gyro_bias");
   if (lever_arm) n.push_back("lever_arm");
+  if (mount_rotation) n.push_back("mount_rotation");
+  if (gyro_scale) n.push_back("gyro_scale");
+  if (principal_point) n.push_back("principal_point");
   return n;
 }
 
@@ -48,6 +51,7 @@ void validate(const SimConfig& c) {
   require(c.outlier_fraction >= 0 && c.outlier_fraction < 1, "observations.outlier_fraction must be in [0, 1)");
   require(!c.effects.line_delay_s || *c.effects.line_delay_s >= 0, "effects.rolling_shutter.line_delay_s must not be negative");
   require(!c.effects.fxfy || (c.effects.fxfy->minCoeff() > 0), "effects.focal_length fx, fy must be positive");
+  require(!c.effects.gyro_scale || (c.effects.gyro_scale->minCoeff() > 0), "effects.gyro_scale sx, sy, sz must be positive");
   const double readout = cam.height * c.effects.line_delay_s.value_or(c.nominal.time.line_delay_s);
   require(readout <= (1 + 1e-9) / c.nominal.frame_rate_hz, "line delay x height exceeds the frame period");
 }
@@ -65,6 +69,9 @@ TrueModel true_model(const NominalModel& n, const Effects& e) {
   if (e.fxfy) t.cam.fx = e.fxfy->x(), t.cam.fy = e.fxfy->y();
   if (e.lever_arm) t.lever_arm = *e.lever_arm;
   if (e.gyro_bias) t.gyro_bias = *e.gyro_bias;
+  if (e.mount_rotation) t.mount = exp_so3(*e.mount_rotation);
+  if (e.gyro_scale) t.gyro_scale = *e.gyro_scale;
+  if (e.principal_point) t.cam.cx = e.principal_point->x(), t.cam.cy = e.principal_point->y();
   return t;
 }
 
@@ -146,7 +153,7 @@ void simulate_landmarks(const SimConfig& c, const TrueModel& m, SimulatedRecordi
   }
   // The written samples are the truth: interpolating them is the motion the data follow.
   const SampledTrajectory truth(std::move(samples));
-  const LandmarkSetup setup{m.cam, m.time, m.lever_arm};
+  const LandmarkSetup setup{m.cam, m.time, m.lever_arm, m.mount};
   for (const FrameStamp& f : r.frames)
     for (const Landmark& L : r.points) {
       const auto p = predict_landmark(setup, truth, f.t, L.X);
@@ -162,7 +169,9 @@ std::vector<GyroSample> sample_gyro(const SimConfig& c, const BodyMotion& imu, c
   std::vector<GyroSample> out;
   for (double t = t_begin; t <= t_end;) {
     const double dt = 1.0 / (g.rate_min_hz + (g.rate_max_hz - g.rate_min_hz) * u(rng));
-    Eigen::Vector3d w = imu.body_rate(t) + m.gyro_bias + g.noise_rad_s * Eigen::Vector3d(n(rng), n(rng), n(rng));
+    // What the gyro reads for the IMU's true rate: w_true = diag(s) (w_measured - b).
+    const Eigen::Vector3d w_true = imu.body_rate(t);
+    Eigen::Vector3d w = w_true.cwiseQuotient(m.gyro_scale) + m.gyro_bias + g.noise_rad_s * Eigen::Vector3d(n(rng), n(rng), n(rng));
     double stamp = t + g.jitter_s * n(rng);
     if (!out.empty() && u(rng) < g.repeat_probability) stamp = out.back().t;
     out.push_back({stamp, w});
@@ -182,7 +191,7 @@ void simulate_matches(const SimConfig& c, const TrueModel& m, SimulatedRecording
   // between samples is exact to well below a micro-radian.
   std::vector<OrientationTrack::Sample> cam_samples;
   for (double t = t_begin; t <= t_end; t += 5e-4)
-    cam_samples.push_back({t, camera_orientation(imu.at(t).q, r.nominal.imu_to_camera)});
+    cam_samples.push_back({t, camera_orientation(imu.at(t).q, m.mount * r.nominal.imu_to_camera)});  // Exp(r) R_nominal
   const OrientationTrack truth(std::move(cam_samples));
   const MatchSetup setup{m.cam, m.time};
   std::uniform_real_distribution<double> u(0, m.cam.width - 1), v(0, m.cam.height - 1), flip(0, 1);

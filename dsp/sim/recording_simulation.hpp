@@ -26,6 +26,9 @@ struct Effects {
   std::optional<Eigen::Vector2d> fxfy;    // focal_length
   std::optional<Eigen::Vector3d> gyro_bias;  // gyro_bias (IMU axes)
   std::optional<Eigen::Vector3d> lever_arm;  // lever_arm (body axes)
+  std::optional<Eigen::Vector3d> mount_rotation;   // mount_rotation: rotation vector r
+  std::optional<Eigen::Vector3d> gyro_scale;       // gyro_scale: w_true = diag(s) (w_measured - b)
+  std::optional<Eigen::Vector2d> principal_point;  // principal_point: cx, cy
   bool any() const;
   std::vector<std::string> names() const;  // spec names of the effects switched on
 };
@@ -86,6 +89,8 @@ struct TrueModel {
   CameraModel cam;
   TimeModel time;
   Eigen::Vector3d lever_arm = Eigen::Vector3d::Zero(), gyro_bias = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d mount = Eigen::Matrix3d::Identity();  // Exp(r) of mount_rotation
+  Eigen::Vector3d gyro_scale = Eigen::Vector3d::Ones();
 };
 TrueModel true_model(const NominalModel& nominal, const Effects& effects);
 

@@ -4,6 +4,7 @@
 // nominal values where no effect was named, and each key's sigma from the fit.
 #include <gtest/gtest.h>
 
+#include "dsp/geometry/camera_motion.hpp"
 #include "dsp/sim/recording_simulation.hpp"
 #include "formats/calibration_v1.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
@@ -23,7 +24,7 @@ TEST(DiagnosisCalibration, TheFileCarriesWhatTheDiagnosisFound) {
   const dsp::SimulatedRecording sim = dsp::simulate_recording(c);
   const dsp::Diagnosis d = dsp::diagnose(sim.rec);
   const std::string path = g_tmp.path("cal.yaml");
-  formats::write_calibration(path, tools::calibration_from(sim.rec.nominal, d, "test"));
+  formats::write_calibration(path, tools::calibration_from(sim.rec, d, "test"));
   const formats::Calibration cal = formats::read_calibration(path);
   EXPECT_NEAR(cal.line_delay_s, 4e-5, 0.03 * 4e-5);
   EXPECT_NEAR(cal.timeshift_cam_imu_s, -0.01, 5e-4);
@@ -42,6 +43,30 @@ TEST(DiagnosisCalibration, TheFileCarriesWhatTheDiagnosisFound) {
   EXPECT_LT(std::abs(cal.line_delay_s - 4e-5), 4 * sl);
   EXPECT_LT(std::abs(cal.timeshift_cam_imu_s + 0.01), 4 * st);
   EXPECT_EQ(cal.sigma.count("drift_ppm"), 0u);  // not fitted: no sigma
+}
+
+// A mount rotation goes into T_cam_imu: gyro recordings as Exp(r) R_nominal (w_cam = R w_imu),
+// trajectory recordings as Exp(r)^T (R_c = R Exp(r): body-to-camera is its transpose); the
+// daemon then turns the gyro's (or the body's) rates into the camera's true ones.
+TEST(DiagnosisCalibration, MountRotationComposesIntoTheImuRotation) {
+  dsp::SimConfig g = test::simulation(dsp::ObservationKind::Matches, 21, 4.0, 0.5);
+  g.matches_per_pair = 100;
+  g.nominal.imu_to_camera << 0, -1, 0, -1, 0, 0, 0, 0, -1;
+  g.rotation_amplitude_rad = 0.25, g.motion_frequency_hz = 1.2;
+  const Eigen::Vector3d r(0.024, -0.016, 0.03);
+  g.effects.mount_rotation = r;
+  const dsp::SimulatedRecording sg = dsp::simulate_recording(g);
+  const formats::Calibration cg = tools::calibration_from(sg.rec, dsp::diagnose(sg.rec), "test");
+  const Eigen::Matrix3d want_g = dsp::exp_so3(r) * g.nominal.imu_to_camera;
+  EXPECT_LT((cg.imu_to_camera - want_g).cwiseAbs().maxCoeff(), 0.003) << cg.imu_to_camera;
+
+  dsp::SimConfig t = test::simulation(dsp::ObservationKind::Landmarks, 23, 3.0, 0.5);
+  test::small_target(t);
+  const Eigen::Vector3d rt(0.0008, -0.0006, 0.004);
+  t.effects.mount_rotation = rt;
+  const dsp::SimulatedRecording st = dsp::simulate_recording(t);
+  const formats::Calibration ct = tools::calibration_from(st.rec, dsp::diagnose(st.rec), "test");
+  EXPECT_LT((ct.imu_to_camera - dsp::exp_so3(rt).transpose()).cwiseAbs().maxCoeff(), 0.002) << ct.imu_to_camera;
 }
 
 }  // namespace

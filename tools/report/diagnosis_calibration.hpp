@@ -10,6 +10,6 @@
 
 namespace rsd::tools {
 
-formats::Calibration calibration_from(const dsp::NominalModel& nominal, const dsp::Diagnosis& d, const std::string& source);
+formats::Calibration calibration_from(const dsp::Recording& rec, const dsp::Diagnosis& d, const std::string& source);
 
 }  // namespace rsd::tools
