@@ -23,6 +23,11 @@ void visit_config(formats::ConfigSection& c, SimSourceConfig& s) {
   c.value("angular_rate_rad_s", s.angular_rate, "the camera's own motion, camera axes");
   c.value("velocity_m_s", s.velocity);
   c.value("wobble_rad_s", s.wobble_rad_s);
+  c.value("wobble_hz", s.wobble_hz);
+  c.check(s.wobble_hz > 0, "wobble_hz", "must be positive");
+  c.value("wobble_axes", s.wobble_axes, "per axis: multiples of the wobble's amplitude");
+  c.value("wobble_axes_hz", s.wobble_axes_hz, "per axis: multiples of its frequency");
+  c.check((s.wobble_axes_hz.array() > 0).all(), "wobble_axes_hz", "must be positive");
   c.value("scene_depth_m", s.scene_depth_m, "a textured wall this far ahead");
   c.check(s.scene_depth_m > 0, "scene_depth_m", "must be positive");
   c.value("velocity_rate_hz", s.velocity_rate_hz, "the simulated IMU, published on velocity.channel");

@@ -16,8 +16,12 @@ class SimSource::Motion final : public dsp::CameraMotion {
   explicit Motion(const SimSourceConfig& c) : c_(c) {}
   // Rotation vector of the camera in the world: integral of the rate.
   Eigen::Vector3d phi(double t) const {
-    const double w = 2 * M_PI * c_.wobble_hz;
-    return c_.angular_rate * t + Eigen::Vector3d::Constant(c_.wobble_rad_s * (1 - std::cos(w * t)) / w);
+    Eigen::Vector3d phi = c_.angular_rate * t;
+    for (int i = 0; i < 3; ++i) {
+      const double w = 2 * M_PI * c_.wobble_hz * c_.wobble_axes_hz[i];
+      phi[i] += c_.wobble_rad_s * c_.wobble_axes[i] * (1 - std::cos(w * t)) / w;
+    }
+    return phi;
   }
   Eigen::Affine3d at(double t) const override {
     const Eigen::Matrix3d R_wc = dsp::exp_so3(phi(t));

@@ -32,6 +32,9 @@ struct SimSourceConfig {
   Eigen::Vector3d angular_rate{0.0, 0.3, 0.8};  // rad/s
   Eigen::Vector3d velocity{0.5, 0.0, 0.0};      // m/s
   double wobble_rad_s = 0.5, wobble_hz = 0.7;
+  // Per axis, multiples of the wobble's amplitude and frequency: a hand turns about changing
+  // axes (1, 1, 1: the same wobble about every axis, a fixed axis of rotation).
+  Eigen::Vector3d wobble_axes{1, 1, 1}, wobble_axes_hz{1, 1, 1};
   double scene_depth_m = 3.0;                   // a textured wall this far ahead
   // The velocity feed.
   double velocity_rate_hz = 200;
