@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "drivers/driver_registry.hpp"
 #include "formats/config_section.hpp"
 #include "formats/yaml_map.hpp"
 
@@ -99,6 +100,7 @@ void use_imu_calibration(Config& c, const formats::Calibration& cal) {
   in.gyro_scale = cal.gyro_scale;
   in.drift_ppm = cal.drift_ppm;
   in.lever_arm_m = cal.lever_arm_m;
+  for (const drivers::Driver& d : drivers::all_drivers()) d.use_clock_offset(c.source.settings[d.name], cal.timeshift_cam_imu_s);
 }
 
 }  // namespace

@@ -37,6 +37,9 @@ struct Driver {
   // `force` replaces the section's own; otherwise it is used only where the section has none.
   std::function<void(std::any&, double line_delay_s, std::optional<dsp::Readout>, bool force)> use_row_timing =
       [](std::any&, double, std::optional<dsp::Readout>, bool) {};
+  // The motion sensor's calibrated clock offset (t_imu = t_cam + offset), for sources that hand
+  // over recorded motion ahead of the frames that need it.
+  std::function<void(std::any&, double offset_s)> use_clock_offset = [](std::any&, double) {};
 };
 
 // A driver whose settings are `Config` and whose source is `Source(const Config&)`.

@@ -69,10 +69,17 @@ void RecordingReplaySource::open() {
   start();
 }
 
+double RecordingReplaySource::offset_s() const { return cfg_.time_offset_s.value_or(rec_.rec.nominal.time.time_offset_s); }
+
 void RecordingReplaySource::start() {
   images_->start();
-  next_motion_ = next_frame_ = 0;
+  next_frame_ = 0;
   pacer_.reset();
+  // Motion from half a second before the first frame's: what came long before says nothing
+  // about the frames (and the velocity input takes the first sample it sees as the drift's T0).
+  const auto from = std::llround((rec_.rec.frames.front().t + offset_s() - 0.5) * 1e9);
+  next_motion_ = 0;
+  while (next_motion_ < motion_.size() && motion_[next_motion_].t_ns < from) ++next_motion_;
 }
 
 void RecordingReplaySource::deliver_motion_until(double t_motion) {
@@ -90,7 +97,7 @@ CaptureStatus RecordingReplaySource::capture(const dsp::ImageView& dst, FrameMet
   if (!pacer_.wait(std::llround(t * 1e6), timeout)) return CaptureStatus::Timeout;
   // The motion over this frame's readout (on the motion clock, at the nominal offset), and a
   // margin for a calibrated offset that differs from it.
-  deliver_motion_until(t + timing_.frame_readout_s() + rec_.rec.nominal.time.time_offset_s + cfg_.motion_lead_s);
+  deliver_motion_until(t + timing_.frame_readout_s() + offset_s() + cfg_.motion_lead_s);
   const CaptureStatus st = images_->capture(dst, meta, timeout);
   if (st == CaptureStatus::Frame) {
     ++next_frame_;
@@ -135,6 +142,7 @@ Driver recording_driver() {
     if (force || r.line_delay_s == 0) r.line_delay_s = line_delay_s;
     if (readout && force) r.readout = readout;
   };
+  d.use_clock_offset = [](std::any& c, double offset_s) { std::any_cast<RecordingReplayConfig&>(c).time_offset_s = offset_s; };
   return d;
 }
 

@@ -36,6 +36,7 @@ struct RecordingReplayConfig {
   // nominal one; not a key of the section.
   double line_delay_s = 0;  // 0: recording.yaml's
   std::optional<dsp::Readout> readout;
+  std::optional<double> time_offset_s;  // the calibration's clock offset; default recording.yaml's
 };
 
 // The body's angular rate (body axes) and velocity (body axes) between consecutive poses,
@@ -64,6 +65,7 @@ class RecordingReplaySource final : public CameraSource, public Playback {
 
  private:
   void deliver_motion_until(double t_motion);
+  double offset_s() const;
   RecordingReplayConfig cfg_;
   formats::ImagesRecording rec_;
   std::unique_ptr<ImagesSource> images_;

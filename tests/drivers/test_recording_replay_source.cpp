@@ -128,6 +128,27 @@ TEST(RecordingReplaySource, CalibratedRowTimingReplacesTheNominal) {
   EXPECT_EQ(src->timing().readout, dsp::Readout::BottomToTop);
 }
 
+// A calibration that puts the IMU clock 0.3 s ahead (a phone's gyro log): each frame then needs
+// motion stamped 0.3 s later, and gets it before it is captured.
+TEST(RecordingReplaySource, ACalibratedClockOffsetMovesTheMotionAhead) {
+  const fs::path dir = gyro_video_recording();
+  const drivers::Driver d = drivers::recording_driver();
+  std::any cfg = d.defaults();
+  std::any_cast<drivers::RecordingReplayConfig&>(cfg).dir = dir.string();
+  std::any_cast<drivers::RecordingReplayConfig&>(cfg).speed = 0;
+  d.use_clock_offset(cfg, 0.1);
+  auto src = d.make(cfg);
+  std::vector<drivers::VelocitySample> motion;
+  src->set_velocity_sink([&](const drivers::VelocitySample& s) { motion.push_back(s); });
+  src->open();
+  src->start();
+  dsp::Image img(32, 24, dsp::PixelFormat::Rgb8);
+  drivers::FrameMeta meta;
+  ASSERT_EQ(src->capture(img.view(), meta, std::chrono::milliseconds(100)), drivers::CaptureStatus::Frame);
+  ASSERT_FALSE(motion.empty());
+  EXPECT_NEAR(motion.back().t_ns * 1e-9, 100.0 + 0.024 + 0.1 + 0.05, 1.001e-3);
+}
+
 TEST(RecordingReplaySource, RecordingsOfObservationsAreRefusedByName) {
   const fs::path dir = temp_dir("obs");
   dsp::Recording r;
