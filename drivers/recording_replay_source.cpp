@@ -121,14 +121,8 @@ std::string RecordingReplaySource::summary(double seconds) const {
 }
 
 void visit_config(formats::ConfigSection& c, RecordingReplayConfig& r) {
-  std::string dir = r.dir;
-  c.value("dir", dir, "an images recording (rsd-recording/1); relative to this file; or rsd --replay DIR");
-  if (!dir.empty() && std::filesystem::path(dir).is_relative() && !c.file().empty())
-    dir = (std::filesystem::path(c.file()).parent_path() / dir).string();
-  r.dir = dir;
-  std::string speed = r.speed == 0 ? "fast" : formats::config_number(r.speed);
-  c.value("speed", speed, "1: real time, N: N times faster, fast: no waiting and no drops");
-  if (c.has("speed")) c.check(parse_speed(speed, r.speed), "speed", "must be a positive factor (1: real time) or fast");
+  visit_replay_path(c, "dir", r.dir, "an images recording (rsd-recording/1); relative to this file; or rsd --replay DIR");
+  visit_replay_speed(c, r.speed);
   c.value("motion_lead_s", r.motion_lead_s, "motion delivered ahead of each frame's last row (beyond the nominal offset)");
   c.check(std::isfinite(r.motion_lead_s) && r.motion_lead_s >= 0, "motion_lead_s", "must be a non-negative number of seconds");
 }

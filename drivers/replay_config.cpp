@@ -5,15 +5,23 @@
 
 namespace rsd::drivers {
 
+void visit_replay_path(formats::ConfigSection& c, const char* key, std::string& path, const char* comment) {
+  std::string p = path;
+  c.value(key, p, comment);
+  if (!p.empty() && std::filesystem::path(p).is_relative() && !c.file().empty())
+    p = (std::filesystem::path(c.file()).parent_path() / p).string();
+  path = p;
+}
+
+void visit_replay_speed(formats::ConfigSection& c, double& speed) {
+  std::string text = speed == 0 ? "fast" : formats::config_number(speed);
+  c.value("speed", text, "1: real time, N: N times faster, fast: no waiting and no drops");
+  if (c.has("speed")) c.check(parse_speed(text, speed), "speed", "must be a positive factor (1: real time) or fast");
+}
+
 void visit_config(formats::ConfigSection& c, ReplayConfig& r) {
-  std::string file = r.file;
-  c.value("file", file, "relative to this file; or rsd --replay LOG");
-  if (!file.empty() && std::filesystem::path(file).is_relative() && !c.file().empty())
-    file = (std::filesystem::path(c.file()).parent_path() / file).string();
-  r.file = file;
-  std::string speed = r.speed == 0 ? "fast" : formats::config_number(r.speed);
-  c.value("speed", speed, "1: real time, N: N times faster, fast: no waiting and no drops");
-  if (c.has("speed")) c.check(parse_speed(speed, r.speed), "speed", "must be a positive factor (1: real time) or fast");
+  visit_replay_path(c, "file", r.file, "relative to this file; or rsd --replay LOG");
+  visit_replay_speed(c, r.speed);
   c.value("loop", r.loop);
   c.value("channel", r.channel, "bot_core.image_t raw frames with their row timing");
   c.value("velocity_channel", r.velocity_channel);

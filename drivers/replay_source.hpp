@@ -54,6 +54,9 @@ class ReplayPacer {
 
 // Parses "fast" / "max" (0) or a positive factor; false otherwise.
 bool parse_speed(const std::string& text, double& speed);
+// The keys every replay's section shares: a path relative to the configuration file, the speed.
+void visit_replay_path(formats::ConfigSection& c, const char* key, std::string& path, const char* comment);
+void visit_replay_speed(formats::ConfigSection& c, double& speed);
 
 class ReplaySource final : public MessageSource, public Playback {
  public:
