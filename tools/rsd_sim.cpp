@@ -3,6 +3,7 @@
 //   rsd-sim recording SCENARIO.yaml OUTDIR   observation recording (recording-v1)
 //   rsd-sim frames SCENARIO.yaml OUTDIR      rendered PNG frames of the scenario's target
 //   rsd-sim lcm SCENARIO.yaml OUT.lcmlog     raw frames + true velocity (+ body pose) as an LCM log
+//   rsd-sim images SCENARIO.yaml OUTDIR      an images recording: PNG frames, trajectory, target
 //   rsd-sim figure1 OUTDIR                   the paper's Figure 1 (rotating checkerboard)
 #include <chrono>
 #include <cmath>
@@ -15,6 +16,7 @@
 #include "dsp/sim/rs_renderer.hpp"
 #include "formats/image_file.hpp"
 #include "formats/recording_v1.hpp"
+#include "tools/sim/scenario_frames.hpp"
 #include "tools/sim/sim_lcm_log.hpp"
 #include "formats/scenario_file.hpp"
 
@@ -24,15 +26,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct FrameOptions {
-  int count = 0;  // 0: every frame of the scenario
-  bool rgb = false;
-  double noise = 0;
-  int supersample = 2;
-  int blur_samples = 1;
-  double exposure_s = 0;
-  bool pose = false;  // lcm: also the body trajectory as bot_core.pose_t
-};
+using tools::FrameOptions;
+using tools::FrameRig;
+using tools::make_rig;
 
 int run_recording(const std::string& scenario, const std::string& out) {
   const formats::Scenario sc = formats::load_scenario(scenario);
@@ -53,62 +49,6 @@ int run_recording(const std::string& scenario, const std::string& out) {
   for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
   std::printf("  effects the nominal model leaves out: %s\n", names.empty() ? "none" : list.c_str());
   return 0;
-}
-
-// World-to-camera motion on the camera clock: the recorded body trajectory through the
-// true time model and lever arm.
-class TrueCameraMotion final : public dsp::CameraMotion {
- public:
-  TrueCameraMotion(const dsp::Recording& r, const dsp::TrueModel& m) : m_(m), body_(samples(r)) {}
-  Eigen::Affine3d at(double t) const override {
-    Eigen::Affine3d g = body_.at(m_.time.motion_time(t));
-    g.translation() -= m_.lever_arm;
-    return g;
-  }
-
- private:
-  static std::vector<dsp::SampledTrajectory::Sample> samples(const dsp::Recording& r) {
-    std::vector<dsp::SampledTrajectory::Sample> s;
-    for (const auto& p : r.trajectory) s.push_back({p.t, p.q, p.p});
-    return s;
-  }
-  dsp::TrueModel m_;
-  dsp::SampledTrajectory body_;
-};
-
-// Everything needed to render a scenario's frames as the real (true-model) camera sees them.
-struct FrameRig {
-  formats::Scenario sc;
-  dsp::SimulatedRecording sim;
-  dsp::TrueModel truth;
-  dsp::RowTiming timing;
-  dsp::Scene scene;
-  std::unique_ptr<TrueCameraMotion> motion;
-  std::unique_ptr<dsp::RsRenderer> renderer;
-  size_t frames;
-};
-
-FrameRig make_rig(const std::string& scenario, const FrameOptions& o) {
-  FrameRig rig;
-  rig.sc = formats::load_scenario(scenario);
-  if (rig.sc.sim.kind != dsp::ObservationKind::Landmarks)
-    throw tools::UsageError(scenario + ": frames are rendered for landmarks scenarios (a target or point set)");
-  rig.sc.sim.noise_px = 0;
-  rig.sim = dsp::simulate_recording(rig.sc.sim);
-  rig.truth = dsp::true_model(rig.sim.rec.nominal, rig.sc.sim.effects);
-  rig.timing = dsp::row_timing(rig.truth.time, rig.truth.cam.height);
-  rig.timing.frame_rate_hz = rig.sim.rec.nominal.frame_rate_hz;
-  rig.timing.exposure_s = o.exposure_s;
-  dsp::RenderOptions ro;
-  ro.supersample = o.supersample;
-  ro.exposure_samples = o.blur_samples;
-  ro.noise_sigma = o.noise;
-  ro.noise_seed = rig.sc.sim.seed;
-  rig.renderer = std::make_unique<dsp::RsRenderer>(rig.truth.cam, rig.timing, ro);
-  rig.motion = std::make_unique<TrueCameraMotion>(rig.sim.rec, rig.truth);
-  rig.scene = rig.sc.target.scene;
-  rig.frames = o.count > 0 ? std::min<size_t>(o.count, rig.sim.rec.frames.size()) : rig.sim.rec.frames.size();
-  return rig;
 }
 
 void progress(size_t k, size_t n) {
@@ -157,6 +97,18 @@ int run_lcm(const std::string& scenario, const std::string& out, const FrameOpti
 
 // The paper's Figure 1: a fronto-parallel checkerboard 0.5 m away, 40 degree field of
 // view, 30 fps with the readout filling the frame, rotating about the optical axis.
+int run_images(const std::string& scenario, const std::string& out, const FrameOptions& o) {
+  const FrameRig rig = make_rig(scenario, o);
+  tools::write_images_recording(rig, o, out);
+  std::printf("rsd-sim: wrote an images recording (%zu frames as PNG, %zu poses, the target and its %zu points) to %s\n",
+              rig.frames, rig.sim.rec.trajectory.size(), rig.sim.rec.points.size(), out.c_str());
+  const auto names = rig.sim.truth.names();
+  std::string list;
+  for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+  std::printf("  effects its nominal model leaves out: %s\n", names.empty() ? "none" : list.c_str());
+  return 0;
+}
+
 int run_figure1(const std::string& out) {
   fs::create_directories(out);
   const dsp::CameraModel cam = dsp::CameraModel::from_hfov(640, 480, 40.0 * M_PI / 180.0);
@@ -212,6 +164,14 @@ int main(int argc, char** argv) {
   lcmlog->add_flag("--pose", fo.pose,
                    "also write the body's pose (world = the target's frame, motion clock) as bot_core.pose_t on RSD_POSE, "
                    "like motion capture (rsd-extract's landmarks input)");
+  auto* images = app.add_subcommand("images", "write an images recording: the frames as PNG with the body trajectory, the "
+                                               "target and its points (what rsd --replay DIR and rsd-diagnose DIR read)");
+  images->add_option("scenario", scenario, "scenario YAML (landmarks kind, checkerboard or aprilgrid)")->required()->check(CLI::ExistingFile);
+  images->add_option("outdir", out, "output directory (created)")->required();
+  images->add_option("--count", fo.count, "frames to render (default: all)")->check(CLI::NonNegativeNumber);
+  images->add_flag("--rgb", fo.rgb, "write RGB instead of mono8");
+  images->add_option("--noise", fo.noise, "pixel noise sigma in grey levels")->check(CLI::NonNegativeNumber);
+  images->add_option("--supersample", fo.supersample, "n x n samples per pixel")->check(CLI::Range(1, 8));
   auto* fig = app.add_subcommand("figure1", "render the paper's Figure 1 (four PNGs)");
   fig->add_option("outdir", out, "output directory (created)")->required();
   if (const auto rc = tools::parse_command_line(app, argc, argv)) return *rc;
@@ -219,6 +179,7 @@ int main(int argc, char** argv) {
     if (*rec) return run_recording(scenario, out);
     if (*frames) return run_frames(scenario, out, fo);
     if (*lcmlog) return run_lcm(scenario, out, fo);
+    if (*images) return run_images(scenario, out, fo);
     return run_figure1(out);
   });
 }
