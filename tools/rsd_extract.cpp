@@ -310,7 +310,7 @@ int run(const Options& o) {
     if (ok[k]) rec.frames.push_back({static_cast<int>(k), s.frames[k].t});
   if (rec.frames.empty()) throw std::runtime_error(o.log + ": the motion does not cover any frame's readout (frames and motion on different clocks?)");
   if (rec.frames.size() < s.frames.size())
-    std::fprintf(stderr, "rsd-extract: %zu of %zu frames lie outside the motion's time span and are left out\n",
+    std::fprintf(stderr, "rsd-extract: %zu of %zu frames lie outside the motion's time span (with 50 ms to spare) and are left out\n",
                  s.frames.size() - rec.frames.size(), s.frames.size());
   LogPictures pictures(o, s, ok);
   if (o.images) {

@@ -19,16 +19,21 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <functional>
+#include <iterator>
 
 #include "daemon/config.hpp"
 #include "daemon/frame_rectifier.hpp"
 #include "daemon/velocity_input.hpp"
 #include "drivers/recording_replay_source.hpp"
+#include "drivers/replay_source.hpp"
 #include "drivers/sim_source.hpp"
 #include "dsp/diagnosis/diagnosis.hpp"
 #include "formats/calibration_v1.hpp"
 #include "formats/image_file.hpp"
+#include "formats/image_t_codec.hpp"
+#include "formats/lcm_log.hpp"
 #include "tools/common/picture_observations.hpp"
 #include "tools/report/diagnosis_calibration.hpp"
 #include "tools/sim/scenario_frames.hpp"
@@ -138,11 +143,7 @@ using TruthRender = std::function<void(double t_camera_s, const dsp::ImageView&)
 
 // Plays the recording through the daemon's replay source, velocity input and rectifier with
 // `cal`, and measures every frame (but the first two) against the truth at its reference time.
-double rectified_rms(const fs::path& dir, const formats::Calibration& cal, const TruthRender& render_truth) {
-  daemon::Config cfg;
-  cfg.source.driver = "recording";
-  cfg.source.settings_of<drivers::RecordingReplayConfig>("recording").dir = dir.string();
-  cfg.source.settings_of<drivers::RecordingReplayConfig>("recording").speed = 0;
+double rectified_rms(daemon::Config cfg, const formats::Calibration& cal, const TruthRender& render_truth) {
   daemon::apply_calibration(cfg, cal);
   auto src = daemon::make_source(cfg.source);
   src->open();
@@ -153,7 +154,10 @@ double rectified_rms(const fs::path& dir, const formats::Calibration& cal, const
   int n = 0;
   {
     daemon::VelocityInput in(lcm, "RSD_VELOCITY_TEST", buf, cfg.velocity_input);
-    src->set_velocity_sink([&](const drivers::VelocitySample& s) { in.deliver(s); });
+    if (auto* m = dynamic_cast<drivers::MessageSource*>(src.get()))  // an LCM log: rsd.velocity_t
+      m->set_velocity_message_sink([&](const rsd::velocity_t& msg) { in.deliver(msg); });
+    else
+      src->set_velocity_sink([&](const drivers::VelocitySample& s) { in.deliver(s); });
     daemon::FrameRectifier rect(cfg.rectify, daemon::camera_model(cfg.source, src->format()), timing, src->format());
     dsp::Image raw(kW, kH, dsp::PixelFormat::Mono8), out = raw, truth = raw;
     src->start();
@@ -189,6 +193,15 @@ formats::Calibration learn(const fs::path& dir, const char* name) {
               learned.line_delay_s, learned.timeshift_cam_imu_s, learned.gyro_bias_rad_s.x(), learned.gyro_bias_rad_s.y(),
               learned.gyro_bias_rad_s.z());
   return learned;
+}
+
+// An images recording played as the daemon plays it (rsd --replay DIR --speed fast).
+daemon::Config replay_of(const fs::path& dir) {
+  daemon::Config cfg;
+  cfg.source.driver = "recording";
+  cfg.source.settings_of<drivers::RecordingReplayConfig>("recording").dir = dir.string();
+  cfg.source.settings_of<drivers::RecordingReplayConfig>("recording").speed = 0;
+  return cfg;
 }
 
 // What the simulator hid, as a calibration file would say it.
@@ -229,9 +242,9 @@ void run(const Scenario& s, double nominal_at_least_px, double goal_px, double f
   ro.supersample = 2;
   dsp::RsRenderer gs(r.truth.camera, global, ro);
   const TruthRender truth = [&](double t, const dsp::ImageView& v) { gs.render(sim.scene(), sim.truth(), t - t0 * 1e-9, v); };
-  const double before = rectified_rms(dir, formats::calibration_of(r.nominal, "nominal"), truth);
-  const double after = rectified_rms(dir, learned, truth);
-  const double best = rectified_rms(dir, true_calibration(r), truth);
+  const double before = rectified_rms(replay_of(dir), formats::calibration_of(r.nominal, "nominal"), truth);
+  const double after = rectified_rms(replay_of(dir), learned, truth);
+  const double best = rectified_rms(replay_of(dir), true_calibration(r), truth);
   expect_loop_closed(s.name, before, after, best, nominal_at_least_px, goal_px, from_best_px);
   fs::remove_all(dir);
 }
@@ -272,9 +285,85 @@ TEST(ClosedLoop, LandmarksRecordingOfATrackedBody) {
   true_cal.line_delay_s = rig.truth.time.line_delay_s;
   true_cal.timeshift_cam_imu_s = rig.truth.time.time_offset_s;
   true_cal.imu_to_camera = rig.truth.mount.transpose();  // body-to-camera: R_c = R M
-  const double before = rectified_rms(dir, formats::calibration_of(rig.sim.rec.nominal, "nominal"), truth);
-  const double after = rectified_rms(dir, learned, truth);
-  const double best = rectified_rms(dir, true_cal, truth);
+  const double before = rectified_rms(replay_of(dir), formats::calibration_of(rig.sim.rec.nominal, "nominal"), truth);
+  const double after = rectified_rms(replay_of(dir), learned, truth);
+  const double best = rectified_rms(replay_of(dir), true_cal, truth);
   expect_loop_closed("landmarks", before, after, best, 0.5, 0.3, 0.15);
+  fs::remove_all(dir);
+}
+
+// The path through the binaries and an LCM recording: rsd records the simulated camera with the
+// hidden physics and fast motion of the second case (rsd --record), rsd-extract makes matches from the log,
+// rsd-diagnose writes the calibration, and the log is replayed with it (rsd --replay LOG
+// --calibration CAL), measured as above.
+TEST(ClosedLoop, ThroughAnLcmRecordingAndTheTools) {
+  const fs::path dir = fs::temp_directory_path() / ("rsd-closed-loop-lcm-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const double hfov_deg = 2 * std::atan(320 / (1.03 * 320 / std::tan(M_PI / 6))) * 180 / M_PI;  // f 3% longer than 60 deg's
+  std::ofstream(dir / "hidden.yaml")
+      << "source:\n  driver: sim\n  sim:\n    width: 640\n    height: 480\n    hfov_deg: " << hfov_deg
+      << "\n    line_delay_s: 6.25e-05\n    exposure_s: 0\n    noise_grey: 0.5\n    angular_rate_rad_s: [0.3, -0.2, 0.1]\n"
+         "    velocity_m_s: [0, 0, 0]\n    wobble_rad_s: 3.5\n    wobble_hz: 1.2\n    wobble_axes: [1.0, 0.8, 0.6]\n"
+         "    wobble_axes_hz: [1.0, 1.37, 0.71]\n    velocity_rate_hz: 400\n    imu_time_offset_s: 0.012\n"
+         "    gyro_bias_rad_s: [0.01, -0.01, 0.01]\n    imu_mount_rotation_rad: [0.010076, 0.010076, 0.010076]\n"
+         "    realtime: false\n";
+  std::ofstream(dir / "nominal.yaml")
+      << "camera: {width: 640, height: 480, fx: 554.2563, fy: 554.2563, cx: 319.5, cy: 239.5, distortion: [0, 0, 0, 0]}\n"
+         "timing: {frame_rate_hz: 30, line_delay_s: 5.6818e-05, readout: top_to_bottom, time_offset_s: 0}\n"
+         "motion: {imu_to_camera: [1, 0, 0, 0, 1, 0, 0, 0, 1]}\n";
+  const std::string d = dir.string();
+  auto sh = [&](const std::string& cmd) {
+    const int rc = std::system((cmd + " > " + d + "/out.txt 2>&1").c_str());
+    std::ifstream in(d + "/out.txt");
+    const std::string out((std::istreambuf_iterator<char>(in)), {});
+    EXPECT_EQ(rc, 0) << cmd << "\n" << out;
+  };
+  sh(std::string(RSD_BIN) + " -q -c " + d + "/hidden.yaml --frames 80 --record " + d + "/run.lcmlog");
+  sh(std::string(RSD_EXTRACT_BIN) + " " + d + "/run.lcmlog " + d + "/matches --nominal " + d + "/nominal.yaml");
+  sh(std::string(RSD_DIAGNOSE_BIN) + " " + d + "/matches --json " + d + "/d.json --write-calibration " + d + "/cal.yaml");
+  const formats::Calibration learned = formats::read_calibration(d + "/cal.yaml");
+  std::printf("[lcm] learned: f %.2f (true %.2f), line delay %.4g (true 6.25e-05), offset %.5f, bias (%.4f %.4f %.4f)\n",
+              learned.cam.fx, 1.03 * 554.2563, learned.line_delay_s, learned.timeshift_cam_imu_s, learned.gyro_bias_rad_s.x(),
+              learned.gyro_bias_rad_s.y(), learned.gyro_bias_rad_s.z());
+
+  const daemon::Config hidden = daemon::load_config(d + "/hidden.yaml");
+  const drivers::SimSourceConfig& truth_cfg = hidden.source.settings_of<drivers::SimSourceConfig>("sim");
+  drivers::SimSource sim(truth_cfg);
+  sim.open();
+  dsp::RowTiming global = sim.timing();
+  global.line_delay_s = 1e-12;
+  dsp::RsRenderer gs(truth_cfg.camera, global, {});
+  int64_t t0 = 0;  // the first recorded frame is the simulator's time zero
+  {
+    formats::LcmLogReader reader(d + "/run.lcmlog");
+    formats::LogEvent ev;
+    bot_core::image_t img;
+    std::string why;
+    while (reader.next(ev) && ev.channel != "RSD_RAW") {
+    }
+    ASSERT_EQ(ev.channel, "RSD_RAW");
+    formats::RecordedFrame f;
+    ASSERT_EQ(formats::decode_frame(ev.data.data(), ev.data.size(), img, f, why), formats::DecodeStatus::Ok) << why;
+    t0 = f.meta.first_row_ns;
+  }
+  const TruthRender truth = [&](double t, const dsp::ImageView& v) { gs.render(sim.scene(), sim.truth(), t - t0 * 1e-9, v); };
+  daemon::Config replay;
+  replay.source.driver = "replay";
+  replay.source.settings_of<drivers::ReplayConfig>("replay").file = d + "/run.lcmlog";
+  replay.source.settings_of<drivers::ReplayConfig>("replay").speed = 0;
+  formats::Calibration nominal = formats::calibration_of(dsp::NominalModel{}, "nominal");
+  nominal.cam = dsp::CameraModel::from_hfov(640, 480, M_PI / 3);
+  nominal.line_delay_s = 5.6818e-05;
+  formats::Calibration true_cal = nominal;
+  true_cal.cam = truth_cfg.camera;
+  true_cal.line_delay_s = truth_cfg.line_delay_s;
+  true_cal.timeshift_cam_imu_s = 0.012;
+  true_cal.gyro_bias_rad_s = truth_cfg.gyro_bias;
+  true_cal.imu_to_camera = dsp::exp_so3(truth_cfg.imu_mount_rotation_rad);
+  const double before = rectified_rms(replay, nominal, truth);
+  const double after = rectified_rms(replay, learned, truth);
+  const double best = rectified_rms(replay, true_cal, truth);
+  expect_loop_closed("lcm", before, after, best, 1.0, 0.3, 0.15);
   fs::remove_all(dir);
 }

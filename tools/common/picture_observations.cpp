@@ -13,11 +13,11 @@
 namespace rsd::tools {
 
 std::vector<bool> covered_by_motion(const std::vector<double>& frame_t, double motion_t0, double motion_t1,
-                                    const dsp::NominalModel& nominal) {
+                                    const dsp::NominalModel& nominal, double margin_s) {
   std::vector<bool> ok;
   for (const double t : frame_t) {
     const double tm = t + nominal.time.time_offset_s;
-    ok.push_back(tm >= motion_t0 && tm + 1.0 / nominal.frame_rate_hz <= motion_t1);
+    ok.push_back(tm - margin_s >= motion_t0 && tm + 1.0 / nominal.frame_rate_hz + margin_s <= motion_t1);
   }
   return ok;
 }
@@ -132,7 +132,7 @@ dsp::Recording observations_from_pictures(const formats::ImagesRecording& r, con
   for (size_t k = 0; k < rec.frames.size(); ++k)
     if (f.usable[k]) kept.push_back(rec.frames[k]);
   if (kept.size() < rec.frames.size())
-    std::fprintf(stderr, "rsd: %zu of %zu frames lie outside the motion's time span and are left out\n",
+    std::fprintf(stderr, "rsd: %zu of %zu frames lie outside the motion's time span (with 50 ms to spare) and are left out\n",
                  rec.frames.size() - kept.size(), rec.frames.size());
   rec.frames = kept;
   return rec;

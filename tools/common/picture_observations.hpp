@@ -26,10 +26,13 @@ struct PictureFrames {
   std::string what;                                  // for messages: the log or the recording
 };
 
-// Frames whose whole readout the motion spans at the nominal time offset: outside it the
-// motion would be extrapolated, and a diagnosis would blame the camera for it.
+// Frames whose whole readout the motion spans at the nominal time offset, with `margin_s` to
+// spare either side: outside it the motion would be extrapolated, and a diagnosis would blame
+// the camera for it; the margin leaves the diagnosis room to find a clock offset of up to that
+// much (its bounds keep every frame's motion inside the data).
+inline constexpr double kMotionMarginS = 0.05;
 std::vector<bool> covered_by_motion(const std::vector<double>& frame_t, double motion_t0, double motion_t1,
-                                    const dsp::NominalModel& nominal);
+                                    const dsp::NominalModel& nominal, double margin_s = kMotionMarginS);
 
 // 8-bit grey for tracking and detection; 16-bit pictures are scaled by one factor for the
 // whole sequence (from the first frame's maximum: tracking assumes constant brightness).
