@@ -28,7 +28,10 @@ enum class VelocityStatus { Ok, NoData, Stale };
 
 class VelocityBuffer {
  public:
-  static constexpr size_t kCapacity = 1024;
+  // Readers look at the newer half: 2048 samples, a second of a 2 kHz IMU. A replay hands
+  // samples over ahead of the frames that the pipeline still holds (its slots, plus the clock
+  // offset): a few hundred milliseconds of them must stay readable.
+  static constexpr size_t kCapacity = 4096;
   explicit VelocityBuffer(VelocityLimits limits = {}) : limits_(limits) {}
 
   // Writer: rejects (and counts) samples that break the sanity limits or go back in time.
