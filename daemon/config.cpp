@@ -100,6 +100,7 @@ void use_imu_calibration(Config& c, const formats::Calibration& cal) {
   in.gyro_scale = cal.gyro_scale;
   in.drift_ppm = cal.drift_ppm;
   in.lever_arm_m = cal.lever_arm_m;
+  in.pose_calibrated = true;
   for (const drivers::Driver& d : drivers::all_drivers()) d.use_clock_offset(c.source.settings[d.name], cal.timeshift_cam_imu_s);
 }
 

@@ -106,6 +106,7 @@ void VelocityInput::set_calibration(const VelocityInputConfig& c) {
   cfg_.gyro_scale = c.gyro_scale;
   cfg_.drift_ppm = c.drift_ppm;
   cfg_.lever_arm_m = c.lever_arm_m;
+  cfg_.pose_calibrated = c.pose_calibrated;
 }
 
 rsd::velocity_t VelocityInput::to_message(const drivers::VelocitySample& s) {
@@ -131,17 +132,22 @@ void VelocityInput::on_pose(const lcm_recv_buf_t* rbuf, const char*, void* user)
     return;
   }
   std::lock_guard<std::mutex> lock(self->writer_);
+  self->push_pose(m);
+}
+
+void VelocityInput::push_pose(const bot_core::pose_t& m) {
   double v[3];
-  self->at_camera_origin(m.rotation_rate, m.vel, v);
-  self->push(m.utime, self->cfg_.body_to_camera, m.rotation_rate, v, true);
+  at_camera_origin(m.rotation_rate, m.vel, v);
+  // A calibration learned from a trajectory holds the body-to-camera rotation in T_cam_imu;
+  // velocity.body_to_camera, when set, says the same and comes first.
+  const bool calibrated_rotation = cfg_.pose_calibrated && cfg_.body_to_camera.isIdentity();
+  push(camera_utime(m.utime), calibrated_rotation ? cfg_.imu_to_camera : cfg_.body_to_camera, m.rotation_rate, v, true);
 }
 
 void VelocityInput::deliver(const bot_core::pose_t& m) {
   source_feeds_pose_.store(true);
   std::lock_guard<std::mutex> lock(writer_);
-  double v[3];
-  at_camera_origin(m.rotation_rate, m.vel, v);
-  push(m.utime, cfg_.body_to_camera, m.rotation_rate, v, true);
+  push_pose(m);
 }
 
 void VelocityInput::start() {

@@ -45,6 +45,9 @@ struct VelocityInputConfig {
   // The camera's origin in the motion sensor's (body's) axes: a body moving at v and turning at
   // w carries the camera at v + w x lever_arm_m, before the rotation into camera axes.
   Eigen::Vector3d lever_arm_m = Eigen::Vector3d::Zero();
+  // A calibration was given: bot_core.pose_t messages (a tracked body, on the motion clock) go
+  // through its clock offset and drift too, and through its rotation unless body_to_camera is set.
+  bool pose_calibrated = false;
 };
 
 // Whether m is a proper rotation (orthonormal, determinant +1) to within tol.
@@ -91,6 +94,8 @@ class VelocityInput {
   int64_t camera_utime(int64_t utime_motion);
   // A body's linear velocity carried to the camera's origin (the lever arm).
   void at_camera_origin(const double* w, const double* v, double* out) const;
+  // A tracked body's pose message (body axes, motion clock) through the calibration.
+  void push_pose(const bot_core::pose_t& m);
   // A motion-sensor measurement (IMU axes and clock) through the calibration.
   void push_imu(int64_t utime_imu, const double* w_measured, const double* v, bool has_linear);
   lcm_t* lcm_;

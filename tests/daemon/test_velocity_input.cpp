@@ -238,6 +238,40 @@ TEST_F(VelocityInputTest, PoseIsRotatedFromBodyToCameraAxes) {
   EXPECT_EQ(s.t_ns, 5000 * 1000);
 }
 
+// With a calibration, a tracked body's poses are on the motion clock: its offset moves them onto
+// the camera clock, and its rotation (a trajectory's T_cam_imu is body-to-camera) turns them,
+// unless velocity.body_to_camera says otherwise.
+TEST_F(VelocityInputTest, PosesGoThroughTheCalibration) {
+  VelocityInputConfig cfg;
+  cfg.pose_channel = "POSE";
+  cfg.pose_calibrated = true;
+  cfg.imu_to_camera = rot_z90();
+  cfg.imu_time_offset_s = 0.012;
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_, cfg);
+  bot_core::pose_t p{};
+  p.utime = 100000;
+  p.orientation[0] = 1;
+  p.rotation_rate[0] = 0.5, p.rotation_rate[1] = -0.25, p.rotation_rate[2] = 1.0;
+  p.vel[0] = 4.0;
+  publish("POSE", p);
+  drain();
+  ASSERT_EQ(buffer_.count(), 1u);
+  const auto s = at(88000);  // 12 ms earlier on the camera clock
+  EXPECT_EQ(s.w[0], 0.25);
+  EXPECT_EQ(s.w[1], 0.5);
+  EXPECT_EQ(s.v[1], 4.0);
+  // body_to_camera set: it wins over the calibration's rotation (the clock still moves).
+  VelocityBuffer other;
+  cfg.body_to_camera = rot_z90().transpose();
+  VelocityInput in2(lcm_, "RSD_VELOCITY_2", other, cfg);
+  p.utime = 200000;
+  in2.deliver(p);
+  VelocityEstimate e;
+  ASSERT_EQ(other.at(188000 * 1000, e), VelocityStatus::Ok);
+  EXPECT_EQ(e.sample.w[0], -0.25);
+  EXPECT_EQ(e.sample.w[1], -0.5);
+}
+
 TEST_F(VelocityInputTest, PoseChannelIsOffByDefault) {
   VelocityInput in(lcm_, "RSD_VELOCITY", buffer_);
   bot_core::pose_t p{};
