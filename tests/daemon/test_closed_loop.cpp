@@ -37,6 +37,7 @@
 #include "tools/common/picture_observations.hpp"
 #include "tools/report/diagnosis_calibration.hpp"
 #include "tools/sim/scenario_frames.hpp"
+#include "tests/daemon/closed_loop_figure.hpp"
 
 using namespace rsd;
 namespace fs = std::filesystem;
@@ -138,18 +139,21 @@ void add_shifts(const cv::Mat& ref, const cv::Mat& img, double& sum, int& n) {
   }
 }
 
+using test::Measured;
+
 // Renders the global-shutter truth at a time on the camera clock (s).
 using TruthRender = std::function<void(double t_camera_s, const dsp::ImageView&)>;
 
 // Plays the recording through the daemon's replay source, velocity input and rectifier with
 // `cal`, and measures every frame (but the first two) against the truth at its reference time.
-double rectified_rms(daemon::Config cfg, const formats::Calibration& cal, const TruthRender& render_truth) {
+Measured rectified_rms(daemon::Config cfg, const formats::Calibration& cal, const TruthRender& render_truth) {
   daemon::apply_calibration(cfg, cal);
   auto src = daemon::make_source(cfg.source);
   lcm_t* lcm = lcm_create("memq://");
   daemon::VelocityBuffer buf;
   double sum = 0;
   int n = 0;
+  Measured out;
   {
     daemon::VelocityInput in(lcm, "RSD_VELOCITY_TEST", buf, cfg.velocity_input);
     auto* m = dynamic_cast<drivers::MessageSource*>(src.get());  // an LCM log: velocity and pose messages
@@ -159,19 +163,24 @@ double rectified_rms(daemon::Config cfg, const formats::Calibration& cal, const 
     else src->set_velocity_sink([&](const drivers::VelocitySample& s) { in.deliver(s); });
     src->open();
     daemon::FrameRectifier rect(cfg.rectify, daemon::camera_model(cfg.source, src->format()), src->timing(), src->format());
-    dsp::Image raw(kW, kH, dsp::PixelFormat::Mono8), out = raw, truth = raw;
+    dsp::Image raw(kW, kH, dsp::PixelFormat::Mono8), rectified = raw, truth = raw;
     src->start();
     drivers::FrameMeta meta;
     for (int k = 0; src->capture(raw.view(), meta, std::chrono::milliseconds(100)) == drivers::CaptureStatus::Frame; ++k) {
-      const daemon::RectifyResult res = rect.process(raw.view(), out.view(), meta, buf);
+      const daemon::RectifyResult res = rect.process(raw.view(), rectified.view(), meta, buf);
       if (k < 2 || !res.rectified) continue;
       render_truth(meta.first_row_ns * 1e-9 + res.reference_time_s, truth.view());
-      add_shifts(cv::Mat(kH, kW, CV_8UC1, truth.data.data()), cv::Mat(kH, kW, CV_8UC1, out.data.data()), sum, n);
+      double frame_sum = 0;
+      int frame_n = 0;
+      add_shifts(cv::Mat(kH, kW, CV_8UC1, truth.data.data()), cv::Mat(kH, kW, CV_8UC1, rectified.data.data()), frame_sum, frame_n);
+      sum += frame_sum, n += frame_n;
+      if (frame_n) out.t.push_back(meta.first_row_ns * 1e-9), out.frame_rms.push_back(std::sqrt(frame_sum / frame_n));
     }
   }
   lcm_destroy(lcm);
   EXPECT_GT(n, 500);
-  return n ? std::sqrt(sum / n) : INFINITY;
+  out.rms = n ? std::sqrt(sum / n) : INFINITY;
+  return out;
 }
 
 // An images recording played as the daemon plays it (rsd --replay DIR --speed fast).
@@ -215,8 +224,11 @@ formats::Calibration true_calibration(const Rig& r) {
   return c;
 }
 
-void expect_loop_closed(const char* name, double before, double after, double best, double nominal_at_least_px,
-                        double goal_px, double from_best_px) {
+void expect_loop_closed(const char* name, const Measured& nominal, const Measured& learned, const Measured& true_cal,
+                        double nominal_at_least_px, double goal_px, double from_best_px) {
+  const double before = nominal.rms, after = learned.rms, best = true_cal.rms;
+  if (const char* dir = std::getenv("RSD_FIGURES_DIR"))  // docs/closed-loop.md's figures
+    test::plot_closed_loop(std::string(dir) + "/closed-loop-" + name + ".png", name, nominal, learned, true_cal);
   std::printf("[%s] rectified RMS against the global-shutter truth: nominal %.3f px, learned %.3f px, true %.3f px\n", name,
               before, after, best);
   ::testing::Test::RecordProperty("nominal_rms_px", std::to_string(before));
@@ -242,9 +254,9 @@ void run(const Scenario& s, double nominal_at_least_px, double goal_px, double f
   ro.supersample = 2;
   dsp::RsRenderer gs(r.truth.camera, global, ro);
   const TruthRender truth = [&](double t, const dsp::ImageView& v) { gs.render(sim.scene(), sim.truth(), t - t0 * 1e-9, v); };
-  const double before = rectified_rms(replay_of(dir), formats::calibration_of(r.nominal, "nominal"), truth);
-  const double after = rectified_rms(replay_of(dir), learned, truth);
-  const double best = rectified_rms(replay_of(dir), true_calibration(r), truth);
+  const Measured before = rectified_rms(replay_of(dir), formats::calibration_of(r.nominal, "nominal"), truth);
+  const Measured after = rectified_rms(replay_of(dir), learned, truth);
+  const Measured best = rectified_rms(replay_of(dir), true_calibration(r), truth);
   expect_loop_closed(s.name, before, after, best, nominal_at_least_px, goal_px, from_best_px);
   fs::remove_all(dir);
 }
@@ -285,10 +297,10 @@ TEST(ClosedLoop, LandmarksRecordingOfATrackedBody) {
   true_cal.line_delay_s = rig.truth.time.line_delay_s;
   true_cal.timeshift_cam_imu_s = rig.truth.time.time_offset_s;
   true_cal.imu_to_camera = rig.truth.mount.transpose();  // body-to-camera: R_c = R M
-  const double before = rectified_rms(replay_of(dir), formats::calibration_of(rig.sim.rec.nominal, "nominal"), truth);
-  const double after = rectified_rms(replay_of(dir), learned, truth);
-  const double best = rectified_rms(replay_of(dir), true_cal, truth);
-  expect_loop_closed("landmarks", before, after, best, 0.5, 0.3, 0.15);
+  const Measured before = rectified_rms(replay_of(dir), formats::calibration_of(rig.sim.rec.nominal, "nominal"), truth);
+  const Measured after = rectified_rms(replay_of(dir), learned, truth);
+  const Measured best = rectified_rms(replay_of(dir), true_cal, truth);
+  expect_loop_closed("landmarks-images", before, after, best, 0.5, 0.3, 0.15);
   fs::remove_all(dir);
 }
 
@@ -361,10 +373,10 @@ TEST(ClosedLoop, ThroughAnLcmRecordingAndTheTools) {
   true_cal.timeshift_cam_imu_s = 0.012;
   true_cal.gyro_bias_rad_s = truth_cfg.gyro_bias;
   true_cal.imu_to_camera = dsp::exp_so3(truth_cfg.imu_mount_rotation_rad);
-  const double before = rectified_rms(replay, nominal, truth);
-  const double after = rectified_rms(replay, learned, truth);
-  const double best = rectified_rms(replay, true_cal, truth);
-  expect_loop_closed("lcm", before, after, best, 1.0, 0.3, 0.15);
+  const Measured before = rectified_rms(replay, nominal, truth);
+  const Measured after = rectified_rms(replay, learned, truth);
+  const Measured best = rectified_rms(replay, true_cal, truth);
+  expect_loop_closed("fast-lcm", before, after, best, 1.0, 0.3, 0.15);
   fs::remove_all(dir);
 }
 
@@ -414,9 +426,9 @@ TEST(ClosedLoop, LandmarksThroughAnLcmRecordingAndTheTools) {
   true_cal.line_delay_s = rig.truth.time.line_delay_s;
   true_cal.timeshift_cam_imu_s = rig.truth.time.time_offset_s;
   true_cal.imu_to_camera = rig.truth.mount.transpose();
-  const double before = rectified_rms(replay, formats::calibration_of(rig.sim.rec.nominal, "nominal"), truth);
-  const double after = rectified_rms(replay, learned, truth);
-  const double best = rectified_rms(replay, true_cal, truth);
-  expect_loop_closed("lcm landmarks", before, after, best, 0.25, 0.3, 0.15);
+  const Measured before = rectified_rms(replay, formats::calibration_of(rig.sim.rec.nominal, "nominal"), truth);
+  const Measured after = rectified_rms(replay, learned, truth);
+  const Measured best = rectified_rms(replay, true_cal, truth);
+  expect_loop_closed("landmarks-lcm", before, after, best, 0.25, 0.3, 0.15);
   fs::remove_all(dir);
 }
