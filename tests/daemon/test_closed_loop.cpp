@@ -213,6 +213,14 @@ formats::Calibration learn(const fs::path& dir, const char* name) {
   return learned;
 }
 
+// Runs one of rsd's binaries; its output (in dir/out.txt) is shown when it fails.
+void run_command(const std::string& cmd, const std::string& dir) {
+  const int rc = std::system((cmd + " > " + dir + "/out.txt 2>&1").c_str());
+  std::ifstream in(dir + "/out.txt");
+  const std::string out((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_EQ(rc, 0) << cmd << "\n" << out;
+}
+
 // What the simulator hid, as a calibration file would say it.
 formats::Calibration true_calibration(const Rig& r) {
   formats::Calibration c = formats::calibration_of(r.nominal, "truth");
@@ -325,12 +333,7 @@ TEST(ClosedLoop, ThroughAnLcmRecordingAndTheTools) {
          "timing: {frame_rate_hz: 30, line_delay_s: 5.6818e-05, readout: top_to_bottom, time_offset_s: 0}\n"
          "motion: {imu_to_camera: [1, 0, 0, 0, 1, 0, 0, 0, 1]}\n";
   const std::string d = dir.string();
-  auto sh = [&](const std::string& cmd) {
-    const int rc = std::system((cmd + " > " + d + "/out.txt 2>&1").c_str());
-    std::ifstream in(d + "/out.txt");
-    const std::string out((std::istreambuf_iterator<char>(in)), {});
-    EXPECT_EQ(rc, 0) << cmd << "\n" << out;
-  };
+  auto sh = [&](const std::string& cmd) { run_command(cmd, d); };
   sh(std::string(RSD_BIN) + " -q -c " + d + "/hidden.yaml --frames 80 --record " + d + "/run.lcmlog");
   sh(std::string(RSD_EXTRACT_BIN) + " " + d + "/run.lcmlog " + d + "/matches --nominal " + d + "/nominal.yaml");
   sh(std::string(RSD_DIAGNOSE_BIN) + " " + d + "/matches --json " + d + "/d.json --write-calibration " + d + "/cal.yaml");
@@ -393,12 +396,7 @@ TEST(ClosedLoop, LandmarksThroughAnLcmRecordingAndTheTools) {
   std::ofstream(dir / "nominal.yaml")
       << "camera: {width: 640, height: 480, fx: 500, fy: 500, cx: 319.5, cy: 239.5, distortion: [0, 0, 0, 0]}\n"
          "timing: {frame_rate_hz: 30, line_delay_s: 4.5455e-05, readout: top_to_bottom, time_offset_s: 0}\n";
-  auto sh = [&](const std::string& cmd) {
-    const int rc = std::system((cmd + " > " + d + "/out.txt 2>&1").c_str());
-    std::ifstream in(d + "/out.txt");
-    const std::string out((std::istreambuf_iterator<char>(in)), {});
-    EXPECT_EQ(rc, 0) << cmd << "\n" << out;
-  };
+  auto sh = [&](const std::string& cmd) { run_command(cmd, d); };
   sh(std::string(RSD_SIM_BIN) + " lcm " + scenario + " " + d + "/run.lcmlog --pose --noise 1");
   sh(std::string(RSD_EXTRACT_BIN) + " " + d + "/run.lcmlog " + d + "/landmarks --nominal " + d +
      "/nominal.yaml --target checkerboard:9x7:0.04");
