@@ -99,14 +99,12 @@ void VelocityInput::deliver(const drivers::VelocitySample& s) {
 
 void VelocityInput::set_calibration(const VelocityInputConfig& c) {
   std::lock_guard<std::mutex> lock(writer_);
-  cfg_.imu_to_camera = c.imu_to_camera;
-  cfg_.body_to_camera = c.body_to_camera;
-  cfg_.imu_time_offset_s = c.imu_time_offset_s;
-  cfg_.gyro_bias_rad_s = c.gyro_bias_rad_s;
-  cfg_.gyro_scale = c.gyro_scale;
-  cfg_.drift_ppm = c.drift_ppm;
-  cfg_.lever_arm_m = c.lever_arm_m;
-  cfg_.pose_calibrated = c.pose_calibrated;
+  // Everything but what the subscriptions and the configuration's own choices fixed at start.
+  const std::string pose_channel = cfg_.pose_channel;
+  const bool gyro_only = cfg_.gyro_only;
+  cfg_ = c;
+  cfg_.pose_channel = pose_channel;
+  cfg_.gyro_only = gyro_only;
 }
 
 rsd::velocity_t VelocityInput::to_message(const drivers::VelocitySample& s) {

@@ -80,7 +80,8 @@ YAML::Node flow_list(std::initializer_list<double> v) {
   return n;
 }
 
-void write_header(const fs::path& dir, const Recording& r) {
+// The header; `observations` is the section as the recording's kind writes it.
+void write_header(const fs::path& dir, const Recording& r, const YAML::Node& observations) {
   const auto& n = r.nominal;
   YAML::Node y;
   y["format"] = "rsd-recording/1";
@@ -96,15 +97,47 @@ void write_header(const fs::path& dir, const Recording& r) {
   const auto& R = n.imu_to_camera;
   y["motion"]["imu_to_camera"] = flow_list({R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1), R(2, 2)});
   y["motion"]["lever_arm_m"] = flow_list({n.lever_arm.x(), n.lever_arm.y(), n.lever_arm.z()});
-  const bool lm = r.kind == dsp::ObservationKind::Landmarks;
-  y["observations"]["kind"] = dsp::to_string(r.kind);
-  y["observations"]["file"] = lm ? "observations.csv" : "matches.csv";
-  if (lm) y["observations"]["points"] = "points.csv";
+  y["observations"] = observations;
   y["frames"] = "frames.csv";
   if (r.noise_px) y["noise_px"] = num(*r.noise_px);
   std::ofstream out(dir / "recording.yaml");
   out << y << '\n';
   if (!out) throw RecordingError((dir / "recording.yaml").string() + ": write failed");
+}
+
+// The directory, the header, frames.csv and the motion: what every kind writes.
+void write_common(const fs::path& dir, const Recording& r, const YAML::Node& observations) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw RecordingError(dir.string() + ": cannot create directory: " + ec.message());
+  write_header(dir, r, observations);
+  {
+    CsvWriter w(dir / "frames.csv", "frame,t");
+    for (const auto& f : r.frames) w.row(f.frame, f.t);
+  }
+  if (r.motion == dsp::MotionKind::Trajectory) {
+    CsvWriter w(dir / "trajectory.csv", "t,x,y,z,qw,qx,qy,qz");
+    for (const auto& p : r.trajectory) w.row(p.t, p.p.x(), p.p.y(), p.p.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z());
+  } else {
+    CsvWriter w(dir / "gyro.csv", "t,wx,wy,wz");
+    for (const auto& g : r.gyro) w.row(g.t, g.w.x(), g.w.y(), g.w.z());
+  }
+}
+
+void write_points(const fs::path& dir, const Recording& r) {
+  CsvWriter p(dir / "points.csv", "id,x,y,z");
+  for (const auto& L : r.points) p.row(L.id, L.X.x(), L.X.y(), L.X.z());
+}
+
+YAML::Node target_node(const dsp::TargetSpec& t) {
+  YAML::Node n;
+  const bool board = t.kind == dsp::TargetKind::Checkerboard;
+  n["type"] = board ? "checkerboard" : "aprilgrid";
+  n["cols"] = t.cols;
+  n["rows"] = t.rows;
+  n[board ? "square_m" : "tag_m"] = num(t.spacing_m);
+  if (!board) n["spacing"] = num(t.tag_spacing);
+  return n;
 }
 
 // ---------- reading ----------
@@ -395,26 +428,16 @@ std::vector<dsp::PoseSample> read_trajectory_csv(const std::string& path) { retu
 
 void write_recording(const std::string& dir_name, const Recording& r) {
   const fs::path dir(dir_name);
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw RecordingError(dir_name + ": cannot create directory: " + ec.message());
-  write_header(dir, r);
-  {
-    CsvWriter w(dir / "frames.csv", "frame,t");
-    for (const auto& f : r.frames) w.row(f.frame, f.t);
-  }
-  if (r.motion == dsp::MotionKind::Trajectory) {
-    CsvWriter w(dir / "trajectory.csv", "t,x,y,z,qw,qx,qy,qz");
-    for (const auto& p : r.trajectory) w.row(p.t, p.p.x(), p.p.y(), p.p.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z());
-  } else {
-    CsvWriter w(dir / "gyro.csv", "t,wx,wy,wz");
-    for (const auto& g : r.gyro) w.row(g.t, g.w.x(), g.w.y(), g.w.z());
-  }
-  if (r.kind == dsp::ObservationKind::Landmarks) {
-    CsvWriter p(dir / "points.csv", "id,x,y,z");
-    for (const auto& L : r.points) p.row(L.id, L.X.x(), L.X.y(), L.X.z());
-    CsvWriter o(dir / "observations.csv", "frame,id,u,v");
-    for (const auto& ob : r.observations) o.row(ob.frame, ob.id, ob.px.x(), ob.px.y());
+  const bool lm = r.kind == dsp::ObservationKind::Landmarks;
+  YAML::Node o;
+  o["kind"] = dsp::to_string(r.kind);
+  o["file"] = lm ? "observations.csv" : "matches.csv";
+  if (lm) o["points"] = "points.csv";
+  write_common(dir, r, o);
+  if (lm) {
+    write_points(dir, r);
+    CsvWriter w(dir / "observations.csv", "frame,id,u,v");
+    for (const auto& ob : r.observations) w.row(ob.frame, ob.id, ob.px.x(), ob.px.y());
   } else {
     CsvWriter m(dir / "matches.csv", "frame_a,ua,va,frame_b,ub,vb");
     for (const auto& mt : r.matches) m.row(mt.frame_a, mt.a.x(), mt.a.y(), mt.frame_b, mt.b.x(), mt.b.y());
@@ -472,37 +495,20 @@ ImagesRecording read_images_recording(const std::string& dir_name) {
 
 void write_images_recording(const std::string& dir_name, const ImagesRecording& r) {
   const fs::path dir(dir_name);
-  dsp::Recording header = r.rec;
-  header.matches.clear(), header.observations.clear();
-  write_recording(dir_name, header);  // the files of the matches or landmarks kind are replaced below
-  fs::remove(dir / "matches.csv"), fs::remove(dir / "observations.csv");
-  if (header.kind == dsp::ObservationKind::Matches) fs::remove(dir / "points.csv");
-  YAML::Node y = YAML::LoadFile((dir / "recording.yaml").string());
-  y["observations"] = YAML::Node();
-  y["observations"]["kind"] = "images";
-  if (!r.video.empty()) y["observations"]["video"] = fs::absolute(r.video).lexically_relative(fs::absolute(dir)).string();
-  else y["observations"]["file"] = "images.csv";
-  if (header.kind == dsp::ObservationKind::Landmarks) {
-    y["observations"]["points"] = "points.csv";
-    if (r.target) {
-      const dsp::TargetSpec& t = *r.target;
-      const bool board = t.kind == dsp::TargetKind::Checkerboard;
-      y["observations"]["target"]["type"] = board ? "checkerboard" : "aprilgrid";
-      y["observations"]["target"]["cols"] = t.cols;
-      y["observations"]["target"]["rows"] = t.rows;
-      y["observations"]["target"][board ? "square_m" : "tag_m"] = num(t.spacing_m);
-      if (!board) y["observations"]["target"]["spacing"] = num(t.tag_spacing);
-    }
-  }
-  std::ofstream out(dir / "recording.yaml");
-  out << y << '\n';
-  if (!out) throw RecordingError((dir / "recording.yaml").string() + ": write failed");
+  const bool lm = r.rec.kind == dsp::ObservationKind::Landmarks;
+  // Paths as the reader gives them (usable from here), written relative to the directory.
+  auto relative = [&](const std::string& p) { return fs::absolute(p).lexically_relative(fs::absolute(dir)).string(); };
+  YAML::Node o;
+  o["kind"] = "images";
+  if (!r.video.empty()) o["video"] = relative(r.video);
+  else o["file"] = "images.csv";
+  if (lm) o["points"] = "points.csv";
+  if (lm && r.target) o["target"] = target_node(*r.target);
+  write_common(dir, r.rec, o);
+  if (lm) write_points(dir, r.rec);
   if (r.video.empty()) {
     CsvWriter w(dir / "images.csv", "frame,file");
-    for (size_t i = 0; i < r.rec.frames.size() && i < r.files.size(); ++i) {
-      // Paths as the reader gives them (usable from here), written relative to the directory.
-      w.row(r.rec.frames[i].frame, fs::absolute(r.files[i]).lexically_relative(fs::absolute(dir)).string());
-    }
+    for (size_t i = 0; i < r.rec.frames.size() && i < r.files.size(); ++i) w.row(r.rec.frames[i].frame, relative(r.files[i]));
   }
 }
 

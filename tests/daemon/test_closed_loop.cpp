@@ -221,16 +221,45 @@ void run_command(const std::string& cmd, const std::string& dir) {
   EXPECT_EQ(rc, 0) << cmd << "\n" << out;
 }
 
-// What the simulator hid, as a calibration file would say it.
-formats::Calibration true_calibration(const Rig& r) {
-  formats::Calibration c = formats::calibration_of(r.nominal, "truth");
-  c.cam = r.truth.camera;
-  c.line_delay_s = r.truth.line_delay_s;
-  c.timeshift_cam_imu_s = r.truth.imu_time_offset_s;
-  c.gyro_bias_rad_s = r.truth.gyro_bias;
-  c.imu_to_camera = dsp::exp_so3(r.truth.imu_mount_rotation_rad);
+// What the simulated camera hid, as a calibration file would say it.
+formats::Calibration true_calibration(const drivers::SimSourceConfig& t, const dsp::NominalModel& nominal) {
+  formats::Calibration c = formats::calibration_of(nominal, "truth");
+  c.cam = t.camera;
+  c.line_delay_s = t.line_delay_s;
+  c.timeshift_cam_imu_s = t.imu_time_offset_s;
+  c.gyro_bias_rad_s = t.gyro_bias;
+  c.imu_to_camera = dsp::exp_so3(t.imu_mount_rotation_rad);
   return c;
 }
+
+// What a scenario hid (the tracker's clock, readout, focal length, the camera's mount in the body).
+formats::Calibration true_calibration(const tools::FrameRig& rig) {
+  formats::Calibration c = formats::calibration_of(rig.sim.rec.nominal, "truth");
+  c.cam = rig.truth.cam;
+  c.line_delay_s = rig.truth.time.line_delay_s;
+  c.timeshift_cam_imu_s = rig.truth.time.time_offset_s;
+  c.imu_to_camera = rig.truth.mount.transpose();  // body-to-camera: R_c = R M
+  return c;
+}
+
+// A scenario's global-shutter truth, rendered by its true camera at a camera-clock time.
+struct ScenarioTruth {
+  ScenarioTruth(const tools::FrameRig& rig, int supersample) : rig_(rig), gs_(rig.truth.cam, global(rig.timing), options(supersample)) {}
+  void operator()(double t, const dsp::ImageView& v) { gs_.render(rig_.scene, *rig_.motion, t, v); }
+
+ private:
+  static dsp::RenderOptions options(int supersample) {
+    dsp::RenderOptions o;
+    o.supersample = supersample;
+    return o;
+  }
+  static dsp::RowTiming global(dsp::RowTiming t) {
+    t.line_delay_s = 1e-12;  // every row at once
+    return t;
+  }
+  const tools::FrameRig& rig_;
+  dsp::RsRenderer gs_;
+};
 
 void expect_loop_closed(const char* name, const Measured& nominal, const Measured& learned, const Measured& true_cal,
                         double nominal_at_least_px, double goal_px, double from_best_px) {
@@ -245,6 +274,14 @@ void expect_loop_closed(const char* name, const Measured& nominal, const Measure
   EXPECT_GT(before, nominal_at_least_px);  // what the daemon was told is visibly wrong
   EXPECT_LT(after, goal_px);
   EXPECT_LT(after - best, from_best_px);
+}
+
+// Replays with the nominal, the learned and the true calibration, and checks the loop closed.
+void measure_loop(const char* name, const daemon::Config& replay, const formats::Calibration& nominal,
+                  const formats::Calibration& learned, const formats::Calibration& truth_cal, const TruthRender& truth,
+                  double nominal_at_least_px, double goal_px = 0.3, double from_best_px = 0.15) {
+  expect_loop_closed(name, rectified_rms(replay, nominal, truth), rectified_rms(replay, learned, truth),
+                     rectified_rms(replay, truth_cal, truth), nominal_at_least_px, goal_px, from_best_px);
 }
 
 void run(const Scenario& s, double nominal_at_least_px, double goal_px, double from_best_px) {
@@ -262,10 +299,8 @@ void run(const Scenario& s, double nominal_at_least_px, double goal_px, double f
   ro.supersample = 2;
   dsp::RsRenderer gs(r.truth.camera, global, ro);
   const TruthRender truth = [&](double t, const dsp::ImageView& v) { gs.render(sim.scene(), sim.truth(), t - t0 * 1e-9, v); };
-  const Measured before = rectified_rms(replay_of(dir), formats::calibration_of(r.nominal, "nominal"), truth);
-  const Measured after = rectified_rms(replay_of(dir), learned, truth);
-  const Measured best = rectified_rms(replay_of(dir), true_calibration(r), truth);
-  expect_loop_closed(s.name, before, after, best, nominal_at_least_px, goal_px, from_best_px);
+  measure_loop(s.name, replay_of(dir), formats::calibration_of(r.nominal, "nominal"), learned,
+               true_calibration(r.truth, r.nominal), truth, nominal_at_least_px, goal_px, from_best_px);
   fs::remove_all(dir);
 }
 
@@ -294,21 +329,9 @@ TEST(ClosedLoop, LandmarksRecordingOfATrackedBody) {
   fs::remove_all(dir);
   tools::write_images_recording(rig, fo, dir.string());
   const formats::Calibration learned = learn(dir, "landmarks");
-  dsp::RowTiming global = rig.timing;
-  global.line_delay_s = 1e-12;
-  dsp::RenderOptions ro;
-  ro.supersample = 2;
-  dsp::RsRenderer gs(rig.truth.cam, global, ro);
-  const TruthRender truth = [&](double t, const dsp::ImageView& v) { gs.render(rig.scene, *rig.motion, t, v); };
-  formats::Calibration true_cal = formats::calibration_of(rig.sim.rec.nominal, "truth");
-  true_cal.cam = rig.truth.cam;
-  true_cal.line_delay_s = rig.truth.time.line_delay_s;
-  true_cal.timeshift_cam_imu_s = rig.truth.time.time_offset_s;
-  true_cal.imu_to_camera = rig.truth.mount.transpose();  // body-to-camera: R_c = R M
-  const Measured before = rectified_rms(replay_of(dir), formats::calibration_of(rig.sim.rec.nominal, "nominal"), truth);
-  const Measured after = rectified_rms(replay_of(dir), learned, truth);
-  const Measured best = rectified_rms(replay_of(dir), true_cal, truth);
-  expect_loop_closed("landmarks-images", before, after, best, 0.5, 0.3, 0.15);
+  ScenarioTruth truth(rig, 2);
+  measure_loop("landmarks-images", replay_of(dir), formats::calibration_of(rig.sim.rec.nominal, "nominal"), learned,
+               true_calibration(rig), std::ref(truth), 0.5);
   fs::remove_all(dir);
 }
 
@@ -370,16 +393,10 @@ TEST(ClosedLoop, ThroughAnLcmRecordingAndTheTools) {
   formats::Calibration nominal = formats::calibration_of(dsp::NominalModel{}, "nominal");
   nominal.cam = dsp::CameraModel::from_hfov(640, 480, M_PI / 3);
   nominal.line_delay_s = 5.6818e-05;
-  formats::Calibration true_cal = nominal;
-  true_cal.cam = truth_cfg.camera;
-  true_cal.line_delay_s = truth_cfg.line_delay_s;
-  true_cal.timeshift_cam_imu_s = 0.012;
-  true_cal.gyro_bias_rad_s = truth_cfg.gyro_bias;
-  true_cal.imu_to_camera = dsp::exp_so3(truth_cfg.imu_mount_rotation_rad);
-  const Measured before = rectified_rms(replay, nominal, truth);
-  const Measured after = rectified_rms(replay, learned, truth);
-  const Measured best = rectified_rms(replay, true_cal, truth);
-  expect_loop_closed("fast-lcm", before, after, best, 1.0, 0.3, 0.15);
+  dsp::NominalModel told;  // what nominal.yaml says
+  told.cam = nominal.cam;
+  told.time.line_delay_s = nominal.line_delay_s;
+  measure_loop("fast-lcm", replay, nominal, learned, true_calibration(truth_cfg, told), truth, 1.0);
   fs::remove_all(dir);
 }
 
@@ -407,10 +424,7 @@ TEST(ClosedLoop, LandmarksThroughAnLcmRecordingAndTheTools) {
 
   tools::FrameOptions fo;
   const tools::FrameRig rig = tools::make_rig(scenario, fo);  // the truth: same scenario, same seed
-  dsp::RowTiming global = rig.timing;
-  global.line_delay_s = 1e-12;
-  dsp::RsRenderer gs(rig.truth.cam, global, {});
-  const TruthRender truth = [&](double t, const dsp::ImageView& v) { gs.render(rig.scene, *rig.motion, t, v); };
+  ScenarioTruth truth(rig, 2);  // the renderer's default
   daemon::Config replay;
   replay.source.driver = "replay";
   replay.source.settings_of<drivers::ReplayConfig>("replay").file = d + "/run.lcmlog";
@@ -419,14 +433,7 @@ TEST(ClosedLoop, LandmarksThroughAnLcmRecordingAndTheTools) {
   replay.source.settings_of<drivers::ReplayConfig>("replay").velocity_channel = "RSD_VELOCITY_NOT_USED";
   replay.source.settings_of<drivers::ReplayConfig>("replay").ignore.push_back("RSD_VELOCITY");
   replay.velocity_input.pose_channel = "RSD_POSE";
-  formats::Calibration true_cal = formats::calibration_of(rig.sim.rec.nominal, "truth");
-  true_cal.cam = rig.truth.cam;
-  true_cal.line_delay_s = rig.truth.time.line_delay_s;
-  true_cal.timeshift_cam_imu_s = rig.truth.time.time_offset_s;
-  true_cal.imu_to_camera = rig.truth.mount.transpose();
-  const Measured before = rectified_rms(replay, formats::calibration_of(rig.sim.rec.nominal, "nominal"), truth);
-  const Measured after = rectified_rms(replay, learned, truth);
-  const Measured best = rectified_rms(replay, true_cal, truth);
-  expect_loop_closed("landmarks-lcm", before, after, best, 0.25, 0.3, 0.15);
+  measure_loop("landmarks-lcm", replay, formats::calibration_of(rig.sim.rec.nominal, "nominal"), learned,
+               true_calibration(rig), std::ref(truth), 0.25);
   fs::remove_all(dir);
 }
