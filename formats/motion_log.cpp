@@ -25,7 +25,7 @@ LogFrame frame_meta(const LogEvent& ev, bot_core::image_t& img, const std::strin
   return {f.meta.first_row_ns * 1e-9, f.line_delay_s, f.readout, f.format.width, f.format.height};
 }
 
-void add_velocity(const LogEvent& ev, MotionLog& s, const std::string& where) {
+void add_velocity(const LogEvent& ev, MotionLog& s, std::vector<double>& speeds, const std::string& where) {
   rsd::velocity_t m{};
   std::string why;
   if (decode_checked(ev.data.data(), ev.data.size(), m, why) != DecodeStatus::Ok ||
@@ -39,6 +39,8 @@ void add_velocity(const LogEvent& ev, MotionLog& s, const std::string& where) {
   const Eigen::Vector3d w(m.angular_velocity[0], m.angular_velocity[1], m.angular_velocity[2]);
   if (!w.allFinite()) return void(++s.malformed);
   s.gyro.push_back({m.utime * 1e-6, w});
+  const Eigen::Vector3d v(m.linear_velocity[0], m.linear_velocity[1], m.linear_velocity[2]);
+  if (m.has_linear && v.allFinite()) speeds.push_back(v.norm());
 }
 
 void add_pose(const LogEvent& ev, MotionLog& s) {
@@ -58,6 +60,7 @@ MotionLog read_motion_log(const std::string& path, const MotionLogChannels& ch) 
   LogEvent ev;
   bot_core::image_t img;
   MotionLog s;
+  std::vector<double> speeds;
   while (log.next(ev)) {
     const int event = ++s.events;
     ++s.channels[ev.channel];
@@ -69,10 +72,16 @@ MotionLog read_motion_log(const std::string& path, const MotionLogChannels& ch) 
         throw std::runtime_error(where + ": frame is " + std::to_string(f.width) + "x" + std::to_string(f.height) + ", the first was " +
                                  std::to_string(s.frames.front().width) + "x" + std::to_string(s.frames.front().height));
     } else if (ev.channel == ch.velocity) {
-      add_velocity(ev, s, where);
+      add_velocity(ev, s, speeds, where);
     } else if (ev.channel == ch.pose) {
       add_pose(ev, s);
     }
+  }
+  s.with_translation = static_cast<int>(speeds.size());
+  if (!speeds.empty()) {
+    std::nth_element(speeds.begin(), speeds.begin() + speeds.size() / 2, speeds.end());
+    s.median_speed_m_s = speeds[speeds.size() / 2];
+    s.max_speed_m_s = *std::max_element(speeds.begin(), speeds.end());
   }
   // Motion may be logged out of order (several publishers): recording-v1 wants it ordered.
   std::stable_sort(s.gyro.begin(), s.gyro.end(), [](const auto& a, const auto& b) { return a.t < b.t; });

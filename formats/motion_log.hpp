@@ -29,6 +29,11 @@ struct MotionLog {
   std::map<std::string, int> channels;  // every channel with its event count (for errors)
   int events = 0;
   int malformed = 0;  // velocity or pose messages that did not decode or made no sense
+  // Velocity messages that carry translation (has_linear, a finite linear velocity), and the
+  // median and largest speed among them (m/s): a rotation-only matches recording of such a
+  // log sees parallax wherever the scene is near.
+  int with_translation = 0;
+  double median_speed_m_s = 0, max_speed_m_s = 0;
 };
 
 struct MotionLogChannels {

@@ -99,6 +99,14 @@ void read_observations(YamlMap m, dsp::SimConfig& s) {
   m.finish();
 }
 
+void read_unmodelled(YamlMap m, dsp::Unmodelled& u) {
+  u.scene_depth_m = m.number("scene_depth_m", u.scene_depth_m);
+  u.gyro_saturation_rad_s = m.number("gyro_saturation_rad_s", u.gyro_saturation_rad_s);
+  u.clock_jump_s = m.number("clock_jump_s", u.clock_jump_s);
+  u.clock_jump_at_s = m.number("clock_jump_at_s", u.clock_jump_at_s);
+  m.finish();
+}
+
 Eigen::Vector3d vec3(YamlMap m, const char* a, const char* b, const char* c) {
   Eigen::Vector3d v(m.number(a), m.number(b), m.number(c));
   m.finish();
@@ -166,6 +174,7 @@ Scenario load_scenario(const std::string& file) {
     for (const auto& name : effects.keys()) read_effect(effects, name, c.nominal, c.effects);
     effects.finish();
   }
+  if (root.has("unmodelled")) read_unmodelled(root.map("unmodelled"), c.unmodelled);
   root.finish();
   if (c.kind == dsp::ObservationKind::Landmarks) {
     try {

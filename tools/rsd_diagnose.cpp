@@ -60,19 +60,29 @@ std::string effect_json(const NamedEffect& e) {
   return o.str();
 }
 
+std::string located_json(const std::vector<Located>& located, const char* indent) {
+  std::ostringstream o;
+  o << "[";
+  for (size_t k = 0; k < located.size(); ++k)
+    o << (k ? ",\n" : "\n") << indent << "  {\"signal\": " << json_string(located[k].signal)
+      << ", \"strength\": " << json_number(located[k].strength) << ", \"detail\": " << json_string(located[k].detail) << "}";
+  o << (located.empty() ? "" : "\n" + std::string(indent)) << "]";
+  return o.str();
+}
+
 // The spec's "Diagnosis output", key for key.
 std::string diagnosis_json(const Diagnosis& d) {
   std::ostringstream o;
   o << "{\n  \"format\": \"rsd-diagnosis/1\",\n  \"baseline\": {\"rms_px\": " << json_number(d.baseline.rms_px)
-    << ", \"observations\": " << d.baseline.observations << "},\n  \"located\": [";
-  for (size_t k = 0; k < d.located.size(); ++k)
-    o << (k ? ",\n" : "\n") << "    {\"signal\": " << json_string(d.located[k].signal)
-      << ", \"strength\": " << json_number(d.located[k].strength) << ", \"detail\": " << json_string(d.located[k].detail) << "}";
-  o << (d.located.empty() ? "" : "\n  ") << "],\n  \"effects\": [";
+    << ", \"observations\": " << d.baseline.observations << "},\n  \"located\": " << located_json(d.located, "  ")
+    << ",\n  \"effects\": [";
   for (size_t k = 0; k < d.effects.size(); ++k) o << (k ? ",\n    " : "\n    ") << effect_json(d.effects[k]);
   o << (d.effects.empty() ? "" : "\n  ") << "],\n  \"final\": {\"rms_px\": " << json_number(d.final_rms_px)
     << "},\n  \"heldout\": {\"baseline_rms_px\": " << json_number(d.heldout_baseline_rms_px)
-    << ", \"final_rms_px\": " << json_number(d.heldout_final_rms_px) << "}\n}\n";
+    << ", \"final_rms_px\": " << json_number(d.heldout_final_rms_px) << "},\n  \"remainder\": {\"significant\": "
+    << (d.remainder.significant ? "true" : "false") << ", \"rms_px\": " << json_number(d.remainder.rms_px)
+    << ", \"expected_rms_px\": " << json_number(d.remainder.expected_rms_px)
+    << ", \"located\": " << located_json(d.remainder.located, "  ") << "}\n}\n";
   return o.str();
 }
 
@@ -121,7 +131,8 @@ int run(int argc, char** argv) {
   }
   std::cout << "baseline RMS " << format_number(d.baseline.rms_px) << " px; effects:";
   for (const NamedEffect& e : d.effects) std::cout << " " << e.name;
-  std::cout << (d.effects.empty() ? " none" : "") << "; final RMS " << format_number(d.final_rms_px) << " px\n";
+  std::cout << (d.effects.empty() ? " none" : "") << "; final RMS " << format_number(d.final_rms_px) << " px; remainder "
+            << (d.remainder.significant ? "significant" : "noise") << "\n" << d.remainder.summary << "\n";
   return 0;
 }
 

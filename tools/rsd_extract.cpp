@@ -226,6 +226,19 @@ dsp::ObservationKind choose_kind(const Options& o, const MotionLog& s) {
   return dsp::ObservationKind::Matches;
 }
 
+// The matches kind is rotation-only: a log whose velocity says the camera translates will show
+// parallax wherever the scene is near, which rsd-diagnose reports as a remainder (never as an
+// effect). 1 cm/s: the speed at which a scene 1 m away moves a 1000 px camera's image by 0.3 px
+// between frames at 30 fps.
+void warn_translation(const Options& o, const MotionLog& s) {
+  if (s.with_translation == 0 || s.max_speed_m_s < 0.01) return;
+  std::fprintf(stderr,
+               "rsd-extract: warning: the velocity on %s carries translation (median %.3g m/s, up to %.3g m/s in %d "
+               "of %zu messages); the matches kind assumes a rotating camera and a distant scene, so a near "
+               "scene's parallax will show in rsd-diagnose as a remainder (translation), not as an effect\n",
+               o.velocity_channel.c_str(), s.median_speed_m_s, s.max_speed_m_s, s.with_translation, s.gyro.size());
+}
+
 // --images: the usable frames as PNG files under OUT/frames, with images.csv, instead of
 // observations: an images recording that rsd --replay, rsd-extract and rsd-diagnose read.
 void write_pictures(const Options& o, LogPictures& pictures, const std::optional<TargetSpec>& target, dsp::Recording& rec) {
@@ -292,6 +305,7 @@ int run(const Options& o) {
   if (kind == dsp::ObservationKind::Matches) {
     rec.motion = dsp::MotionKind::Gyro;
     rec.gyro = s.gyro;
+    warn_translation(o, s);
     if (*s.gyro_frame == rsd::velocity_t::FRAME_CAMERA) {
       n.model.imu_to_camera = Eigen::Matrix3d::Identity();  // the rates are already in camera axes
       n.notes.push_back("gyro in camera axes (rsd.velocity_t FRAME_CAMERA): imu_to_camera = identity");

@@ -156,7 +156,16 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   const std::vector<int> screen = subsample(use_fit, n_screen);
   d.sigma_px = d.noise_floor_px > 0 ? d.noise_floor_px : estimate_sigma(m, screen, d.gross, guess);
   const SelectionOptions so{opt.min_bic_drop, opt.max_iterations};
-  const Selection sel = select_effects(m, use_fit, use_held, screen, nominal, d.gross, d.sigma_px, so);
+  Selection sel = select_effects(m, use_fit, use_held, screen, nominal, d.gross, d.sigma_px, so);
+  // Parallax that the rotation-only matches model cannot express: the effects are chosen
+  // again on what a translation per frame pair cannot explain, so that none stands in for it.
+  d.parallax = parallax_signal(m, sel.params, use_fit);
+  if (d.parallax.clear()) {
+    ModelParams n = nominal, g = d.gross;
+    n.translation_nuisance = g.translation_nuisance = true;
+    sel = select_effects(m, use_fit, use_held, screen, n, g, d.sigma_px, so);
+    sel.params.translation_nuisance = false;  // what the named effects predict, parallax and all
+  }
   for (const SelectedEffect& st : sel.effects) d.effects.push_back(describe(st, sel.params, rec.nominal));
   d.fitted = sel.params;
   d.final_rms_px = robust_stats(m.residuals(sel.params, use_all)).rms_px;
@@ -165,6 +174,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   d.heldout_baseline_rms_px = robust_stats(m.residuals(nominal, use_held)).rms_px;
   d.heldout_final_rms_px = robust_stats(m.residuals(sel.params, use_held)).rms_px;
   d.uncertainties = effect_uncertainties(m, d.effects, d.fitted, d.heldout_indices, opt.heldout_every);
+  d.remainder = assess_remainder(m, d.fitted, use_all, d.noise_floor_px, robust_stats(m.residuals(nominal, use_all)).rms_px);
   return d;
 }
 

@@ -13,6 +13,8 @@
 #include "dsp/diagnosis/locate.hpp"
 #include "dsp/diagnosis/model.hpp"
 #include "dsp/diagnosis/named_effect.hpp"
+#include "dsp/diagnosis/parallax.hpp"
+#include "dsp/diagnosis/remainder.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/uncertainty.hpp"
 
@@ -38,6 +40,10 @@ struct Diagnosis {
   std::vector<std::string> candidates;  // the effects considered for this recording's kinds
   ModelParams gross;                    // where the global search put offset and focal length
   std::vector<ParamUncertainty> uncertainties;  // of every named effect's parameters, in order
+  // Matches: parallax in the residual of the first selection. When clear, the effects were
+  // selected again with each frame pair's translation taken out (parallax.hpp).
+  Parallax parallax;
+  Remainder remainder;  // what the named effects leave: noise, or structure the table lacks
 };
 
 struct DiagnosisOptions {

@@ -1,5 +1,7 @@
 #include "dsp/diagnosis/model.hpp"
 
+#include "dsp/diagnosis/parallax.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -253,6 +255,7 @@ std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, con
     const auto r = tr ? match_residual(p, *tr, obs_[i]) : landmark_residual(p, obs_[i]);
     out.push_back(r.value_or(nan));
   }
+  if (tr && p.translation_nuisance) remove_translation(*this, idx, out);
   return out;
 }
 

@@ -44,6 +44,9 @@ const char* param_name(Param p);
 struct ModelParams {
   std::array<double, kParamCount> v{};
   bool flip_readout = false;  // readout_direction: the opposite of the nominal order
+  // Matches: each frame pair's translation flow is taken out of its residuals (parallax.hpp),
+  // when the recording shows parallax that the rotation-only model cannot express.
+  bool translation_nuisance = false;
   double& operator[](Param p) { return v[static_cast<int>(p)]; }
   double operator[](Param p) const { return v[static_cast<int>(p)]; }
 };

@@ -6,6 +6,7 @@
 
 #include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/fit.hpp"
+#include "dsp/observation/observation_model.hpp"
 
 namespace rsd::dsp {
 
@@ -73,7 +74,61 @@ class Selector {
   Selector(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
            const std::vector<int>& screen, const ModelParams& nominal, const ModelParams& start, double sigma,
            const SelectionOptions& opt)
-      : m_(m), fit_(fit), held_(held), screen_(screen), nominal_(nominal), start_(start), sigma_(sigma), opt_(opt) {}
+      : m_(m), fit_(fit), held_(held), screen_(screen), nominal_(nominal), start_(start), sigma_(sigma), opt_(opt),
+        time_halves_(halves(m, screen, [&](int i) { return m.frame_time(i); })),
+        rate_halves_(m.has_gyro() ? halves(m, screen, [&](int i) { return rate_at(m, i, start); }) : Halves{}) {}
+
+  // Two halves of the screening observations, split at the median of `key` per frame.
+  struct Halves {
+    std::vector<int> a, b;
+    bool usable() const { return a.size() >= 50 && b.size() >= 50; }
+  };
+  template <class Key>
+  static Halves halves(const DiagnosisModel& m, const std::vector<int>& idx, Key key) {
+    std::vector<double> k;
+    for (int i : idx) k.push_back(key(i));
+    if (k.empty()) return {};
+    std::vector<double> sorted = k;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    const double mid = sorted[sorted.size() / 2];
+    Halves h;
+    for (size_t j = 0; j < idx.size(); ++j) (k[j] < mid ? h.a : h.b).push_back(idx[j]);
+    (void)m;
+    return h;
+  }
+  // The gyro's angular rate (magnitude) nearest observation i's frame on the motion clock.
+  static double rate_at(const DiagnosisModel& m, int i, const ModelParams& p) {
+    const auto& g = m.recording().gyro;
+    const double t = m.frame_time(i) + p[Param::TimeOffset];
+    auto it = std::lower_bound(g.begin(), g.end(), t, [](const GyroSample& s, double x) { return s.t < x; });
+    if (it == g.end()) it = std::prev(g.end());
+    return it->w.norm();
+  }
+
+  // Fit `poorer` and `richer` on one half, predict the other, both ways: the robust
+  // chi-square drop on the unseen half, the smaller of the two directions. An effect that
+  // describes the physics predicts what it has not seen; a stand-in, fitted to structure that
+  // differs between the halves (a clock that jumps, a rate the gyro clips), does not.
+  double cross_drop(const Halves& h, const State& poorer, const State& richer) const {
+    double worst = std::numeric_limits<double>::infinity();
+    for (int dir = 0; dir < 2; ++dir) {
+      const std::vector<int>& learn = dir ? h.b : h.a;
+      const std::vector<int>& judge = dir ? h.a : h.b;
+      const ModelParams p0 = fit_params(m_, learn, poorer.params, mask_of(poorer.effects), sigma_, opt_.screen_iterations);
+      const ModelParams p1 = fit_params(m_, learn, richer.params, mask_of(richer.effects), sigma_, opt_.screen_iterations);
+      worst = std::min(worst, robust_chi2(m_.residuals(p0, judge), sigma_) - robust_chi2(m_.residuals(p1, judge), sigma_));
+    }
+    return worst;
+  }
+
+  // Whether adding an effect (poorer -> richer) holds on the blocked halves in time and, in
+  // gyro recordings, on the frames of low and of high angular rate (every effect there shows
+  // through the rate: a stand-in for a gyro that clips fits only the fast frames).
+  bool consistent(const State& poorer, const State& richer) const {
+    if (time_halves_.usable() && !(cross_drop(time_halves_, poorer, richer) > 0)) return false;
+    if (rate_halves_.usable() && !(cross_drop(rate_halves_, poorer, richer) > 0)) return false;
+    return true;
+  }
 
   // BIC = robust chi-square + k ln(2N): the flip counts as one parameter.
   double bic(const ModelParams& p, const std::vector<Effect>& effects, const std::vector<int>& idx) const {
@@ -147,6 +202,7 @@ class Selector {
   ModelParams nominal_, start_;
   double sigma_;
   const SelectionOptions& opt_;
+  Halves time_halves_, rate_halves_;
 };
 
 // The screening subsample's BIC drop projected onto the fitting set: the chi-square drop grows
@@ -232,6 +288,26 @@ void backward(const Selector& sel, State& s, std::vector<SelectedEffect>& steps)
   }
 }
 
+// Drops any selected effect that does not hold out of its own half: with the others in, it
+// must predict the blocked half it was not fitted on, both ways (Selector::consistent). A
+// stand-in for physics outside the table (a clock that jumps, a gyro that clips) fits one
+// half's structure and mispredicts the other's. The latest pick is judged first.
+void consistency(const Selector& sel, State& s, std::vector<SelectedEffect>& steps) {
+  for (bool changed = true; changed && !s.effects.empty();) {
+    changed = false;
+    for (auto it = s.effects.rbegin(); it != s.effects.rend(); ++it) {
+      const Effect e = *it;
+      const State without = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
+      if (sel.consistent(without, s)) continue;
+      s = without;
+      steps.erase(std::remove_if(steps.begin(), steps.end(), [&](const SelectedEffect& st) { return st.effect == e; }),
+                  steps.end());
+      changed = true;
+      break;
+    }
+  }
+}
+
 }  // namespace
 
 Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
@@ -241,6 +317,7 @@ Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, c
   State s = sel.initial();
   std::vector<SelectedEffect> steps = forward(sel, applicable_effects(m), s);
   backward(sel, s, steps);
+  consistency(sel, s, steps);
   return {steps, s.params};
 }
 

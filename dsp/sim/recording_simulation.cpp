@@ -52,6 +52,13 @@ void validate(const SimConfig& c) {
   require(!c.effects.line_delay_s || *c.effects.line_delay_s >= 0, "effects.rolling_shutter.line_delay_s must not be negative");
   require(!c.effects.fxfy || (c.effects.fxfy->minCoeff() > 0), "effects.focal_length fx, fy must be positive");
   require(!c.effects.gyro_scale || (c.effects.gyro_scale->minCoeff() > 0), "effects.gyro_scale sx, sy, sz must be positive");
+  const Unmodelled& u = c.unmodelled;
+  require(u.scene_depth_m >= 0, "unmodelled.scene_depth_m must not be negative");
+  require(u.scene_depth_m == 0 || c.kind == ObservationKind::Matches,
+          "unmodelled.scene_depth_m applies to matches (landmarks have their points)");
+  require(u.gyro_saturation_rad_s >= 0, "unmodelled.gyro_saturation_rad_s must not be negative");
+  require(u.clock_jump_at_s >= 0 && u.clock_jump_at_s <= c.duration_s,
+          "unmodelled.clock_jump_at_s must lie within the recording");
   const double readout = cam.height * c.effects.line_delay_s.value_or(c.nominal.time.line_delay_s);
   require(readout <= (1 + 1e-9) / c.nominal.frame_rate_hz, "line delay x height exceeds the frame period");
 }
@@ -172,6 +179,7 @@ std::vector<GyroSample> sample_gyro(const SimConfig& c, const BodyMotion& imu, c
     // What the gyro reads for the IMU's true rate: w_true = diag(s) (w_measured - b).
     const Eigen::Vector3d w_true = imu.body_rate(t);
     Eigen::Vector3d w = w_true.cwiseQuotient(m.gyro_scale) + m.gyro_bias + g.noise_rad_s * Eigen::Vector3d(n(rng), n(rng), n(rng));
+    if (const double sat = c.unmodelled.gyro_saturation_rad_s; sat > 0) w = w.cwiseMax(-sat).cwiseMin(sat);
     double stamp = t + g.jitter_s * n(rng);
     if (!out.empty() && u(rng) < g.repeat_probability) stamp = out.back().t;
     out.push_back({stamp, w});
@@ -181,12 +189,49 @@ std::vector<GyroSample> sample_gyro(const SimConfig& c, const BodyMotion& imu, c
   return out;
 }
 
+// Matches of features on a plane `depth` along frame_a's optical axis, seen by a camera that
+// translates with the body as well as turning: parallax, which the rotation-only model of
+// matches cannot express. Returns frame_b's pixel of the feature at pixel `a` of frame_a.
+class ParallaxScene {
+ public:
+  ParallaxScene(const SimConfig& c, const TrueModel& m, const BodyMotion& body, double t_begin, double t_end,
+                const Eigen::Matrix3d& imu_to_camera)
+      : setup_{m.cam, m.time, Eigen::Vector3d::Zero(), imu_to_camera.transpose()}, depth_(c.unmodelled.scene_depth_m),
+        body_(samples(body, t_begin, t_end)) {}
+  std::optional<Prediction> predict(double T_a, const Eigen::Vector2d& a, double T_b) const {
+    const auto ray = setup_.cam.ray(a);
+    if (!ray || ray->z() <= 0) return std::nullopt;
+    const double t = setup_.time.motion_time(T_a + row_timing(setup_.time, setup_.cam.height).row_time(a.y()));
+    // World from camera at the row's capture: the body's pose turned by the mount.
+    const Eigen::Affine3d body_from_world = body_.at(t);
+    const Eigen::Matrix3d R_wc = body_from_world.linear().transpose() * setup_.mount;
+    const Eigen::Vector3d p_wc = -body_from_world.linear().transpose() * body_from_world.translation();
+    const Eigen::Vector3d X = p_wc + R_wc * (*ray / ray->z() * depth_);
+    return predict_landmark(setup_, body_, T_b, X);
+  }
+
+ private:
+  static SampledTrajectory samples(const BodyMotion& body, double t_begin, double t_end) {
+    std::vector<SampledTrajectory::Sample> s;
+    for (double t = t_begin; t <= t_end; t += 5e-4) {
+      const PoseSample p = body.at(t);
+      s.push_back({t, p.q, p.p});
+    }
+    return SampledTrajectory(std::move(s));
+  }
+  LandmarkSetup setup_;
+  double depth_;
+  SampledTrajectory body_;
+};
+
 void simulate_matches(const SimConfig& c, const TrueModel& m, SimulatedRecording& out, std::mt19937& rng) {
   Recording& r = out.rec;
   r.motion = MotionKind::Gyro;
   const BodyMotion imu(c, Eigen::Vector3d::Zero(), r.frames.front().t);
   const auto [t_begin, t_end] = motion_span(r, m);
   r.gyro = sample_gyro(c, imu, m, t_begin, t_end, rng);
+  std::optional<ParallaxScene> near;
+  if (c.unmodelled.scene_depth_m > 0) near.emplace(c, m, imu, t_begin, t_end, m.mount * r.nominal.imu_to_camera);
   // The truth is the continuous orientation, sampled densely enough (2 kHz) that slerp
   // between samples is exact to well below a micro-radian.
   std::vector<OrientationTrack::Sample> cam_samples;
@@ -199,7 +244,7 @@ void simulate_matches(const SimConfig& c, const TrueModel& m, SimulatedRecording
     const FrameStamp &fa = r.frames[k], &fb = r.frames[k + 1];
     for (int i = 0; i < c.matches_per_pair; ++i) {
       const Eigen::Vector2d a(u(rng), v(rng));
-      const auto b = predict_match(setup, truth, fa.t, a, fb.t);
+      const auto b = near ? near->predict(fa.t, a, fb.t) : predict_match(setup, truth, fa.t, a, fb.t);
       if (!b || !m.cam.contains(b->pixel, 0.0)) continue;
       const bool outlier = flip(rng) < c.outlier_fraction;
       const Eigen::Vector2d pb = outlier ? Eigen::Vector2d(u(rng), v(rng)) : noisy(b->pixel, c.noise_px, rng);
@@ -226,6 +271,11 @@ SimulatedRecording simulate_recording(const SimConfig& cfg) {
   std::mt19937 rng(cfg.seed);
   if (cfg.kind == ObservationKind::Landmarks) simulate_landmarks(cfg, m, out, rng);
   else simulate_matches(cfg, m, out, rng);
+  // A clock that jumps: the frames after it are stamped clock_jump_s late (their pictures,
+  // taken above, are where the motion really was).
+  if (const Unmodelled& u = cfg.unmodelled; u.clock_jump_s != 0)
+    for (FrameStamp& f : r.frames)
+      if (f.t - r.nominal.time.t0 >= u.clock_jump_at_s) f.t += u.clock_jump_s;
   return out;
 }
 

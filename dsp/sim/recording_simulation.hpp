@@ -48,10 +48,24 @@ enum class MotionSource {
   Samples,   // given poses (e.g. a trajectory file), interpolated linearly and by slerp
 };
 
+// Physics outside the named effects: what a diagnosis must report as a remainder and never
+// name as one of the table's effects (docs/formats/recording-v1.md, "remainder").
+struct Unmodelled {
+  // Matches: the features lie on a plane this far along frame_a's optical axis (0: at
+  // infinity, the rotation-only model's world). The body's translation then gives parallax.
+  double scene_depth_m = 0;
+  double gyro_saturation_rad_s = 0;  // the gyro clips each axis at +- this (0: never)
+  // The frame stamps jump by clock_jump_s from clock_jump_at_s after the first frame on.
+  double clock_jump_s = 0;
+  double clock_jump_at_s = 0;
+  bool any() const { return scene_depth_m > 0 || gyro_saturation_rad_s > 0 || clock_jump_s != 0; }
+};
+
 struct SimConfig {
   ObservationKind kind = ObservationKind::Landmarks;
   NominalModel nominal;
   Effects effects;
+  Unmodelled unmodelled;
   unsigned seed = 1;
   double duration_s = 2.0;
   double start_time_s = 100.0;     // camera clock of the first frame

@@ -15,7 +15,7 @@ rsd_cli_test(cli_diagnose_e2e_run STATUS 0 LABELS e2e MESSAGES "effects: rolling
 set_tests_properties(cli_diagnose_e2e_run PROPERTIES FIXTURES_REQUIRED diagnose_e2e_rec FIXTURES_SETUP diagnose_e2e_out
                      TIMEOUT 120)
 add_test(NAME cli_diagnose_e2e_json
-         COMMAND sh -c "j=\"$0/diagnosis.json\"; cat \"$j\"; grep -q '\"format\": \"rsd-diagnosis/1\"' \"$j\" && grep -q '\"baseline\": {\"rms_px\": [0-9.]*, \"observations\": 900}' \"$j\" && grep -q '\"final\": {\"rms_px\": 0\.[45]' \"$j\" && grep -q '\"heldout\": {\"baseline_rms_px\": [0-9.]*, \"final_rms_px\": 0\.[45]' \"$j\" && test $(grep -c '\"name\": ' \"$j\") -eq 1 && grep -q '\"name\": \"rolling_shutter\"' \"$j\" && grep -o '\"line_delay_s\": [-0-9.e+]*' \"$j\" | awk '{d = $2 + 0} END {exit !(d > 0.97 * 5e-5 && d < 1.03 * 5e-5)}'"
+         COMMAND sh -c "j=\"$0/diagnosis.json\"; cat \"$j\"; grep -q '\"format\": \"rsd-diagnosis/1\"' \"$j\" && grep -q '\"baseline\": {\"rms_px\": [0-9.]*, \"observations\": 900}' \"$j\" && grep -q '\"final\": {\"rms_px\": 0\.[45]' \"$j\" && grep -q '\"heldout\": {\"baseline_rms_px\": [0-9.]*, \"final_rms_px\": 0\.[45]' \"$j\" && grep -q '\"remainder\": {\"significant\": false, \"rms_px\": 0\.[45][0-9]*, \"expected_rms_px\": 0\.[45][0-9]*, \"located\": ..}' \"$j\" && test $(grep -c '\"name\": ' \"$j\") -eq 1 && grep -q '\"name\": \"rolling_shutter\"' \"$j\" && grep -o '\"line_delay_s\": [-0-9.e+]*' \"$j\" | awk '{d = $2 + 0} END {exit !(d > 0.97 * 5e-5 && d < 1.03 * 5e-5)}'"
                  ${DIAG})
 set_tests_properties(cli_diagnose_e2e_json PROPERTIES FIXTURES_REQUIRED diagnose_e2e_out LABELS e2e)
 add_test(NAME cli_diagnose_e2e_report

@@ -309,6 +309,8 @@ std::string verdict(const Diagnosis& d) {
     for (size_t k = 0; k < d.effects.size(); ++k) o << (k ? ", " : " ") << "`" << d.effects[k].name << "`";
     o << ".**";
   }
+  if (d.remainder.significant)
+    o << " **Structure beyond noise remains that no named effect explains (see What remains).**";
   o << " Held-out RMS " << format_number(d.heldout_baseline_rms_px) << " px (nominal) -> "
     << format_number(d.heldout_final_rms_px) << " px (final); the residual sigma noise alone gives: "
     << format_number(d.sigma_px) << " px.\n";
@@ -335,6 +337,27 @@ std::string effects_table(const Diagnosis& d, const std::vector<ParamUncertainty
   for (const NamedEffect& e : d.effects)
     o << "| `" << e.name << "` | " << e.explains << " | " << format_number(e.rms_px) << " | "
       << format_number(e.bic_drop) << " | " << format_number(e.heldout_drop) << " |\n";
+  return o.str();
+}
+
+std::string remainder_section(const Remainder& r) {
+  std::ostringstream o;
+  o << "## What remains\n\n" << (r.significant ? "**Significant: physics the effect table does not hold.** " : "")
+    << r.summary << "\n\n"
+    << "| test | statistic | z | structured RMS (px) |\n| --- | --- | --- | --- |\n"
+    << "| across each frame: scatter about the frame mean over nearest-neighbour differences (1 = noise) | "
+    << format_number(r.spatial_ratio, 3) << " | " << format_number(r.spatial_z, 3) << " | "
+    << format_number(r.spatial_rms_px, 3) << " |\n"
+    << "| from frame to frame: von Neumann ratio of the frame means (1 = independent frames) | "
+    << format_number(r.temporal_ratio, 3) << " | " << format_number(r.temporal_z, 3) << " | "
+    << format_number(r.temporal_rms_px, 3) << " |\n\n"
+    << "Structure is called significant when a test is clear (z above 4) and material (its variance at least a "
+       "fifth of the noise's).\n";
+  if (!r.located.empty()) {
+    o << "\n| where the remainder lives | strength | detail |\n| --- | --- | --- |\n";
+    for (const Located& l : r.located)
+      o << "| `" << l.signal << "` | " << format_number(l.strength, 3) << " | " << l.detail << " |\n";
+  }
   return o.str();
 }
 
@@ -367,6 +390,7 @@ std::string index_markdown(const ReportInput& in, const std::vector<ParamUncerta
   else o << "| signal | strength | detail |\n| --- | --- | --- |\n";
   for (const Located& l : d.located)
     o << "| `" << l.signal << "` | " << format_number(l.strength, 3) << " | " << l.detail << " |\n";
+  o << "\n" << remainder_section(d.remainder);
   o << "\n## Figures\n\nTop panels: the nominal model; bottom: the final one. Pixel positions are "
     << (in.model->recording().kind == ObservationKind::Matches ? "frame_b's (the predicted end of each match)"
                                                                : "the observed landmarks'")

@@ -17,10 +17,14 @@ namespace rsd::tools {
 struct SuiteCase {
   dsp::ObservationKind kind = dsp::ObservationKind::Landmarks;
   std::vector<std::string> effects;  // spec names; empty = no effect
+  // Physics outside the effect table (parallax, gyro_saturation, clock_jump; empty: none):
+  // the diagnosis must report it as a significant remainder and name no effect for it.
+  std::string outside;
   unsigned seed = 1;
   double duration_s = 0;             // 0: the suite's length
   bool speed = false;                // a speed case: diagnose() must also take < kSpeedLimitS
   std::string name() const;          // "rolling_shutter + time_offset", "none"
+  std::string key() const;           // for --cases: "rolling_shutter+time_offset", "outside:parallax", "none"
 };
 
 // Issue 6: a 20 s recording is diagnosed in under 30 s on 2 cores.
@@ -63,6 +67,10 @@ struct CaseResult {
   double heldout_baseline_px = 0, heldout_final_px = 0, floor_px = 0;
   bool floor_is_true_model = false;  // false: the noise sigma stands in (truth not expressible)
   bool heldout_ok = false;
+  // The remainder: significant exactly when the case holds physics outside the table.
+  bool remainder_significant = false, remainder_ok = false;
+  double remainder_rms_px = 0, remainder_expected_px = 0;
+  std::string remainder_where;  // the strongest located signal of a significant remainder
   double seconds = 0;  // diagnose() alone
   bool pass() const;
 };

@@ -1,0 +1,41 @@
+// Parallax in matches recordings. The model of matches is rotation-only (the scene at
+// infinity); a camera that also translates past a near scene displaces each frame pair's
+// matches by the flow of that translation, which no effect of the table describes. Here: the
+// flow fields of a small rotation and of a translation over a fronto-parallel scene between
+// two frames (the instantaneous motion field, per unit of rotation and of translation over
+// depth), and the translation nuisance: each frame pair's translation flow fitted robustly to
+// its residuals and taken out, so that effects are judged on what a translation cannot explain.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "dsp/geometry/camera_model.hpp"
+
+namespace rsd::dsp {
+
+class DiagnosisModel;
+
+// d(pixel) per unit rotation (columns: about x, y, z) and per unit translation over depth
+// (columns: along x, y, z), at `pixel`, in pixels.
+Eigen::Matrix<double, 2, 3> rotation_flow(const CameraModel& cam, const Eigen::Vector2d& pixel);
+Eigen::Matrix<double, 2, 3> translation_flow(const CameraModel& cam, const Eigen::Vector2d& pixel);
+
+// Matches: whether a translation of the camera between the two frames of each pair explains
+// the inlier residuals of `p` beyond a small rotation of it (z-score of the extra chi-square
+// over its 3 degrees of freedom per pair), and the share of the residual energy the
+// translation explains, net of what noise explains by chance. Zero for landmarks. Uses at
+// most 20000 of idx.
+struct Parallax {
+  double share = 0, z = 0;
+  int pairs = 0;
+  bool clear() const { return z > 4 && share >= 0.05; }  // 4 sigma, and 5% of the energy
+};
+struct ModelParams;
+Parallax parallax_signal(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx);
+
+// Removes from `r` (residuals of the observations `idx`, NaN for failed predictions) each frame
+// pair's translation flow, fitted to the pair's inliers (a pair with under 6 keeps its residuals).
+void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r);
+
+}  // namespace rsd::dsp

@@ -1,0 +1,209 @@
+#include "dsp/diagnosis/remainder.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include "dsp/diagnosis/fit.hpp"
+#include "dsp/diagnosis/parallax.hpp"
+#include "dsp/diagnosis/robust_stats.hpp"
+
+namespace rsd::dsp {
+
+namespace {
+
+constexpr double kClearZ = 4.0;           // "statistically clear"
+constexpr double kMaterialShare = 0.2;    // structured variance over the noise variance
+constexpr int kMaxPerFrame = 200;         // nearest neighbours are searched among these
+
+// One frame's inlier observations: their predicted pixels and their residuals.
+struct Frame {
+  int rank;
+  std::vector<Eigen::Vector2d> px, r;
+  Eigen::Vector2d mean() const {
+    Eigen::Vector2d s = Eigen::Vector2d::Zero();
+    for (const auto& x : r) s += x;
+    return s / static_cast<double>(r.size());
+  }
+};
+
+std::vector<Frame> frames_of(const DiagnosisModel& m, const std::vector<int>& idx,
+                             const std::vector<Eigen::Vector2d>& r) {
+  const std::vector<bool> in = inliers(r);
+  std::map<int, Frame> by_rank;
+  for (size_t k = 0; k < idx.size(); ++k) {
+    if (!in[k]) continue;
+    Frame& f = by_rank[m.frame_rank(idx[k])];
+    f.rank = m.frame_rank(idx[k]);
+    // Where the model puts it: neighbours chosen by the observed (noisy) pixels would favour,
+    // among a grid's equidistant neighbours, the one whose noise differs most.
+    if (static_cast<int>(f.r.size()) < kMaxPerFrame) f.px.push_back(m.observed(idx[k]) - r[k]), f.r.push_back(r[k]);
+  }
+  std::vector<Frame> out;
+  for (auto& [rank, f] : by_rank)
+    if (f.r.size() >= 3) out.push_back(std::move(f));
+  return out;
+}
+
+// The independent noise: differences between each observation and its nearest neighbour in
+// the same frame (a smooth field beneath cancels), and the scatter about the frame mean (it
+// does not); both per coordinate, and how many values each rests on.
+struct Scatter {
+  double neighbour_var = 0, within_var = 0;
+  int n = 0;
+};
+
+Scatter scatter(const std::vector<Frame>& frames) {
+  std::vector<Eigen::Vector2d> diff, dev;
+  for (const Frame& f : frames) {
+    const Eigen::Vector2d mean = f.mean();
+    const double n = static_cast<double>(f.r.size());
+    for (size_t i = 0; i < f.r.size(); ++i) {
+      size_t best = i;
+      double best_d2 = std::numeric_limits<double>::infinity();
+      for (size_t j = 0; j < f.r.size(); ++j) {
+        const double d2 = (f.px[j] - f.px[i]).squaredNorm();
+        if (j != i && d2 < best_d2) best_d2 = d2, best = j;
+      }
+      diff.push_back(f.r[i] - f.r[best]);
+      dev.push_back((f.r[i] - mean) * std::sqrt(n / (n - 1)));  // unbiased about the frame mean
+    }
+  }
+  Scatter s;
+  s.n = static_cast<int>(diff.size());
+  const double nb = robust_stats(diff).scale_px, w = robust_stats(dev).scale_px;
+  s.neighbour_var = 0.5 * nb * nb;  // a difference carries two observations' noise
+  s.within_var = w * w;
+  return s;
+}
+
+// The sequence of frame means, per coordinate: its variance, half its mean squared step, and
+// the independent noise each mean carries on average.
+struct MeanSeries {
+  double var = 0, step = 0, own_noise = 0;
+  int frames = 0;
+};
+
+MeanSeries mean_series(const std::vector<Frame>& frames, double noise_var) {
+  MeanSeries s;
+  s.frames = static_cast<int>(frames.size());
+  if (s.frames < 3) return s;
+  std::vector<Eigen::Vector2d> means;
+  Eigen::Vector2d grand = Eigen::Vector2d::Zero();
+  for (const Frame& f : frames) {
+    means.push_back(f.mean());
+    grand += means.back();
+    s.own_noise += noise_var / static_cast<double>(f.r.size());
+  }
+  grand /= s.frames;
+  s.own_noise /= s.frames;
+  for (size_t k = 0; k < means.size(); ++k) {
+    s.var += 0.5 * (means[k] - grand).squaredNorm();
+    if (k > 0) s.step += 0.25 * (means[k] - means[k - 1]).squaredNorm();
+  }
+  s.var /= (s.frames - 1);
+  s.step /= (s.frames - 1);
+  return s;
+}
+
+std::string percent(double share) { return std::to_string(std::lround(100 * share)) + "%"; }
+
+std::string summary_of(const Remainder& r) {
+  std::ostringstream o;
+  o.precision(3);
+  if (r.nothing_to_explain) o << "The nominal model fits within noise. ";
+  else o << "The named effects explain " << percent(r.explained_share) << " of the mismatch beyond noise. ";
+  o << "The final residual is " << r.rms_px << " px per coordinate, where noise alone leaves " << r.expected_rms_px
+    << " px";
+  if (r.stated_noise_px > 0) o << " (the recording states " << r.stated_noise_px << " px)";
+  o << ". ";
+  if (!r.significant) {
+    o << "What remains has no structure in the image or in time: it is noise.";
+    return o.str();
+  }
+  o << "What remains is not noise:";
+  if (r.spatial) o << " " << r.spatial_rms_px << " px vary smoothly across each frame";
+  if (r.spatial && r.temporal) o << ", and";
+  if (r.temporal) o << " " << r.temporal_rms_px << " px move all of a frame's observations together, smoothly from frame to frame";
+  o << ". No effect of the table explains it";
+  if (!r.located.empty()) o << "; it lives mostly in " << r.located.front().signal << " (" << r.located.front().detail << ")";
+  o << ".";
+  return o.str();
+}
+
+// Where the remainder lives: the baseline's signals on the final residual, the two tests'
+// structured parts as shares of the residual energy, and the parallax pattern for matches.
+std::vector<Located> locate_remainder(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx,
+                                      const Remainder& r) {
+  std::vector<Located> out = locate(m, p, idx);
+  const double total = r.rms_px * r.rms_px;
+  if (r.temporal)
+    out.push_back({"frame_shift", std::min(1.0, r.temporal_rms_px * r.temporal_rms_px / total),
+                   "all of a frame's observations are displaced together, and the displacement changes smoothly "
+                   "from frame to frame: motion the motion data do not carry, or a clock error that changes"});
+  if (r.spatial)
+    out.push_back({"image_field", std::min(1.0, r.spatial_rms_px * r.spatial_rms_px / total),
+                   "neighbouring observations of a frame share their residual: a smooth field across the image"});
+  if (m.kind() == ObservationKind::Matches) {
+    const Parallax px = parallax_signal(m, p, idx);
+    if (px.clear())
+      out.push_back({"translation", px.share,
+                     "each frame pair's residual is the flow of a camera translation, not of a rotation: parallax "
+                     "of a near scene, which the rotation-only model of matches cannot express"});
+  }
+  std::sort(out.begin(), out.end(), [](const Located& a, const Located& b) { return a.strength > b.strength; });
+  return out;
+}
+
+}  // namespace
+
+Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx_all,
+                           double noise_floor_px, double baseline_rms_px) {
+  Remainder r;
+  ModelParams fitted = p;
+  fitted.translation_nuisance = false;  // the residual the model leaves, parallax and all
+  const std::vector<int> idx = subsample(idx_all, 20000);
+  const auto res = m.residuals(fitted, idx);
+  r.rms_px = robust_stats(res).rms_px;
+  r.stated_noise_px = noise_floor_px;
+  const std::vector<Frame> frames = frames_of(m, idx, res);
+  const Scatter sc = scatter(frames);
+  if (sc.n < 20 || !(sc.neighbour_var > 0)) {
+    r.expected_rms_px = noise_floor_px > 0 ? noise_floor_px : r.rms_px;
+    r.summary = "Too few observations per frame to test the remainder for structure.";
+    return r;
+  }
+  const double noise_var = sc.neighbour_var;
+  // Spatial: log of the variance ratio, its standard error inflated by half for the sharing
+  // of observations between neighbour pairs.
+  r.spatial_ratio = sc.within_var / noise_var;
+  r.spatial_z = std::log(r.spatial_ratio) / (1.5 * std::sqrt(2.0 / sc.n));
+  r.spatial = r.spatial_z > kClearZ && r.spatial_ratio - 1 > kMaterialShare;
+  r.spatial_rms_px = r.spatial ? std::sqrt(sc.within_var - noise_var) : 0;
+  // Temporal: the von Neumann ratio over both coordinates has standard error 1/sqrt(2F).
+  const MeanSeries ms = mean_series(frames, noise_var);
+  double frame_white = 0;  // variance of the frame-common errors that are independent per frame
+  if (ms.frames >= 3 && ms.var > 0) {
+    r.temporal_ratio = ms.step / ms.var;
+    r.temporal_z = (1 - r.temporal_ratio) * std::sqrt(2.0 * ms.frames);
+    const double smooth = std::max(0.0, ms.var - ms.step);
+    r.temporal = r.temporal_z > kClearZ && smooth > kMaterialShare * noise_var;
+    r.temporal_rms_px = r.temporal ? std::sqrt(smooth) : 0;
+    frame_white = std::max(0.0, std::min(ms.var, ms.step) - ms.own_noise);
+  }
+  r.expected_rms_px = std::sqrt(noise_var + frame_white);
+  r.significant = r.spatial || r.temporal;
+  // The nominal model within 5% of the noise left nothing to explain.
+  r.nothing_to_explain = baseline_rms_px <= 1.05 * r.expected_rms_px;
+  const double excess = baseline_rms_px * baseline_rms_px - r.expected_rms_px * r.expected_rms_px;
+  r.explained_share = r.nothing_to_explain
+                          ? 1.0
+                          : std::clamp((baseline_rms_px * baseline_rms_px - r.rms_px * r.rms_px) / excess, 0.0, 1.0);
+  if (r.significant) r.located = locate_remainder(m, fitted, idx, r);
+  r.summary = summary_of(r);
+  return r;
+}
+
+}  // namespace rsd::dsp

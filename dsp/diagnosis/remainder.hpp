@@ -1,0 +1,51 @@
+// What the named effects leave (docs/formats/recording-v1.md, "remainder"): is the final
+// residual noise, or does structure remain that the effect table does not hold (parallax in
+// matches, a gyro that saturates, a clock that jumps)? And where does it live?
+//
+// Noise here is whatever has no structure: pixel noise independent from observation to
+// observation, and errors a frame's observations share (gyro stamp jitter) that are
+// independent from frame to frame. Structure is what neither is:
+//  - spatial: residuals that vary smoothly across a frame. Neighbouring observations of one
+//    frame then agree more than their scatter about the frame's mean says; the differences
+//    of nearest neighbours estimate the independent noise whatever smooth field lies beneath.
+//  - temporal: frame means that follow each other from frame to frame. The von Neumann ratio
+//    of the sequence of frame means (half the mean squared step over the variance) is 1 for
+//    independent frame errors and falls towards 0 for a smooth one.
+// Each must be statistically clear (4 sigma) and material (its variance at least a fifth of
+// the noise's), so that the motion data's own errors and a remainder too small to matter are
+// not called physics.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "dsp/diagnosis/locate.hpp"
+#include "dsp/diagnosis/model.hpp"
+
+namespace rsd::dsp {
+
+struct Remainder {
+  bool significant = false;
+  double rms_px = 0;           // per-coordinate RMS of the final residual's inliers
+  double expected_rms_px = 0;  // what noise alone leaves (the data's own, from the tests below)
+  double stated_noise_px = 0;  // the recording's noise floor per coordinate (0: not stated)
+  // Share of the baseline's mismatch beyond noise (energy) that the named effects removed;
+  // 1 when the nominal model already fitted within noise (nothing_to_explain).
+  double explained_share = 0;
+  bool nothing_to_explain = false;
+  // Spatial test: within-frame variance over the neighbour-difference variance, and its z.
+  double spatial_ratio = 1, spatial_z = 0;
+  // Temporal test: von Neumann ratio of the frame means, and its z.
+  double temporal_ratio = 1, temporal_z = 0;
+  double spatial_rms_px = 0, temporal_rms_px = 0;  // RMS of the structured parts (0: none)
+  bool spatial = false, temporal = false;         // which test found structure
+  std::vector<Located> located;  // where the remainder lives (empty when not significant)
+  std::string summary;           // plain words for the report
+};
+
+// The remainder of `fitted` over the observations `idx` (at most 20000 used), given the
+// recording's stated per-coordinate noise floor (0: unknown) and the nominal model's RMS.
+Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& fitted, const std::vector<int>& idx,
+                           double noise_floor_px, double baseline_rms_px);
+
+}  // namespace rsd::dsp
