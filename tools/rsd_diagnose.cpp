@@ -29,11 +29,17 @@ constexpr const char* kDescription =
     "recording.yaml states, says where the residual lives, and names the effects that explain it\n"
     "(rolling_shutter, readout_direction, time_offset, clock_drift, lens_distortion,\n"
     "focal_length, gyro_bias, lever_arm, mount_rotation, gyro_scale, principal_point), fitted\n"
-    "robustly and chosen by BIC. Every 5th frame\n"
-    "is held out of the fit and used to compare the nominal and the final model. With --report,\n"
-    "REPORT_DIR gets index.md (verdict, effects with 1-sigma uncertainties, held-out RMS\n"
-    "before and after, located signals) and PNG figures of the residual against row, radius\n"
-    "and time and over the image, before and after.\n\n"
+    "robustly and chosen by BIC, head to head where hypotheses explain the same structure (the\n"
+    "report says when the data cannot tell them apart), and kept only if each predicts the half\n"
+    "of the recording it was not fitted on (in time and in angular rate). Every 5th frame is held\n"
+    "out of the fit and used to compare the nominal and the final model. What the named effects\n"
+    "leave is tested for structure (JSON \"remainder\"): physics outside the table, such as\n"
+    "parallax in matches, a gyro that clips or a clock that jumps, is reported there and no\n"
+    "effect is named in its stead. With --report, REPORT_DIR gets index.md (verdict, effects with\n"
+    "1-sigma uncertainties, held-out RMS before and after, located signals, what remains), a page\n"
+    "per named effect (effect-NAME.md: parameters, evidence, the structure it removes) and PNG\n"
+    "figures of the residual against row, radius and time, over the image, and per frame.\n"
+    "Progress goes to stderr.\n\n"
     "An images recording (observations.kind: images: pictures and a gyro or trajectory) is diagnosed\n"
     "from observations made from its pictures, as rsd-extract makes them: tracked features with a\n"
     "gyro, the target's corners with a trajectory.\n\n"
@@ -117,6 +123,10 @@ int run(int argc, char** argv) {
   DiagnosisOptions opt;
   opt.heldout_every = o.heldout_every;
   const auto t0 = std::chrono::steady_clock::now();
+  opt.progress = [&](const std::string& what) {
+    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::cerr << "rsd-diagnose: [" << format_number(t, 3) << " s] " << what << "\n";
+  };
   const Diagnosis d = diagnose(model, opt);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << "rsd-diagnose: diagnosed in " << format_number(secs, 3) << " s\n";

@@ -29,7 +29,7 @@ constexpr const char* kDescription =
     "Writes a Markdown table; exit status 1 if any goal fails.\n\n"
     "Full table (docs/diagnosis-benchmark.md), from the repository root:\n"
     "  rsd-diagnose-suite --out docs/diagnosis-benchmark.md --example docs/diagnosis-benchmark\n"
-    "CI (reduced: 8 of the cases):             rsd-diagnose-suite --reduced";
+    "CI (reduced: 11 of the cases):             rsd-diagnose-suite --reduced";
 
 std::vector<dsp::ObservationKind> parse_kinds(const std::string& s) {
   std::vector<dsp::ObservationKind> out;

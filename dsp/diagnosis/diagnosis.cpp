@@ -11,7 +11,9 @@ namespace rsd::dsp {
 namespace {
 
 NamedEffect describe(const SelectedEffect& st, const ModelParams& p, const NominalModel& n) {
-  NamedEffect out{effect_name(st.effect), {}, "", st.rms_px, st.bic_drop, st.heldout_drop};
+  NamedEffect out{effect_name(st.effect), {}, "", st.rms_px, st.bic_drop, st.heldout_drop,
+                  st.blocked_time_drop, st.blocked_rate_drop, {}};
+  for (Effect r : st.rivals) out.rivals.push_back(effect_name(r));
   std::ostringstream x;
   auto param = [&](Param q) { return EffectParam{param_name(q), p[q], ""}; };
   switch (st.effect) {
@@ -69,6 +71,11 @@ NamedEffect describe(const SelectedEffect& st, const ModelParams& p, const Nomin
       x << "the principal point is (" << p[Param::Cx] << ", " << p[Param::Cy] << ") px, not (" << n.cam.cx << ", " << n.cam.cy << ")";
       break;
     case Effect::Count: break;
+  }
+  if (!out.rivals.empty()) {
+    x << "; the data cannot tell it from";
+    for (size_t k = 0; k < out.rivals.size(); ++k) x << (k ? " or " : " ") << out.rivals[k];
+    x << " (head to head, BIC within the threshold)";
   }
   out.explains = x.str();
   return out;
@@ -131,6 +138,28 @@ std::vector<int> usable(const DiagnosisModel& m, const ModelParams& p, const std
   return out;
 }
 
+// The selection; for matches with parallax the rotation-only model cannot express, chosen again
+// on what a translation per frame pair cannot explain, so that no effect stands in for it. The
+// parameters keep the translation nuisance on when it was used.
+Selection select_with_parallax(const DiagnosisModel& m, const std::vector<int>& use_fit, const std::vector<int>& use_held,
+                               const std::vector<int>& screen, const ModelParams& nominal, Diagnosis& d,
+                               const SelectionOptions& so) {
+  // The blocked-halves check waits for the parallax test: with parallax the selection is
+  // made again, and checking the stand-ins it will not keep would be wasted.
+  // A restart (at another sigma) after parallax was found goes straight to the second selection.
+  if (!d.parallax.clear()) {
+    SelectionOptions first = so;
+    first.blocked_halves = false;
+    Selection sel = select_effects(m, use_fit, use_held, screen, nominal, d.gross, d.sigma_px, first);
+    d.parallax = parallax_signal(m, sel.params, use_fit);
+    if (!d.parallax.clear()) return hold_on_blocked_halves(m, use_fit, use_held, screen, nominal, d.gross, d.sigma_px, so, sel);
+  }
+  if (so.progress) so.progress("parallax in the matches: selecting again with each frame pair's translation taken out");
+  ModelParams n = nominal, g = d.gross;
+  n.translation_nuisance = g.translation_nuisance = true;
+  return select_effects(m, use_fit, use_held, screen, n, g, d.sigma_px, so);
+}
+
 }  // namespace
 
 Diagnosis diagnose(const Recording& rec, const DiagnosisOptions& opt) { return diagnose(DiagnosisModel(rec), opt); }
@@ -148,24 +177,50 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   d.noise_floor_px = rec.noise_px ? *rec.noise_px * m.noise_gain() : 0.0;
   // Gross errors first, with the stated noise or a first guess of it (the baseline's scale).
   const double guess = d.noise_floor_px > 0 ? d.noise_floor_px : std::max(d.baseline.scale_px, 1e-3);
-  d.gross = gross_start(m, subsample(fit, n_screen), nominal, guess);
-  d.located = locate_with_gross(m, nominal, d.gross, fit);
-  const std::vector<int> use_all = usable(m, d.gross, all), use_fit = usable(m, d.gross, fit),
-                         use_held = usable(m, d.gross, held);
-  d.unusable = m.size() - static_cast<int>(use_all.size());
-  const std::vector<int> screen = subsample(use_fit, n_screen);
+  auto progress = [&](const std::string& what) {
+    if (opt.progress) opt.progress(what);
+  };
+  progress("searching the clock offset and focal scale for gross errors");
+  const std::vector<int> fit_screen = subsample(fit, n_screen);
+  d.gross = gross_start(m, fit_screen, nominal, guess);
+  std::vector<int> use_all, use_fit, use_held, screen;
+  auto split_usable = [&] {
+    use_all = usable(m, d.gross, all), use_fit = usable(m, d.gross, fit), use_held = usable(m, d.gross, held);
+    screen = subsample(use_fit, n_screen);
+  };
+  split_usable();
+  // Without a stated noise the scale comes from the data once the gross errors are in; a
+  // search run at a guess far off (fast motion: the baseline's scale is tens of pixels) is
+  // run again at the scale it led to.
   d.sigma_px = d.noise_floor_px > 0 ? d.noise_floor_px : estimate_sigma(m, screen, d.gross, guess);
-  const SelectionOptions so{opt.min_bic_drop, opt.max_iterations};
-  Selection sel = select_effects(m, use_fit, use_held, screen, nominal, d.gross, d.sigma_px, so);
-  // Parallax that the rotation-only matches model cannot express: the effects are chosen
-  // again on what a translation per frame pair cannot explain, so that none stands in for it.
-  d.parallax = parallax_signal(m, sel.params, use_fit);
-  if (d.parallax.clear()) {
-    ModelParams n = nominal, g = d.gross;
-    n.translation_nuisance = g.translation_nuisance = true;
-    sel = select_effects(m, use_fit, use_held, screen, n, g, d.sigma_px, so);
-    sel.params.translation_nuisance = false;  // what the named effects predict, parallax and all
+  if (d.noise_floor_px == 0 && std::abs(std::log(d.sigma_px / guess)) > std::log(1.25)) {
+    d.gross = gross_start(m, fit_screen, nominal, d.sigma_px);
+    split_usable();
+    d.sigma_px = estimate_sigma(m, screen, d.gross, d.sigma_px);
   }
+  SelectionOptions so;
+  so.min_bic_drop = opt.min_bic_drop, so.max_iterations = opt.max_iterations;
+  so.progress = opt.progress;
+  Selection sel;
+  for (int attempt = 0;; ++attempt) {
+    progress("selecting effects at sigma " + std::to_string(d.sigma_px) + " px");
+    sel = select_with_parallax(m, use_fit, use_held, screen, nominal, d, so);
+    // The scale the fit ends with must agree with the one it started from (within 25%): a
+    // recording that understates its noise, or a scale estimated before the effects were in,
+    // would make BIC name noise. Otherwise the selection runs again at the scale it ended with.
+    const double ended = robust_stats(m.residuals(sel.params, screen)).scale_px;
+    const bool disagrees = ended > 1.25 * d.sigma_px || (d.noise_floor_px == 0 && ended < 0.8 * d.sigma_px);
+    if (!disagrees || attempt == 2) break;
+    d.sigma_restarts.push_back(d.sigma_px);
+    d.sigma_px = ended;
+    if (d.noise_floor_px == 0) {
+      d.gross = gross_start(m, fit_screen, nominal, d.sigma_px);
+      split_usable();
+    }
+  }
+  sel.params.translation_nuisance = false;  // what the named effects predict, parallax and all
+  d.located = locate_with_gross(m, nominal, d.gross, fit);
+  d.unusable = m.size() - static_cast<int>(use_all.size());
   for (const SelectedEffect& st : sel.effects) d.effects.push_back(describe(st, sel.params, rec.nominal));
   d.fitted = sel.params;
   d.final_rms_px = robust_stats(m.residuals(sel.params, use_all)).rms_px;
@@ -173,6 +228,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   d.heldout_observations = static_cast<int>(use_held.size());
   d.heldout_baseline_rms_px = robust_stats(m.residuals(nominal, use_held)).rms_px;
   d.heldout_final_rms_px = robust_stats(m.residuals(sel.params, use_held)).rms_px;
+  progress("uncertainties and the remainder");
   d.uncertainties = effect_uncertainties(m, d.effects, d.fitted, d.heldout_indices, opt.heldout_every);
   d.remainder = assess_remainder(m, d.fitted, use_all, d.noise_floor_px, robust_stats(m.residuals(nominal, use_all)).rms_px);
   return d;

@@ -6,6 +6,7 @@
 // writes the JSON and report. Method and measured accuracy: docs/diagnosis.md.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,9 @@ struct Diagnosis {
   std::vector<NamedEffect> effects;  // in order of selection; empty = fits within noise
   ModelParams fitted;
   double sigma_px = 0;  // the residual sigma the fits and BIC used (noise_floor_px when known)
+  // Scales a selection started from and ended far from (by over 25%), in order: each time the
+  // selection ran again at the scale it ended with (sigma_px is the last).
+  std::vector<double> sigma_restarts;
   double final_rms_px = 0;  // over the usable observations
   double heldout_baseline_rms_px = 0, heldout_final_rms_px = 0;
   int heldout_observations = 0;
@@ -51,6 +55,9 @@ struct DiagnosisOptions {
   double min_bic_drop = 10;       // "very strong" evidence on the usual BIC scale
   int max_iterations = 30;        // final fits
   int screen_observations = 5000;  // candidates are fitted on this many fitting observations
+  // Called on the caller's thread as the diagnosis moves on (a stage, an effect named), for
+  // progress output on long runs; may be empty.
+  std::function<void(const std::string&)> progress;
 };
 
 Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt = {});

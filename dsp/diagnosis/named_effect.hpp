@@ -19,6 +19,11 @@ struct NamedEffect {
   double rms_px = 0;    // fitting-set RMS once this effect (and those before it) is in
   double bic_drop = 0;  // how much BIC fell when it was added
   double heldout_drop = 0;  // how much the held-out robust chi-square fell when it was added
+  // The robust chi-square drop on the unseen half of the blocked halves, in time and in angular
+  // rate (the worse direction; NaN where not applicable).
+  double blocked_time_drop = 0, blocked_rate_drop = 0;
+  // Effects the data cannot tell from this one (head to head within the BIC threshold).
+  std::vector<std::string> rivals;
 };
 
 }  // namespace rsd::dsp

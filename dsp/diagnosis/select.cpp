@@ -6,6 +6,7 @@
 
 #include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/fit.hpp"
+#include "dsp/diagnosis/plausibility.hpp"
 #include "dsp/observation/observation_model.hpp"
 
 namespace rsd::dsp {
@@ -45,10 +46,6 @@ std::vector<Effect> applicable_effects(const DiagnosisModel& m) {
     if (e == Effect::GyroBias && !m.has_gyro()) continue;
     if (e == Effect::LeverArm && m.has_gyro()) continue;
     if (e == Effect::GyroScale && !m.has_gyro()) continue;
-    // The principal point is modelled and fitted, but not yet a candidate: against a lever arm
-    // across the optical axis (landmarks) and a mount rotation (both kinds) it explains nearly
-    // the same shift, and the selection does not compare such hypotheses head to head yet.
-    if (e == Effect::PrincipalPoint) continue;
     out.push_back(e);
   }
   return out;
@@ -124,15 +121,20 @@ class Selector {
   // Whether adding an effect (poorer -> richer) holds on the blocked halves in time and, in
   // gyro recordings, on the frames of low and of high angular rate (every effect there shows
   // through the rate: a stand-in for a gyro that clips fits only the fast frames).
-  bool consistent(const State& poorer, const State& richer) const {
-    if (time_halves_.usable() && !(cross_drop(time_halves_, poorer, richer) > 0)) return false;
-    if (rate_halves_.usable() && !(cross_drop(rate_halves_, poorer, richer) > 0)) return false;
-    return true;
+  // The drops (the worse direction of each split; NaN where a split does not apply) go to
+  // `time_drop` and `rate_drop`.
+  bool consistent(const State& poorer, const State& richer, double& time_drop, double& rate_drop) const {
+    time_drop = rate_drop = std::numeric_limits<double>::quiet_NaN();
+    if (time_halves_.usable()) time_drop = cross_drop(time_halves_, poorer, richer);
+    if (rate_halves_.usable()) rate_drop = cross_drop(rate_halves_, poorer, richer);
+    return !(time_drop <= 0) && !(rate_drop <= 0);
   }
 
-  // BIC = robust chi-square + k ln(2N): the flip counts as one parameter.
+  // BIC = robust chi-square + k ln(2N) + the implausibility of the values (plausibility.hpp):
+  // the flip counts as one parameter.
   double bic(const ModelParams& p, const std::vector<Effect>& effects, const std::vector<int>& idx) const {
-    return robust_chi2(m_.residuals(p, idx), sigma_) + k_of({effects, p, 0}) * std::log(2.0 * idx.size());
+    return robust_chi2(m_.residuals(p, idx), sigma_) + k_of({effects, p, 0}) * std::log(2.0 * idx.size()) +
+           implausibility(p, effects);
   }
 
   State initial() const { return {{}, nominal_, bic(nominal_, {}, fit_)}; }
@@ -180,7 +182,9 @@ class Selector {
     const double D = design_effect(m_, richer.params, fit_, sigma_);
     const double pen = std::log(2.0 * fit_.size());
     const double dk = (k_of(richer) - k_of(poorer));
-    return ((poorer.bic - k_of(poorer) * pen) - (richer.bic - k_of(richer) * pen)) / D - dk * pen;
+    const double prior0 = implausibility(poorer.params, poorer.effects), prior1 = implausibility(richer.params, richer.effects);
+    return ((poorer.bic - k_of(poorer) * pen - prior0) - (richer.bic - k_of(richer) * pen - prior1)) / D - dk * pen -
+           (prior1 - prior0);
   }
   static double k_of(const State& s) {
     return static_cast<double>(mask_of(s.effects).count()) + (s.params.flip_readout ? 1 : 0);
@@ -210,18 +214,28 @@ class Selector {
 double projected_drop(const Selector& sel, const State& from, const State& to) {
   const double rho = static_cast<double>(sel.screen_.size()) / static_cast<double>(sel.fit_.size());
   const double k_from = Selector::k_of(from), k_to = Selector::k_of(to);
-  const double chi2_drop = (from.bic - k_from * std::log(2.0 * sel.screen_.size())) -
-                           (to.bic - k_to * std::log(2.0 * sel.screen_.size()));
-  return chi2_drop / rho - (k_to - k_from) * std::log(2.0 * sel.fit_.size());
+  const double prior_from = implausibility(from.params, from.effects), prior_to = implausibility(to.params, to.effects);
+  const double chi2_drop = (from.bic - k_from * std::log(2.0 * sel.screen_.size()) - prior_from) -
+                           (to.bic - k_to * std::log(2.0 * sel.screen_.size()) - prior_to);
+  return chi2_drop / rho - (k_to - k_from) * std::log(2.0 * sel.fit_.size()) - (prior_to - prior_from);
 }
+
+// Hypotheses that explain the same structure (a mount rotation, a principal point and a lever
+// arm across the optical axis in landmarks; a focal length and distortion; a gyro scale and a
+// focal length in matches) are compared head to head: fitted on all fitting observations, the
+// lowest BIC wins, and those within min_bic_drop of it are its rivals, which the data cannot
+// tell from it.
+struct RoundResult {
+  double drop = 0, held_drop = 0;
+  std::vector<Effect> rivals;
+};
 
 // One forward round: every candidate screened on the subsample; those whose projected drop is
 // near the best (near-degenerate hypotheses, e.g. a lever arm along the optical axis and a
 // focal length, which the subsample cannot tell apart) are refitted on all fitting
 // observations and the lowest BIC there wins. Returns false when nothing clears the
 // threshold.
-bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, State& s, double& drop,
-                   double& held_drop) {
+bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, State& s, RoundResult& out) {
   State here = s;
   here.bic = sel.bic(s.params, s.effects, sel.screen_);
   std::vector<std::pair<double, State>> screened;
@@ -236,32 +250,39 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
   const double best_projected = screened.front().first;
   if (best_projected < sel.opt_.min_bic_drop) return false;
   const double margin = 30 + 0.05 * best_projected;
-  State best;
-  bool any = false;
+  std::vector<State> near;
   for (const auto& [d, c] : screened) {
     if (d < best_projected - margin) break;
-    State full = sel.refit_all(c);
-    if (!any || full.bic < best.bic) best = std::move(full), any = true;
+    near.push_back(sel.refit_all(c));
   }
+  const auto best = std::min_element(near.begin(), near.end(), [](const State& a, const State& b) { return a.bic < b.bic; });
+  out.rivals.clear();
+  for (const State& c : near)
+    if (&c != &*best && c.bic - best->bic < sel.opt_.min_bic_drop) out.rivals.push_back(c.effects[s.effects.size()]);
   // The winner by BIC; accepted by the drop with the design effect (which is itself noisy
   // by a few percent, too much to rank near-degenerate candidates by).
-  drop = sel.drop(s, best);
-  if (drop < sel.opt_.min_bic_drop) return false;
+  out.drop = sel.drop(s, *best);
+  if (out.drop < sel.opt_.min_bic_drop) return false;
   // The held-out observations must agree: the effect predicts frames the fit never saw better.
-  held_drop = sel.heldout_drop(s, best);
-  if (!sel.held_.empty() && held_drop <= 0) return false;
-  s = std::move(best);
+  out.held_drop = sel.heldout_drop(s, *best);
+  if (!sel.held_.empty() && out.held_drop <= 0) return false;
+  s = std::move(*best);
   return true;
 }
 
 std::vector<SelectedEffect> forward(const Selector& sel, const std::vector<Effect>& candidates, State& s) {
   std::vector<SelectedEffect> steps;
-  double drop = 0, held_drop = 0;
+  RoundResult r;
   while (true) {
     const size_t before = s.effects.size();
-    if (!forward_round(sel, candidates, s, drop, held_drop)) return steps;
+    if (!forward_round(sel, candidates, s, r)) return steps;
     const double rms = sel.rms(s.params);
-    for (size_t k = before; k < s.effects.size(); ++k) steps.push_back({s.effects[k], rms, drop, held_drop});
+    for (size_t k = before; k < s.effects.size(); ++k) {
+      steps.push_back({s.effects[k], rms, r.drop, r.held_drop, r.rivals});
+      if (sel.opt_.progress)
+        sel.opt_.progress(std::string("named ") + effect_name(s.effects[k]) + " (BIC drop " +
+                          std::to_string(std::lround(r.drop)) + ")");
+    }
   }
 }
 
@@ -298,7 +319,12 @@ void consistency(const Selector& sel, State& s, std::vector<SelectedEffect>& ste
     for (auto it = s.effects.rbegin(); it != s.effects.rend(); ++it) {
       const Effect e = *it;
       const State without = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
-      if (sel.consistent(without, s)) continue;
+      double time_drop = 0, rate_drop = 0;
+      const bool holds = sel.consistent(without, s, time_drop, rate_drop);
+      for (SelectedEffect& st : steps)
+        if (st.effect == e) st.blocked_time_drop = time_drop, st.blocked_rate_drop = rate_drop;
+      if (holds) continue;
+      if (sel.opt_.progress) sel.opt_.progress(std::string("dropped ") + effect_name(e) + ": it does not hold on the blocked halves");
       s = without;
       steps.erase(std::remove_if(steps.begin(), steps.end(), [&](const SelectedEffect& st) { return st.effect == e; }),
                   steps.end());
@@ -317,8 +343,23 @@ Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, c
   State s = sel.initial();
   std::vector<SelectedEffect> steps = forward(sel, applicable_effects(m), s);
   backward(sel, s, steps);
+  if (!opt.blocked_halves) return {steps, s.params};
+  if (opt.progress && !steps.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
   consistency(sel, s, steps);
   return {steps, s.params};
+}
+
+Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
+                                 const std::vector<int>& screen, const ModelParams& nominal, const ModelParams& start,
+                                 double sigma_px, const SelectionOptions& opt, Selection chosen) {
+  const Selector sel(m, fit, held, screen, nominal, start, sigma_px, opt);
+  State s{{}, chosen.params, 0};
+  for (const SelectedEffect& st : chosen.effects) s.effects.push_back(st.effect);  // one step per effect
+  s.bic = sel.bic(s.params, s.effects, fit);
+  if (opt.progress && !chosen.effects.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
+  consistency(sel, s, chosen.effects);
+  chosen.params = s.params;
+  return chosen;
 }
 
 }  // namespace rsd::dsp

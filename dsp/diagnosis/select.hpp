@@ -3,6 +3,8 @@
 // subsample of the fitting observations; only the winner of a round is refitted on them all.
 #pragma once
 
+#include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -24,6 +26,9 @@ struct SelectionOptions {
   double min_bic_drop = 10;
   int max_iterations = 30;         // final fits
   int screen_iterations = 8;       // candidate fits on the subsample
+  std::function<void(const std::string&)> progress;  // an effect named or dropped (may be empty)
+  // Whether select_effects ends with the blocked-halves check (hold_on_blocked_halves).
+  bool blocked_halves = true;
 };
 
 struct SelectedEffect {
@@ -31,6 +36,13 @@ struct SelectedEffect {
   double rms_px;    // fitting-set RMS once it (and those before it) is in
   double bic_drop;  // how much BIC fell when it was added
   double heldout_drop;  // how much the held-out robust chi-square fell (0: nothing held out)
+  // Hypotheses for the same structure that came within min_bic_drop of it, head to head on all
+  // fitting observations: the data cannot tell them from it.
+  std::vector<Effect> rivals;
+  // The robust chi-square drop on the unseen blocked half (the worse direction), in time and in
+  // angular rate (gyro recordings); NaN where not applicable.
+  double blocked_time_drop = std::numeric_limits<double>::quiet_NaN();
+  double blocked_rate_drop = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct Selection {
@@ -46,5 +58,13 @@ Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, c
                          const std::vector<int>& screen,
                          const ModelParams& nominal, const ModelParams& start, double sigma_px,
                          const SelectionOptions& opt);
+
+// The blocked-halves check of a selection made without it (SelectionOptions::blocked_halves
+// false): every named effect must predict the half of the recording it was not fitted on,
+// both ways, in time and (gyro recordings) in angular rate; those that do not are dropped and
+// the rest refitted. The same arguments as the selection had.
+Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
+                                 const std::vector<int>& screen, const ModelParams& nominal, const ModelParams& start,
+                                 double sigma_px, const SelectionOptions& opt, Selection chosen);
 
 }  // namespace rsd::dsp

@@ -19,7 +19,7 @@ add_test(NAME cli_diagnose_e2e_json
                  ${DIAG})
 set_tests_properties(cli_diagnose_e2e_json PROPERTIES FIXTURES_REQUIRED diagnose_e2e_out LABELS e2e)
 add_test(NAME cli_diagnose_e2e_report
-         COMMAND sh -c "r=\"$0/report\"; grep -q 'Verdict: the nominal model does not fit' \"$r/index.md\" && grep -q '| `rolling_shutter` | `line_delay_s` | [0-9.e-]* | [0-9.e-]* | 0 |' \"$r/index.md\" || exit 1; for p in residual-vs-row residual-vs-radius residual-vs-time residual-map; do grep -q \"($p.png)\" \"$r/index.md\" && sh \"$1\" \"$r/$p.png\" 30000 || { echo \"bad $p.png\"; exit 1; }; done"
+         COMMAND sh -c "r=\"$0/report\"; grep -q 'Verdict: the nominal model does not fit' \"$r/index.md\" && grep -q '| `rolling_shutter` | `line_delay_s` | [0-9.e-]* | [0-9.e-]* | 0 |' \"$r/index.md\" || exit 1; for p in residual-vs-row residual-vs-radius residual-vs-time residual-map remainder; do grep -q \"($p.png)\" \"$r/index.md\" && sh \"$1\" \"$r/$p.png\" 30000 || { echo \"bad $p.png\"; exit 1; }; done; grep -q '(effect-rolling_shutter.md)' \"$r/index.md\" && grep -q '## What remains' \"$r/index.md\" && grep -q '| blocked halves in time: chi-square drop on the unseen half (worse direction) | [0-9]' \"$r/effect-rolling_shutter.md\" && grep -q '(effect-rolling_shutter.png)' \"$r/effect-rolling_shutter.md\" && sh \"$1\" \"$r/effect-rolling_shutter.png\" 30000 && test $(ls \"$r\"/effect-*.md | wc -l) -eq 1"
                  ${DIAG} ${CMAKE_CURRENT_SOURCE_DIR}/check_png.sh)
 set_tests_properties(cli_diagnose_e2e_report PROPERTIES FIXTURES_REQUIRED diagnose_e2e_out LABELS e2e)
 

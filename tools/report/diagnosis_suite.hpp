@@ -20,6 +20,10 @@ struct SuiteCase {
   // Physics outside the effect table (parallax, gyro_saturation, clock_jump; empty: none):
   // the diagnosis must report it as a significant remainder and name no effect for it.
   std::string outside;
+  // A rig of its own instead of one-sigma effects: "phone" (matches; everything off at once, at
+  // a real phone's sizes) or "fast" (matches; 3-4 rad/s, a 30 ms readout, 0.3 px noise that the
+  // recording does not state). `effects` then lists what it switches on.
+  std::string preset;
   unsigned seed = 1;
   double duration_s = 0;             // 0: the suite's length
   bool speed = false;                // a speed case: diagnose() must also take < kSpeedLimitS

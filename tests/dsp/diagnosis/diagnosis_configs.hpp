@@ -30,4 +30,11 @@ inline dsp::SimConfig simulation(dsp::ObservationKind kind, unsigned seed, doubl
   return c;
 }
 
+// The small target (small_target) filmed by the VGA camera.
+inline dsp::SimConfig target_simulation(unsigned seed, double duration_s, double noise_px) {
+  dsp::SimConfig c = simulation(dsp::ObservationKind::Landmarks, seed, duration_s, noise_px);
+  small_target(c);
+  return c;
+}
+
 }  // namespace rsd::test

@@ -37,4 +37,11 @@ inline std::string names(const dsp::Diagnosis& d) {
   return s;
 }
 
+// Every observation of a model, in order.
+inline std::vector<int> every_observation(const dsp::DiagnosisModel& m) {
+  std::vector<int> all(m.size());
+  for (int i = 0; i < m.size(); ++i) all[i] = i;
+  return all;
+}
+
 }  // namespace rsd::test

@@ -35,24 +35,14 @@ SimConfig handheld(unsigned seed, double duration_s) {
   return c;
 }
 
-SimConfig target(unsigned seed, double duration_s) {
-  SimConfig c = rsd::test::simulation(ObservationKind::Landmarks, seed, duration_s, kNoise);
-  rsd::test::small_target(c);
-  return c;
-}
-
-std::vector<int> everything(const DiagnosisModel& m) {
-  std::vector<int> all(m.size());
-  for (int i = 0; i < m.size(); ++i) all[i] = i;
-  return all;
-}
+SimConfig target(unsigned seed, double duration_s) { return rsd::test::target_simulation(seed, duration_s, kNoise); }
 
 // RMS displacement (px, per coordinate) the effects cause, on noise-free data.
 double effect_rms(SimConfig c, const ModelParams* p = nullptr) {
   c.noise_px = 0;
   const SimulatedRecording sim = simulate_recording(c);
   const DiagnosisModel m(sim.rec);
-  return robust_stats(m.residuals(p ? *p : nominal_params(sim.rec.nominal), everything(m))).rms_px;
+  return robust_stats(m.residuals(p ? *p : nominal_params(sim.rec.nominal), rsd::test::every_observation(m))).rms_px;
 }
 
 Diagnosis expect_named(const SimConfig& c, const std::string& expected) {

@@ -12,6 +12,7 @@
 #include "dsp/diagnosis/diagnosis.hpp"
 #include "dsp/sim/recording_simulation.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
+#include "tests/dsp/diagnosis/diagnosis_lookup.hpp"
 
 using namespace rsd::dsp;
 
@@ -32,24 +33,14 @@ SimConfig phone(unsigned seed, double duration_s = 10) {
   return c;
 }
 
-SimConfig target(unsigned seed, double duration_s = 10) {
-  SimConfig c = rsd::test::simulation(ObservationKind::Landmarks, seed, duration_s, 0.5);
-  rsd::test::small_target(c);
-  return c;
-}
-
-std::vector<int> everything(const DiagnosisModel& m) {
-  std::vector<int> all(m.size());
-  for (int i = 0; i < m.size(); ++i) all[i] = i;
-  return all;
-}
+SimConfig target(unsigned seed, double duration_s = 10) { return rsd::test::target_simulation(seed, duration_s, 0.5); }
 
 // The remainder of the nominal model (the truth: no table effect is switched on).
 Remainder at_truth(const SimulatedRecording& sim) {
   const DiagnosisModel m(sim.rec);
   const ModelParams p = nominal_params(sim.rec.nominal);
   const double floor = *sim.rec.noise_px * m.noise_gain();
-  const Remainder r = assess_remainder(m, p, everything(m), floor, floor);
+  const Remainder r = assess_remainder(m, p, rsd::test::every_observation(m), floor, floor);
   std::printf("rms %.3f expected %.3f stated %.3f | spatial ratio %.3f z %.1f | temporal ratio %.3f z %.1f | %s\n",
               r.rms_px, r.expected_rms_px, r.stated_noise_px, r.spatial_ratio, r.spatial_z, r.temporal_ratio,
               r.temporal_z, r.summary.c_str());
@@ -116,4 +107,21 @@ TEST(Remainder, SmoothFieldAcrossTheImageIsSpatial) {
   EXPECT_TRUE(r.significant);
   EXPECT_TRUE(r.spatial);
   EXPECT_FALSE(r.temporal);
+}
+
+// A recording that understates its noise (0.3 px stated, 1 px real): BIC at the stated scale
+// would take noise for effects. The selection ends at a scale far from the one it started from
+// and runs again at the data's own; nothing is named, and the remainder is noise.
+TEST(Remainder, UnderstatedNoiseRestartsTheSelectionAtTheDataScale) {
+  SimConfig noisy = target(9, 6);
+  noisy.noise_px = 1.0;
+  SimulatedRecording sim = simulate_recording(noisy);
+  sim.rec.noise_px = 0.3;
+  const Diagnosis d = diagnose(sim.rec);
+  std::printf("sigma %.3f px after %zu restart(s); named %zu\n", d.sigma_px, d.sigma_restarts.size(), d.effects.size());
+  ASSERT_FALSE(d.sigma_restarts.empty());
+  EXPECT_NEAR(d.sigma_restarts.front(), 0.3, 1e-12);
+  EXPECT_NEAR(d.sigma_px, 1.0, 0.05);
+  EXPECT_TRUE(d.effects.empty());
+  EXPECT_FALSE(d.remainder.significant);
 }

@@ -1,0 +1,27 @@
+// What a real rig can plausibly have, as a penalty on a hypothesis (in chi-square units, added
+// to its BIC): an effect whose fitted value lies beyond what the physics allows is more likely
+// standing in for something else. Each bound is soft: every `width` beyond it costs one
+// sigma squared.
+//   - focal_length: pixels are square to within 1% (fx/fy; width 0.2%). A phone's 6%
+//     anisotropy stood in for a camera turned on its mount.
+//   - gyro_bias: a MEMS gyro's bias stays within 0.1 rad/s (about 6 deg/s; width 0.02 rad/s).
+//     A bias of 66-86 mrad/s stood in for parallax.
+//   - gyro_scale: a scale factor within 5% of one per axis (width 1%).
+//   - lever_arm: within 0.5 m of the tracked origin (width 0.1 m).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "dsp/diagnosis/model.hpp"
+
+namespace rsd::dsp {
+
+enum class Effect : int;
+
+// The penalty of the effects' values in `p` (0 when all are plausible).
+double implausibility(const ModelParams& p, const std::vector<Effect>& effects);
+// Why, in words, for an effect whose value is implausible ("" when it is plausible).
+std::string implausible_because(const ModelParams& p, Effect e);
+
+}  // namespace rsd::dsp
