@@ -18,6 +18,7 @@
 #include <iterator>
 
 #include "daemon/service.hpp"
+#include "rsd/version.hpp"
 #include "drivers/recording_replay_source.hpp"
 #include "drivers/replay_source.hpp"
 #include "formats/recording_v1.hpp"
@@ -133,7 +134,13 @@ int main(int argc, char** argv) {
                  "replays: also write every rectified frame as OUT/<frame>.png (frame number zero-padded to 6 digits)");
   app.add_option("--output-video", cl.output.video, "replays: also write the rectified frames as a video (.avi, .mp4, .mov, .mkv)");
   app.add_flag("--progress", progress, "replay: show the progress bar even when stderr is not a terminal");
-  CLI11_PARSE(app, argc, argv);
+  app.set_version_flag("--version", std::string("rsd ") + rsd::kVersion);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version exit 0; a bad argument 2, as in every rsd program.
+    return app.exit(e) == 0 ? 0 : 2;
+  }
   limits.status_line = !quiet;
   limits.progress = !quiet && (progress || isatty(STDERR_FILENO));
   if (print_default) {

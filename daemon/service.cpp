@@ -279,7 +279,9 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
       t_health = now;
     }
   }
-  sd.stopping();
+  // A restart for a changed configuration is a reload to systemd (RELOADING=1 went out, READY=1
+  // follows from the restarted service): STOPPING=1 would start the unit's stop timeout.
+  if (!flags.reload.load() || flags.stop.load()) sd.stopping();
   s.pipeline->stop();  // flushes what is in flight
   s.active().stop();
   s.velocity_in->stop();

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "tools/common/cli_util.hpp"
 #include "dsp/geometry/rs_backprojection.hpp"
 #include "dsp/geometry/rs_projection.hpp"
 
@@ -73,7 +74,7 @@ int main(int argc, char** argv) {
   app.add_option("--depth", o.depth, "distance of the checkerboard plane, metres")->check(CLI::PositiveNumber);
   app.add_option("--rev-per-s", o.rev_per_s, "spin about the optical axis, revolutions per second");
   app.add_option("--v", o.v, "camera-frame velocity vx,vy,vz of the scene, m/s")->delimiter(',')->expected(3);
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = rsd::tools::parse_command_line(app, argc, argv)) return *rc;
 
   const CameraModel cam = CameraModel::from_hfov(640, 480, 40.0 * M_PI / 180.0);
   const RowTiming timing = RowTiming::full_frame(cam.height, o.fps);

@@ -19,6 +19,7 @@
 #include <map>
 #include <thread>
 
+#include "tools/common/cli_util.hpp"
 #include "formats/lcm_log.hpp"
 #include "formats/image_t_codec.hpp"
 #include "drivers/replay_source.hpp"
@@ -152,7 +153,7 @@ int main(int argc, char** argv) {
   app.add_flag("--info", o.info, "describe the log (channels, frames, rectified, skipped) and exit");
   app.add_flag("--quiet,-q", o.quiet, "no progress or summary");
   app.add_flag("--progress", o.progress, "show progress even when stderr is not a terminal");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto rc = rsd::tools::parse_command_line(app, argc, argv)) return *rc;
   if (!parse_speed(o.speed_text, o.speed)) {
     std::fprintf(stderr, "rsd-replay: --speed: expected a positive factor or fast, not '%s'\n", o.speed_text.c_str());
     return 2;

@@ -20,6 +20,7 @@ PACKAGES=(
   default-jdk-headless libjchart2d-java  # Java LCM types for lcm-spy
   libopencv-dev libopencv-contrib-dev    # AprilTag codes (aruco), feature tracking, reference remap
   libsystemd-dev systemd python3         # sd_notify; unit verification and notify tests
+  help2man dpkg-dev procps               # man pages from --help; the Debian package (cpack, dpkg-shlibdeps); kill
   libcamera-dev                          # the libcamera driver
   libaravis-dev aravis-tools libusb-1.0-0-dev iproute2 util-linux  # Aravis driver; fake GigE camera tests in a private netns
 )

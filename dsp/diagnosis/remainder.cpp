@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -39,11 +40,23 @@ std::vector<Frame> frames_of(const DiagnosisModel& m, const std::vector<int>& id
     f.rank = m.frame_rank(idx[k]);
     // Where the model puts it: neighbours chosen by the observed (noisy) pixels would favour,
     // among a grid's equidistant neighbours, the one whose noise differs most.
-    if (static_cast<int>(f.r.size()) < kMaxPerFrame) f.px.push_back(m.observed(idx[k]) - r[k]), f.r.push_back(r[k]);
+    f.px.push_back(m.observed(idx[k]) - r[k]), f.r.push_back(r[k]);
   }
   std::vector<Frame> out;
-  for (auto& [rank, f] : by_rank)
-    if (f.r.size() >= 3) out.push_back(std::move(f));
+  for (auto& [rank, f] : by_rank) {
+    if (f.r.size() < 3) continue;
+    // A frame with many observations keeps an even spread of them (features come in the
+    // order they were detected, often row by row).
+    if (f.r.size() > static_cast<size_t>(kMaxPerFrame)) {
+      Frame kept{f.rank, {}, {}};
+      for (size_t j = 0; j < static_cast<size_t>(kMaxPerFrame); ++j) {
+        const size_t at = j * f.r.size() / kMaxPerFrame;
+        kept.px.push_back(f.px[at]), kept.r.push_back(f.r[at]);
+      }
+      f = std::move(kept);
+    }
+    out.push_back(std::move(f));
+  }
   return out;
 }
 

@@ -1,5 +1,9 @@
 #include "tools/common/cli_util.hpp"
 
+#include <filesystem>
+
+#include "rsd/version.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -101,6 +105,9 @@ CLI::Validator file_extension(const std::vector<std::string>& extensions) {
 // ---------------------------------------------------------------- errors and exit status
 
 std::optional<int> parse_command_line(CLI::App& app, int argc, char** argv) {
+  // --version: "<program> <version>", the program as it was called (rsd-diagnose, ...).
+  const std::string program = argc > 0 ? std::filesystem::path(argv[0]).filename().string() : app.get_name();
+  app.set_version_flag("--version", program + " " + rsd::kVersion);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -55,7 +55,8 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Parses the command line. Returns the exit status when the tool should stop now: 0
+// Parses the command line (with --version added: the program's name and rsd's version).
+// Returns the exit status when the tool should stop now: 0
 // after --help, 2 on a parse error (CLI11 has printed the message); nullopt to go on.
 std::optional<int> parse_command_line(CLI::App& app, int argc, char** argv);
 
