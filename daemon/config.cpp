@@ -1,5 +1,7 @@
 #include "daemon/config.hpp"
 
+#include <sched.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -78,10 +80,22 @@ void visit_lcm(formats::ConfigSection& c, Config& cfg) {
   c.value("health_channel", cfg.channels.health);
 }
 
+void visit_realtime(formats::ConfigSection& c, RealtimeConfig& r) {
+  c.value("enabled", r.enabled, "SCHED_FIFO capture and locked memory (rsd --realtime, as the service unit runs it)");
+  c.value("capture_priority", r.capture_priority, "SCHED_FIFO priority of the capture thread");
+  c.check(r.capture_priority >= 1 && r.capture_priority <= 99, "capture_priority", "must be 1..99");
+  c.value("lock_memory", r.lock_memory, "mlockall once start-up has allocated the frame buffers");
+  for (auto [key, cpu] : {std::pair{"capture_cpu", &r.capture_cpu}, {"rectify_cpu", &r.rectify_cpu}, {"publish_cpu", &r.publish_cpu}}) {
+    c.value(key, *cpu, key == std::string("capture_cpu") ? "pin a pipeline thread to a CPU (-1: any), enabled or not" : nullptr);
+    c.check(*cpu >= -1 && *cpu < CPU_SETSIZE, key, "must be -1 (any) or a CPU number");
+  }
+}
+
 // The whole file, section by section: read or printed by the same visit.
 void visit_config(formats::ConfigSection& c, Config& cfg) {
   c.section("source", [&](formats::ConfigSection& s) { visit_source(s, cfg.source); });
   c.section("pipeline", [&](formats::ConfigSection& s) { visit_pipeline(s, cfg.pipeline); });
+  c.section("realtime", [&](formats::ConfigSection& s) { visit_realtime(s, cfg.pipeline.realtime); });
   c.section("rectification", [&](formats::ConfigSection& s) { visit_rectification(s, cfg.rectify); });
   c.section("velocity", [&](formats::ConfigSection& s) { visit_velocity(s, cfg); });
   c.section("lcm", [&](formats::ConfigSection& s) { visit_lcm(s, cfg); });

@@ -36,7 +36,7 @@ void on_signal(int sig) {
 // What the command line says beyond the configuration.
 struct CommandLine {
   std::string config_file, calibration_file, record_file, replay, speed;
-  bool loop = false;
+  bool loop = false, realtime = false;
   rsd::daemon::FrameFilesConfig output;
 };
 
@@ -99,6 +99,7 @@ bool make_config(const CommandLine& cl, rsd::daemon::Config& out) {
   if (!apply_replay_options(cfg, cl)) return false;
   use_recording_nominal(cfg);
   cfg.record_file = cl.record_file;
+  if (cl.realtime) cfg.pipeline.realtime.enabled = true;
   out = std::move(cfg);
   return true;
 }
@@ -121,6 +122,10 @@ int main(int argc, char** argv) {
   app.add_flag("--print-default-config", print_default, "print the default configuration and exit");
   app.add_option("--frames", limits.max_frames, "stop after publishing this many frames (0: run until stopped)");
   app.add_option("--duration", limits.max_seconds, "stop after this many seconds (0: run until stopped)");
+  app.add_flag("--realtime", cl.realtime,
+               "the capture thread at SCHED_FIFO (realtime.capture_priority) and memory locked after start-up\n"
+               "(realtime.lock_memory), when permitted; a warning and normal scheduling when not. The service unit\n"
+               "runs rsd with it and grants exactly that (CAP_SYS_NICE, CAP_IPC_LOCK)");
   app.add_flag("--quiet,-q", quiet, "no live status line, progress bar or closing summary on stderr");
   app.add_option("--record", cl.record_file, "record raw frames (with per-row timing), velocity and outputs to this LCM log");
   app.add_option("--replay", cl.replay,

@@ -1,5 +1,7 @@
 #include "daemon/pipeline.hpp"
 
+#include <cstdio>
+
 #include "drivers/monotonic_clock.hpp"
 
 namespace rsd::daemon {
@@ -37,9 +39,27 @@ void Pipeline::start() {
   camera_lost_ = end_of_stream_ = finished_ = false;
   capture_done_ = rectify_done_ = false;
   running_ = true;
-  capture_ = std::thread([this] { capture_loop(); });
-  rectify_ = std::thread([this] { rectify_loop(); });
-  publish_ = std::thread([this] { publish_loop(); });
+  const RealtimeConfig& rt = cfg_.realtime;
+  capture_ = std::thread([this, &rt] {
+    schedule("capture", rt.enabled ? rt.capture_priority : 0, rt.capture_cpu);
+    capture_loop();
+  });
+  rectify_ = std::thread([this, &rt] {
+    schedule("rectify", 0, rt.rectify_cpu);
+    rectify_loop();
+  });
+  publish_ = std::thread([this, &rt] {
+    schedule("publish", 0, rt.publish_cpu);
+    publish_loop();
+  });
+}
+
+// A thread's scheduling, once at its start (never on the hot path); what was not permitted is
+// said once per process, and the thread runs on as it was.
+void Pipeline::schedule(const char* thread, int priority, int cpu) {
+  static std::atomic<bool> warned{false};
+  const std::string why = make_thread_realtime(thread, priority, cpu);
+  if (!why.empty() && !warned.exchange(true)) std::fprintf(stderr, "rsd: warning: %s\n", why.c_str());
 }
 
 void Pipeline::stop() {

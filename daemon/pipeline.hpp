@@ -16,6 +16,7 @@
 #include "daemon/frame_rectifier.hpp"
 #include "daemon/lcm_publisher.hpp"
 #include "daemon/latency_stats.hpp"
+#include "daemon/realtime.hpp"
 #include "daemon/velocity_buffer.hpp"
 #include "drivers/camera_source.hpp"
 
@@ -31,6 +32,7 @@ struct PipelineConfig {
   // reproducible). A live camera keeps the default: it must never wait.
   bool lossless = false;
   std::chrono::milliseconds capture_timeout{200};
+  RealtimeConfig realtime;  // the threads' scheduling and CPUs (daemon/realtime.hpp)
 };
 
 struct PipelineStats {
@@ -80,6 +82,7 @@ class Pipeline {
     int raw_slot = -1;  // with publish_raw: the raw frame travelling with this one
   };
   void capture_loop();
+  static void schedule(const char* thread, int priority, int cpu);
   void rectify_loop();
   void publish_loop();
   uint32_t raw_slot_for_capture();

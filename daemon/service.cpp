@@ -236,6 +236,9 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   if (!open_with_backoff(s.active(), flags, sd, deadline)) return;
   s.wire();
   s.start_pipeline();
+  // Start-up has allocated what the hot path uses: lock it in memory, when asked and permitted.
+  if (const RealtimeConfig& rt = cfg.pipeline.realtime; rt.enabled && rt.lock_memory)
+    if (const std::string why = lock_memory(); !why.empty()) std::fprintf(stderr, "rsd: warning: %s\n", why.c_str());
   sd.ready();
   const auto t_start = Clock::now();
   auto t_health = t_start, t_progress = t_start;

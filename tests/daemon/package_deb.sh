@@ -4,7 +4,8 @@
 # conffile, man pages, the LCM type jar, rsd-spy, docs; no test binaries), the conffile mark,
 # the installed programs' --version, the installed configuration through the installed rsd's
 # --check-config, and systemd-analyze verify of the installed units against that root (it
-# exits 0 even on bad values, so any output at all is a failure).
+# exits 0 even on bad values, so any output at all is a failure), and their exposure in
+# systemd-analyze security --offline=true: at most 2.0 (--threshold=20) for each.
 set -eu
 build=$(cd "$1" && pwd); work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 fail() { echo "package: $*"; exit 1; }
@@ -43,4 +44,9 @@ verify() {
 verify /usr/lib/systemd/system/rsd.service
 cp "$root/usr/lib/systemd/system/rsd@.service" "$root/usr/lib/systemd/system/rsd@cam0.service"
 verify /usr/lib/systemd/system/rsd@cam0.service
+for unit in rsd.service rsd@cam0.service; do
+  report=$(systemd-analyze security --offline=true --threshold=20 --root="$root" "/usr/lib/systemd/system/$unit" 2>&1) ||
+    { echo "$report" | grep -E '✗|Overall'; fail "$unit is exposed above 2.0"; }
+  echo "$report" | grep 'Overall exposure'
+done
 echo "package verified: $(wc -l < "$work/list") paths"
