@@ -18,19 +18,19 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 // Opens the camera, retrying with exponential backoff (0.5 s .. 8 s) until it answers or
-// the service is asked to stop.
-bool open_with_backoff(drivers::CameraSource& src, StopFlags& flags, SystemdNotify& sd, Clock::time_point deadline) {
+// the service is asked to stop (or its run ends). Returns "" or the last error.
+std::string open_with_backoff(drivers::CameraSource& src, StopFlags& flags, SystemdNotify& sd, Clock::time_point deadline) {
   double backoff = 0.5;
   for (;;) {
     try {
       src.open();
-      return true;
+      return "";
     } catch (const drivers::CameraError& e) {
       std::fprintf(stderr, "rsd: %s: %s; retrying in %.1f s\n", src.name().c_str(), e.what(), backoff);
       sd.status(std::string("no camera: ") + e.what());
       const auto until = Clock::now() + std::chrono::duration<double>(backoff);
       while (Clock::now() < until)
-        if (flags.stop.load() || Clock::now() >= deadline) return false;
+        if (flags.stop.load() || Clock::now() >= deadline) return e.what();
         else std::this_thread::sleep_for(std::chrono::milliseconds(50));
       backoff = std::min(backoff * 2, 8.0);
     }
@@ -233,7 +233,8 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   const auto deadline = limits.max_seconds > 0
                             ? Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limits.max_seconds))
                             : Clock::time_point::max();
-  if (!open_with_backoff(s.active(), flags, sd, deadline)) return;
+  if (const std::string why = open_with_backoff(s.active(), flags, sd, deadline); !why.empty())
+    throw std::runtime_error("no frame ever arrived: " + s.active().name() + " never opened (" + why + ")");
   s.wire();
   s.start_pipeline();
   // Start-up has allocated what the hot path uses: lock it in memory, when asked and permitted.
@@ -274,7 +275,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
       s.drops_before += s.pipeline->stats().drops.load();
       s.pub->health().source_state = "reconnecting";
       s.pub->publish_health();
-      if (!open_with_backoff(s.active(), flags, sd, deadline)) break;
+      if (!open_with_backoff(s.active(), flags, sd, deadline).empty()) break;
       s.start_pipeline();
     }
     if (now - t_health >= std::chrono::seconds(1)) {
@@ -319,6 +320,12 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
                    s.recorder->path().c_str());
   }
   if (summary) *summary = out;
+  // A run with nothing to show ends as a failure, whatever stopped it (a camera that opened
+  // and never delivered, a log without frames).
+  const uint64_t frames_in = s.in_before + s.pipeline->stats().frames_in.load();
+  if (frames_in == 0 && !flags.reload.load())
+    throw std::runtime_error("no frame ever arrived from " + s.active().name() + " in " +
+                             std::to_string(static_cast<int>(std::lround(seconds))) + " s");
 }
 
 }  // namespace rsd::daemon

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <thread>
 
 #include "daemon/service.hpp"
 #include "drivers/sim_source.hpp"
@@ -63,4 +64,45 @@ TEST(ServiceReconnect, LostCameraIsRetriedWithBackoffAndResumes) {
   EXPECT_GE(summary.frames_out, 60u);          // it came back and went on
   EXPECT_GE(secs, 0.5 + 1.0);                  // two refused opens: backoff 0.5 s, then 1 s
   EXPECT_LT(secs, 20.0);
+}
+
+namespace {
+
+// A camera that opens and then never delivers a frame.
+class Silent final : public drivers::CameraSource {
+ public:
+  std::string name() const override { return "silent-test"; }
+  void open() override {}
+  drivers::FrameFormat format() const override { return {160, 120, dsp::PixelFormat::Mono8}; }
+  dsp::RowTiming timing() const override {
+    dsp::RowTiming t;
+    t.height = 120;
+    t.line_delay_s = 1e-4;
+    return t;
+  }
+  void start() override {}
+  drivers::CaptureStatus capture(const dsp::ImageView&, drivers::FrameMeta&, std::chrono::milliseconds timeout) override {
+    std::this_thread::sleep_for(std::min(timeout, std::chrono::milliseconds(20)));
+    return drivers::CaptureStatus::Timeout;
+  }
+  void stop() override {}
+};
+
+}  // namespace
+
+// A run in which no frame ever arrived ends as a failure that says so, whether the camera never
+// opened or opened and stayed silent.
+TEST(ServiceReconnect, NoFrameEverIsAFailureThatSaysSo) {
+  daemon::Config cfg;
+  cfg.source.settings_of<drivers::SimSourceConfig>("sim").camera = dsp::CameraModel::from_hfov(160, 120, 1.0);
+  daemon::StopFlags flags;
+  daemon::RunLimits limits;
+  limits.max_seconds = 0.6;
+  limits.status_line = false;
+  try {
+    daemon::run_service(cfg, flags, limits, [](const daemon::Config&) { return std::make_unique<Silent>(); });
+    ADD_FAILURE() << "a silent camera's run ended as a success";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no frame ever arrived from silent-test"), std::string::npos) << e.what();
+  }
 }
