@@ -27,6 +27,8 @@ void visit_pipeline(formats::ConfigSection& c, PipelineConfig& p) {
   c.check(p.queue_depth >= 1 && p.queue_depth <= 64, "queue_depth", "must be 1..64");
   c.check(p.raw_slots >= p.queue_depth + 2, "raw_slots", "must be at least queue_depth + 2");
   c.check(p.out_slots >= p.queue_depth + 2, "out_slots", "must be at least queue_depth + 2");
+  c.check(p.raw_slots <= 64, "raw_slots", "must be at most 64 (each is a frame buffer allocated at start)");
+  c.check(p.out_slots <= 64, "out_slots", "must be at most 64 (each is a frame buffer allocated at start)");
   c.value("publish_raw", p.publish_raw);
 }
 

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "drivers/driver_registry.hpp"
+#include "drivers/recording_replay_source.hpp"
 #include "drivers/replay_source.hpp"
 #include "formats/intrinsics_file.hpp"
 
@@ -26,7 +27,12 @@ void read_intrinsics(formats::YamlMap& m, SourceConfig& s) {
   s.camera_origin = "source.intrinsics_file";
   std::filesystem::path file = m.text("intrinsics_file", "");
   if (file.is_relative()) file = std::filesystem::path(m.file()).parent_path() / file;
-  const formats::Intrinsics in = formats::load_intrinsics(file.string(), m.text("intrinsics_camera", ""));
+  formats::Intrinsics in;
+  try {
+    in = formats::load_intrinsics(file.string(), m.text("intrinsics_camera", ""));
+  } catch (const std::exception& e) {
+    m.fail("intrinsics_file", std::string("cannot be used: ") + e.what());
+  }
   s.camera = in.cam;
   if (in.line_delay_s)  // a calibrated line delay beats "the readout fills the frame"
     for (const drivers::Driver& d : drivers::all_drivers()) d.use_row_timing(s.settings[d.name], *in.line_delay_s, std::nullopt, false);
@@ -68,11 +74,36 @@ void visit_source(formats::ConfigSection& c, SourceConfig& s) {
     formats::YamlMap& m = reader->map();
     std::filesystem::path file = m.text("calibration_file", "");
     if (file.is_relative()) file = std::filesystem::path(m.file()).parent_path() / file;
-    use_calibration(s, formats::read_calibration(file.string()));
+    formats::Calibration cal;
+    try {
+      cal = formats::read_calibration(file.string());
+    } catch (const std::exception& e) {
+      m.fail("calibration_file", std::string("cannot be used: ") + e.what());
+    }
+    use_calibration(s, std::move(cal));
   }
   if (!driver) return;
-  if (s.driver == "replay")
-    c.check(!s.settings_of<drivers::ReplayConfig>("replay").file.empty(), "driver", "'replay' needs replay.file: the LCM log to play");
+  if (s.driver == "replay") {
+    const std::string& log = s.settings_of<drivers::ReplayConfig>("replay").file;
+    c.check(!log.empty(), "driver", "'replay' needs replay.file: the LCM log to play");
+    c.check(log.empty() || std::filesystem::is_regular_file(log), "driver",
+            "'replay' plays replay.file '" + log + "', which does not exist (or is not a file)");
+  }
+  if (s.driver == "recording") {
+    const std::string& dir = s.settings_of<drivers::RecordingReplayConfig>("recording").dir;
+    c.check(!dir.empty(), "driver", "'recording' needs recording.dir: the images recording to play");
+    c.check(dir.empty() || std::filesystem::is_regular_file(std::filesystem::path(dir) / "recording.yaml"), "driver",
+            "'recording' plays recording.dir '" + dir + "', which holds no recording.yaml");
+  }
+  // Intrinsics for another frame size than the section asks the camera for: refused now, not
+  // when the camera first delivers.
+  const char* intrinsics_key = s.calibration ? "calibration_file" : s.camera_origin == "source.intrinsics_file" ? "intrinsics_file" : "camera";
+  if (s.camera)
+    if (const auto size = driver->configured_size(s.settings.at(s.driver)))
+      c.check(s.camera->width == size->first && s.camera->height == size->second, intrinsics_key,
+              s.camera_origin + " gives intrinsics for " + std::to_string(s.camera->width) + "x" +
+                  std::to_string(s.camera->height) + ", but source." + s.driver + " asks the camera for " +
+                  std::to_string(size->first) + "x" + std::to_string(size->second));
   c.check(!driver->real_camera || s.camera.has_value(), "driver",
           "'" + s.driver + "' needs the camera's intrinsics: add source.camera {width, height, fx, fy, cx, cy, distortion}, "
           "source.intrinsics_file (Kalibr camchain or ROS camera_info) or source.calibration_file");

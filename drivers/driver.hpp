@@ -12,6 +12,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "drivers/camera_source.hpp"
 #include "dsp/geometry/camera_model.hpp"
@@ -19,6 +20,11 @@
 #include "formats/config_section.hpp"
 
 namespace rsd::drivers {
+
+// What a driver section may ask for: an image side, a frame rate, an exposure, buffers.
+inline constexpr int kMaxSide = 16384;
+inline constexpr double kMaxRateHz = 10000, kMaxExposureS = 10;
+inline constexpr int kMaxBuffers = 64;
 
 struct Driver {
   std::string name;
@@ -40,6 +46,11 @@ struct Driver {
   // The motion sensor's calibrated clock offset (t_imu = t_cam + offset), for sources that hand
   // over recorded motion ahead of the frames that need it.
   std::function<void(std::any&, double offset_s)> use_clock_offset = [](std::any&, double) {};
+  // The frame size its section asks the camera for (nullopt: the camera's own, or unknown until
+  // it opens), so that intrinsics for another size are refused before it runs.
+  std::function<std::optional<std::pair<int, int>>(const std::any&)> configured_size = [](const std::any&) {
+    return std::optional<std::pair<int, int>>();
+  };
 };
 
 // A driver whose settings are `Config` and whose source is `Source(const Config&)`.
@@ -52,6 +63,17 @@ Driver make_driver(std::string name, std::string summary, bool real_camera, void
   d.defaults = [] { return std::any(Config{}); };
   d.visit = [visit](formats::ConfigSection& s, std::any& c) { visit(s, std::any_cast<Config&>(c)); };
   d.make = [](const std::any& c) -> std::unique_ptr<CameraSource> { return std::make_unique<Source>(std::any_cast<const Config&>(c)); };
+  if constexpr (requires(Config x) {
+                  x.width = 0;
+                  x.height = 0;
+                }) {
+    if (real_camera)
+      d.configured_size = [](const std::any& c) -> std::optional<std::pair<int, int>> {
+        const auto& x = std::any_cast<const Config&>(c);
+        if (x.width > 0 && x.height > 0) return std::pair<int, int>(x.width, x.height);
+        return std::nullopt;
+      };
+  }
   if constexpr (requires(Config x) {
                   x.line_delay_s = 0.0;
                   x.readout = dsp::Readout::TopToBottom;

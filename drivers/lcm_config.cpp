@@ -11,9 +11,9 @@ void visit_config(formats::ConfigSection& c, LcmSourceConfig& l) {
   c.value("channel", l.channel);
   c.value("velocity_channel", l.velocity_channel);
   c.value("open_timeout_s", l.open_timeout_s, "wait this long for the first frame, then retry with backoff");
-  c.check(l.open_timeout_s > 0, "open_timeout_s", "must be positive");
+  c.check(l.open_timeout_s > 0 && l.open_timeout_s <= 3600, "open_timeout_s", "must be positive, at most 3600 s");
   c.value("fps", l.fallback_fps, "frame rate when the frames do not carry their timing");
-  c.check(l.fallback_fps > 0, "fps", "must be positive");
+  c.check(l.fallback_fps > 0 && l.fallback_fps <= kMaxRateHz, "fps", "must be positive, at most 10000");
 }
 
 Driver lcm_driver() {

@@ -6,14 +6,18 @@ namespace rsd::drivers {
 void visit_config(formats::ConfigSection& c, LibcameraConfig& l) {
   c.value("camera_id", l.camera_id, "\"\": the first camera");
   c.value("width", l.width);
+  c.check(l.width >= 1 && l.width <= kMaxSide, "width", "must be 1.." + std::to_string(kMaxSide));
   c.value("height", l.height);
+  c.check(l.height >= 1 && l.height <= kMaxSide, "height", "must be 1.." + std::to_string(kMaxSide));
   c.choice("format", l.format, {{"mono8", dsp::PixelFormat::Mono8}, {"rgb8", dsp::PixelFormat::Rgb8}});
   c.value("role", l.role);
   c.value("fps", l.fps);
-  c.check(l.fps > 0, "fps", "must be positive");
+  c.check(l.fps > 0 && l.fps <= kMaxRateHz, "fps", "must be positive, at most 10000");
   c.value("line_delay_s", l.line_delay_s);
+  c.check(l.line_delay_s >= 0 && l.line_delay_s < 1, "line_delay_s", "must be 0 (the readout fills the frame period) .. 1 s");
   c.choice("readout", l.readout, {{"top_to_bottom", dsp::Readout::TopToBottom}, {"bottom_to_top", dsp::Readout::BottomToTop}});
   c.value("exposure_s", l.exposure_s);
+  c.check(l.exposure_s >= 0 && l.exposure_s <= kMaxExposureS, "exposure_s", "must be 0 (the driver's) .. 10 s");
 }
 
 Driver libcamera_driver() {

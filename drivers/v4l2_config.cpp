@@ -6,14 +6,19 @@ namespace rsd::drivers {
 void visit_config(formats::ConfigSection& c, V4l2Config& v) {
   c.value("device", v.device);
   c.value("width", v.width);
+  c.check(v.width >= 1 && v.width <= kMaxSide, "width", "must be 1.." + std::to_string(kMaxSide));
   c.value("height", v.height);
+  c.check(v.height >= 1 && v.height <= kMaxSide, "height", "must be 1.." + std::to_string(kMaxSide));
   c.value("pixel_format", v.pixel_format, "GREY, Y16, YUYV, RGB24");
   c.value("fps", v.fps);
-  c.check(v.fps > 0, "fps", "must be positive");
+  c.check(v.fps > 0 && v.fps <= kMaxRateHz, "fps", "must be positive, at most 10000");
   c.value("buffers", v.buffers);
+  c.check(v.buffers >= 2 && v.buffers <= static_cast<unsigned>(kMaxBuffers), "buffers", "must be 2..64");
   c.value("line_delay_s", v.line_delay_s);
+  c.check(v.line_delay_s >= 0 && v.line_delay_s < 1, "line_delay_s", "must be 0 (the readout fills the frame period) .. 1 s");
   c.choice("readout", v.readout, {{"top_to_bottom", dsp::Readout::TopToBottom}, {"bottom_to_top", dsp::Readout::BottomToTop}});
   c.value("exposure_s", v.exposure_s, "0: ask the driver");
+  c.check(v.exposure_s >= 0 && v.exposure_s <= kMaxExposureS, "exposure_s", "must be 0 (the driver's) .. 10 s");
 }
 
 Driver v4l2_driver() {
