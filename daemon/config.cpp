@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "daemon/log.hpp"
 #include "drivers/driver_registry.hpp"
 #include "formats/config_section.hpp"
 #include "formats/yaml_map.hpp"
@@ -93,6 +94,21 @@ void visit_realtime(formats::ConfigSection& c, RealtimeConfig& r) {
   }
 }
 
+void visit_health(formats::ConfigSection& c, HealthConfig& h) {
+  c.value("stall_after_s", h.stall_after_s, "no frame for this long: the source is stalled (0: five frame periods, at least 1 s)");
+  c.check(std::isfinite(h.stall_after_s) && h.stall_after_s >= 0 && h.stall_after_s <= 3600, "stall_after_s", "must be 0..3600 s");
+  c.value("low_fps_fraction", h.low_fps_fraction, "warn when a camera delivers below this fraction of its configured rate ...");
+  c.check(h.low_fps_fraction >= 0 && h.low_fps_fraction <= 1, "low_fps_fraction", "must be 0..1 (0: never warn)");
+  c.value("low_fps_after_s", h.low_fps_after_s, "... for this long");
+  c.check(std::isfinite(h.low_fps_after_s) && h.low_fps_after_s >= 1 && h.low_fps_after_s <= 3600, "low_fps_after_s",
+          "must be 1..3600 s");
+}
+
+void visit_log(formats::ConfigSection& c, std::string& level) {
+  c.value("level", level, "trace, debug, info, warning, error, critical or off (rsd --log-level overrides)");
+  c.check(parse_log_level(level).has_value(), "level", "must be trace, debug, info, warning, error, critical or off");
+}
+
 // The whole file, section by section: read or printed by the same visit.
 void visit_config(formats::ConfigSection& c, Config& cfg) {
   c.section("source", [&](formats::ConfigSection& s) { visit_source(s, cfg.source); });
@@ -101,6 +117,8 @@ void visit_config(formats::ConfigSection& c, Config& cfg) {
   c.section("rectification", [&](formats::ConfigSection& s) { visit_rectification(s, cfg.rectify); });
   c.section("velocity", [&](formats::ConfigSection& s) { visit_velocity(s, cfg); });
   c.section("lcm", [&](formats::ConfigSection& s) { visit_lcm(s, cfg); });
+  c.section("health", [&](formats::ConfigSection& s) { visit_health(s, cfg.health); });
+  c.section("log", [&](formats::ConfigSection& s) { visit_log(s, cfg.log_level); });
 }
 
 // The IMU part of a calibration: the velocity input's rotation, clock offset and drift, bias,

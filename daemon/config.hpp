@@ -9,6 +9,7 @@
 #include "daemon/frame_rectifier.hpp"
 #include "daemon/lcm_publisher.hpp"
 #include "daemon/pipeline.hpp"
+#include "daemon/source_watch.hpp"
 #include "daemon/velocity_buffer.hpp"
 #include "daemon/velocity_input.hpp"
 #include "daemon/source_config.hpp"
@@ -29,6 +30,8 @@ struct Config {
   bool record_append = false;  // after a SIGHUP reload: continue the recording
   // rsd --output-dir / --output-video (replays only): rectified frames to files as well.
   FrameFilesConfig output;
+  HealthConfig health;                // the stall detector and the frame-rate warning
+  std::string log_level = "info";     // log.level; rsd --log-level overrides it
 };
 
 // Throws formats::ConfigError naming file, line and key.

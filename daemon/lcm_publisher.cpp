@@ -55,7 +55,7 @@ void LcmPublisher::publish_image(bool raw, const dsp::ImageView& img, const Imag
   const size_t row_bytes = static_cast<size_t>(img.width) * dsp::bytes_per_pixel(img.format);
   for (int y = 0; y < img.height; ++y) std::memcpy(image_.data.data() + y * row_bytes, img.row(y), row_bytes);
   char text[kMetaValueCapacity];
-  std::snprintf(text, sizeof text, "%" PRId64, s.utime);
+  std::snprintf(text, sizeof text, "%" PRId64, s.frame_utime);
   set_meta(0, text);
   std::snprintf(text, sizeof text, "%.17g", s.line_delay_s * 1e9);
   set_meta(1, text);

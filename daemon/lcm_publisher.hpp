@@ -24,7 +24,8 @@ struct Channels {
 };
 
 struct ImageStamp {
-  int64_t utime = 0;  // first row's capture time, us
+  int64_t utime = 0;        // first row's capture time, Unix us (the message's utime)
+  int64_t frame_utime = 0;  // the same instant, CLOCK_MONOTONIC us (metadata frame_utime)
   int64_t sequence = 0;
   double line_delay_s = 0;
   dsp::Readout readout = dsp::Readout::TopToBottom;

@@ -17,6 +17,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "daemon/log.hpp"
 #include "daemon/service.hpp"
 #include "rsd/version.hpp"
 #include "drivers/recording_replay_source.hpp"
@@ -57,19 +58,19 @@ bool apply_replay_options(rsd::daemon::Config& cfg, const CommandLine& cl) {
     double& speed = recording ? cfg.source.settings_of<RecordingReplayConfig>("recording").speed
                               : cfg.source.settings_of<ReplayConfig>("replay").speed;
     if (!rsd::drivers::parse_speed(cl.speed, speed)) {
-      std::fprintf(stderr, "rsd: --speed: expected a positive factor or fast, not '%s'\n", cl.speed.c_str());
+      rsd::daemon::log_fatal("--speed: expected a positive factor or fast, not '" + cl.speed + "'");
       return false;
     }
   }
   if (cl.loop) cfg.source.settings_of<ReplayConfig>("replay").loop = true;
   if ((!cl.speed.empty() && !lcm_log && !recording) || (cl.loop && !lcm_log)) {
-    std::fprintf(stderr, "rsd: %s\n", cl.loop ? "--loop applies to LCM log replays (--replay LOG)"
-                                              : "--speed applies to replays (--replay LOG or DIR)");
+    rsd::daemon::log_fatal(cl.loop ? "--loop applies to LCM log replays (--replay LOG)"
+                                   : "--speed applies to replays (--replay LOG or DIR)");
     return false;
   }
   if ((!cl.output.dir.empty() || !cl.output.video.empty()) && !lcm_log && !recording) {
-    std::fprintf(stderr, "rsd: --output-dir and --output-video apply to replays (--replay DIR or LOG): a live camera never "
-                         "waits on a disk\n");
+    rsd::daemon::log_fatal("--output-dir and --output-video apply to replays (--replay DIR or LOG): a live camera never "
+                           "waits on a disk");
     return false;
   }
   cfg.output = cl.output;
@@ -126,7 +127,12 @@ int main(int argc, char** argv) {
                "the capture thread at SCHED_FIFO (realtime.capture_priority) and memory locked after start-up\n"
                "(realtime.lock_memory), when permitted; a warning and normal scheduling when not. The service unit\n"
                "runs rsd with it and grants exactly that (CAP_SYS_NICE, CAP_IPC_LOCK)");
-  app.add_flag("--quiet,-q", quiet, "no live status line, progress bar or closing summary on stderr");
+  app.add_flag("--quiet,-q", quiet, "no live status line, progress bar or closing summary on stderr (the log goes on)");
+  std::string log_level;
+  app.add_option("--log-level", log_level,
+                 "trace, debug, info (default), warning, error, critical or off; over the configuration's log.level.\n"
+                 "Under systemd each line carries its journald priority (journalctl -p warning -u rsd)")
+      ->check([](const std::string& v) { return rsd::daemon::parse_log_level(v) ? "" : "expected trace, debug, info, warning, error, critical or off"; });
   app.add_option("--record", cl.record_file, "record raw frames (with per-row timing), velocity and outputs to this LCM log");
   app.add_option("--replay", cl.replay,
                  "replay instead of the configured camera: an LCM log (source.driver: replay), or an images recording\n"
@@ -146,6 +152,7 @@ int main(int argc, char** argv) {
     // --help and --version exit 0; a bad argument 2, as in every rsd program.
     return app.exit(e) == 0 ? 0 : 2;
   }
+  rsd::daemon::init_log(log_level.empty() ? spdlog::level::info : *rsd::daemon::parse_log_level(log_level));
   limits.status_line = !quiet;
   limits.progress = !quiet && (progress || isatty(STDERR_FILENO));
   if (print_default) {
@@ -156,12 +163,13 @@ int main(int argc, char** argv) {
   try {
     if (!make_config(cl, cfg)) return 2;
   } catch (const rsd::formats::ConfigError& e) {
-    std::fprintf(stderr, "rsd: configuration error: %s\n", e.what());
+    rsd::daemon::log_fatal(std::string("configuration error: ") + e.what());
     return 2;
   } catch (const rsd::formats::RecordingError& e) {
-    std::fprintf(stderr, "rsd: --replay: %s\n", e.what());
+    rsd::daemon::log_fatal(std::string("--replay: ") + e.what());
     return 2;
   }
+  if (log_level.empty()) spdlog::set_level(*rsd::daemon::parse_log_level(cfg.log_level));
   if (check) {
     std::printf("rsd: %s is valid\n", cl.config_file.empty() ? "the default configuration" : cl.config_file.c_str());
     return 0;
@@ -191,12 +199,13 @@ int main(int argc, char** argv) {
     try {
       rsd::daemon::run_service(cfg, g_flags, limits, {}, nullptr, reloader);
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "rsd: error: %s\n", e.what());
+      rsd::daemon::log_fatal(e.what());
       return 1;
     }
     if (!g_flags.reload.exchange(false) || g_flags.stop.load()) return 0;
-    std::fprintf(stderr, "rsd: configuration reloaded: restarting the pipeline\n");
+    spdlog::info("configuration reloaded: restarting the pipeline");
     cfg = restart_cfg;
     cfg.record_append = true;  // the recording continues
+    if (log_level.empty()) spdlog::set_level(*rsd::daemon::parse_log_level(cfg.log_level));
   }
 }

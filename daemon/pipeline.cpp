@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include <spdlog/spdlog.h>
+
 #include "drivers/monotonic_clock.hpp"
 
 namespace rsd::daemon {
@@ -59,7 +61,7 @@ void Pipeline::start() {
 void Pipeline::schedule(const char* thread, int priority, int cpu) {
   static std::atomic<bool> warned{false};
   const std::string why = make_thread_realtime(thread, priority, cpu);
-  if (!why.empty() && !warned.exchange(true)) std::fprintf(stderr, "rsd: warning: %s\n", why.c_str());
+  if (!why.empty() && !warned.exchange(true)) spdlog::warn("{}", why);
 }
 
 void Pipeline::stop() {
@@ -117,6 +119,7 @@ void Pipeline::capture_loop() {
   while (running_.load(std::memory_order_relaxed)) {
     Raw& r = raw_[slot];
     drivers::CaptureStatus st;
+    r.meta.wall_ns = 0;  // a slot's previous frame must not lend its Unix time to this one
     try {
       st = source_.capture(r.image.view(), r.meta, cfg_.capture_timeout);
     } catch (const drivers::CameraError& e) {
@@ -130,7 +133,9 @@ void Pipeline::capture_loop() {
     }
     if (st != drivers::CaptureStatus::Frame) continue;
     r.ready_ns = monotonic_ns();
+    drivers::stamp_wall_clock(r.meta);
     stats_.frames_in.fetch_add(1, std::memory_order_relaxed);
+    stats_.last_frame_ns.store(r.ready_ns, std::memory_order_relaxed);
     const auto reclaimed = hand_over(to_rectify_, slot);
     slot = reclaimed ? *reclaimed : raw_slot_for_capture();
   }
@@ -193,11 +198,11 @@ void Pipeline::take_up_next_rectifier() {
 
 void Pipeline::publish_frame(Out& o, uint64_t seq) {
   const dsp::RowTiming& t = o.timing;
-  ImageStamp s{o.meta.first_row_ns / 1000, static_cast<int64_t>(seq), t.line_delay_s, t.readout, o.meta.exposure_s,
-               o.result.rectified};
+  ImageStamp s{o.meta.wall_ns / 1000, o.meta.first_row_ns / 1000, static_cast<int64_t>(seq), t.line_delay_s, t.readout,
+               o.meta.exposure_s, o.result.rectified};
   pub_.publish_image(false, o.image.view(), s);
   rsd::frame_info_t& info = pub_.info();
-  info.utime = s.utime;
+  info.utime = s.frame_utime;  // the per-row times are on the monotonic clock
   info.sequence = static_cast<int64_t>(seq);
   info.source_sequence = static_cast<int64_t>(o.meta.sequence);
   info.line_delay_s = t.line_delay_s;
@@ -239,7 +244,7 @@ void Pipeline::publish_loop() {
     Out& o = out_[*slot];
     if (o.raw_slot >= 0) {
       Raw& r = raw_[static_cast<size_t>(o.raw_slot)];
-      pub_.publish_image(true, r.image.view(), {o.meta.first_row_ns / 1000, static_cast<int64_t>(seq),
+      pub_.publish_image(true, r.image.view(), {o.meta.wall_ns / 1000, o.meta.first_row_ns / 1000, static_cast<int64_t>(seq),
                                                 o.timing.line_delay_s, o.timing.readout, o.meta.exposure_s, false});
       raw_free_late_.put(static_cast<uint32_t>(o.raw_slot));
       o.raw_slot = -1;

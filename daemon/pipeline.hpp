@@ -37,6 +37,7 @@ struct PipelineConfig {
 
 struct PipelineStats {
   std::atomic<uint64_t> frames_in{0}, frames_out{0}, drops{0}, rectified{0}, unrectified{0};
+  std::atomic<int64_t> last_frame_ns{0};  // CLOCK_MONOTONIC when the newest frame arrived (0: none yet)
 };
 
 class Pipeline {

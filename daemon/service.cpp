@@ -1,10 +1,13 @@
 #include "daemon/service.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <thread>
 
+#include "daemon/log.hpp"
 #include "daemon/recording_source.hpp"
+#include "daemon/source_watch.hpp"
 #include "daemon/systemd_notify.hpp"
 #include "daemon/velocity_input.hpp"
 #include "drivers/message_source.hpp"
@@ -26,7 +29,7 @@ std::string open_with_backoff(drivers::CameraSource& src, StopFlags& flags, Syst
       src.open();
       return "";
     } catch (const drivers::CameraError& e) {
-      std::fprintf(stderr, "rsd: %s: %s; retrying in %.1f s\n", src.name().c_str(), e.what(), backoff);
+      spdlog::warn("{}: {}; retrying in {:.1f} s", src.name(), e.what(), backoff);
       sd.status(std::string("no camera: ") + e.what());
       const auto until = Clock::now() + std::chrono::duration<double>(backoff);
       while (Clock::now() < until)
@@ -53,6 +56,7 @@ struct Session {
   std::unique_ptr<Pipeline> pipeline;
   std::unique_ptr<FrameFiles> files;  // rsd --output-dir / --output-video
   std::vector<uint8_t> pose_buf = std::vector<uint8_t>(512);
+  std::unique_ptr<SourceWatch> watch;  // the source's state, afresh with every pipeline
   int reconnects = 0;
   // Counters of the pipelines before a reconnect: health and limits count since start.
   uint64_t in_before = 0, out_before = 0, drops_before = 0;
@@ -74,6 +78,12 @@ struct Session {
       });
   }
   drivers::CameraSource& active() { return recording ? static_cast<drivers::CameraSource&>(*recording) : *source; }
+  // Where the intrinsics in use came from, for the start-up line.
+  std::string intrinsics_origin() const {
+    if (cfg.source.camera) return cfg.source.camera_origin;
+    if (const drivers::MessageSource* m = messages(); m && m->recorded_camera()) return "the log";
+    return "the source's own (nominal)";
+  }
   drivers::MessageSource* messages() const { return dynamic_cast<drivers::MessageSource*>(source.get()); }
   drivers::Playback* playback() const { return dynamic_cast<drivers::Playback*>(source.get()); }
   drivers::ReplaySource* replay() const { return dynamic_cast<drivers::ReplaySource*>(source.get()); }
@@ -162,53 +172,96 @@ struct Session {
       files = std::make_unique<FrameFiles>(fc, source->format().width, source->format().height);
     }
     pipeline = std::make_unique<Pipeline>(pc, active(), *rectifier, *pub, velocity);
+    // A live camera promises its rate; a replay or frames over LCM come as they were sent.
+    const bool paced = !playback() && !messages();
+    watch = std::make_unique<SourceWatch>(cfg.health, source->name(), paced ? source->timing().frame_rate_hz : 0, paced);
     pipeline->set_frame_files(files.get());
     active().start();
     pipeline->start();
   }
 };
 
-// "\rrsd: replay [#######.............]  35%  120 frames  84.2 fps" on stderr.
+// "rsd: replay [#######.............]  35%  120 frames  84.2 fps", the status line.
 void print_progress(const drivers::Playback& r, double seconds) {
   constexpr int kWidth = 30;
   const double p = r.progress();
   char bar[kWidth + 1];
   for (int i = 0; i < kWidth; ++i) bar[i] = i < static_cast<int>(p * kWidth + 0.5) ? '#' : '.';
   bar[kWidth] = '\0';
-  std::fprintf(stderr, "\rrsd: replay [%s] %3.0f%%  %llu frames  %.1f fps   ", bar, 100 * p,
-               static_cast<unsigned long long>(r.frames()), seconds > 0 ? static_cast<double>(r.frames()) / seconds : 0.0);
+  char text[128];
+  std::snprintf(text, sizeof text, "replay [%s] %3.0f%%  %llu frames  %.1f fps", bar, 100 * p,
+                static_cast<unsigned long long>(r.frames()), seconds > 0 ? static_cast<double>(r.frames()) / seconds : 0.0);
+  show_status_line(text);
 }
 
+// The latency part of the status: "latency p50 1.20 ms p99 3.40 ms", or with frames beyond the
+// histogram "latency p50 1.20 ms p99 >= 100 ms (max 153.2 ms, 4 frames at 100 ms or more)".
+std::string latency_text(const rsd::health_t& h) {
+  char text[160];
+  if (h.latency_over_range > 0 && h.latency_p99_ms >= LatencyStats::kRangeMs)
+    std::snprintf(text, sizeof text, "latency p50 %.2f ms p99 >= %.0f ms (max %.1f ms, %lld frames at %.0f ms or more)",
+                  h.latency_p50_ms, LatencyStats::kRangeMs, h.latency_max_ms, static_cast<long long>(h.latency_over_range),
+                  LatencyStats::kRangeMs);
+  else
+    std::snprintf(text, sizeof text, "latency p50 %.2f ms p99 %.2f ms", h.latency_p50_ms, h.latency_p99_ms);
+  return text;
+}
+
+// Health once a second (and once at the end): LCM, systemd STATUS, the status line, and a log
+// line when the source's state says something new. `state`: the service's own (reconnecting,
+// stopping), or nullptr for what the source watch makes of the frames.
 void report_health(Session& s, const char* state, double dt, uint64_t& last_in, uint64_t& last_out, bool line,
                    SystemdNotify& sd) {
   const PipelineStats& st = s.pipeline->stats();
   rsd::health_t& h = s.pub->health();
-  h.utime = drivers::monotonic_ns() / 1000;
+  const int64_t now_ns = drivers::monotonic_ns(), last_ns = st.last_frame_ns.load();
+  h.utime = drivers::realtime_ns() / 1000;
   h.source = s.source->name();
-  h.source_state = state;
   h.frames_in = static_cast<int64_t>(s.in_before + st.frames_in.load());
   h.frames_out = static_cast<int64_t>(s.out_before + st.frames_out.load());
   h.drops = static_cast<int64_t>(s.drops_before + st.drops.load());
   h.queue_depth = static_cast<int32_t>(s.pipeline->queue_depth());
   h.latency_p50_ms = s.pipeline->latency().quantile(0.5);
   h.latency_p99_ms = s.pipeline->latency().quantile(0.99);
+  h.latency_max_ms = s.pipeline->latency().max_ms();
+  h.latency_over_range = static_cast<int64_t>(s.pipeline->latency().over_range());
   h.fps_in = static_cast<double>(h.frames_in - static_cast<int64_t>(last_in)) / dt;
   h.fps_out = static_cast<double>(h.frames_out - static_cast<int64_t>(last_out)) / dt;
+  h.fps_configured = s.watch->configured_fps();
+  h.seconds_since_frame = last_ns > 0 ? static_cast<double>(now_ns - last_ns) * 1e-9 : -1;
   h.reconnects = s.reconnects;
+  const SourceWatch::Verdict v = s.watch->update(static_cast<double>(now_ns) * 1e-9, st.frames_in.load(),
+                                                 static_cast<double>(last_ns) * 1e-9, h.fps_in);
+  h.source_state = state ? state : v.state;
   s.pub->publish_health();
   s.pipeline->latency().reset();
   last_in = static_cast<uint64_t>(h.frames_in), last_out = static_cast<uint64_t>(h.frames_out);
-  char text[256];
-  std::snprintf(text, sizeof text, "%s %s: in %lld (%.1f fps) out %lld, rectified %llu, drops %lld, latency p50 %.2f ms p99 %.2f ms",
-                h.source.c_str(), state, static_cast<long long>(h.frames_in), h.fps_in, static_cast<long long>(h.frames_out),
-                static_cast<unsigned long long>(st.rectified.load()), static_cast<long long>(h.drops), h.latency_p50_ms,
-                h.latency_p99_ms);
+  if (!state && !v.warning.empty()) spdlog::warn("{}", v.warning);
+  if (!state && !v.info.empty()) spdlog::info("{}", v.info);
+  char text[384];
+  std::snprintf(text, sizeof text, "%s %s: in %lld (%.1f fps) out %lld, rectified %llu, drops %lld, %s", h.source.c_str(),
+                h.source_state.c_str(), static_cast<long long>(h.frames_in), h.fps_in, static_cast<long long>(h.frames_out),
+                static_cast<unsigned long long>(st.rectified.load()), static_cast<long long>(h.drops), latency_text(h).c_str());
   sd.status(text);
-  if (line) std::fprintf(stderr, "\rrsd: %s   ", text);
+  if (line) show_status_line(text);
+}
+
+// The start-up line: what runs, from where, to where.
+void log_start(const Session& s) {
+  const drivers::FrameFormat f = s.source->format();
+  const dsp::RowTiming t = s.source->timing();
+  const RealtimeConfig& rt = s.cfg.pipeline.realtime;
+  const char* pixels = f.format == dsp::PixelFormat::Rgb8 ? "rgb8" : f.format == dsp::PixelFormat::Mono16 ? "mono16" : "mono8";
+  const std::string calibration = s.cfg.source.calibration ? s.cfg.source.calibration->file : std::string("none");
+  spdlog::info("{} {}x{} {} at {:.1f} fps, line delay {:.2f} us {}, intrinsics from {}, calibration file {}; LCM {} ({}, {}, {}); "
+               "realtime {}",
+               s.source->name(), f.width, f.height, pixels, t.frame_rate_hz, t.line_delay_s * 1e6,
+               dsp::to_string(t.readout), s.intrinsics_origin(), calibration, s.cfg.lcm_url, s.cfg.channels.image, s.cfg.channels.info,
+               s.cfg.channels.health, rt.enabled ? "on (capture priority " + std::to_string(rt.capture_priority) + ")" : "off");
 }
 
 // A SIGHUP with a reloader: refuse, apply between two frames, or ask the caller to restart.
-bool handle_reload(Session& s, StopFlags& flags, const Reloader& reloader, bool after_status_line, SystemdNotify& sd) {
+bool handle_reload(Session& s, StopFlags& flags, const Reloader& reloader, SystemdNotify& sd) {
   flags.reload = false;
   sd.reloading();
   const Reload r = reloader();
@@ -217,9 +270,8 @@ bool handle_reload(Session& s, StopFlags& flags, const Reloader& reloader, bool 
     return false;
   }
   const std::string why = r.kind == Reload::Refused ? r.why : s.apply_calibration(r.cfg);
-  const char* nl = after_status_line ? "\n" : "";
-  if (!why.empty()) std::fprintf(stderr, "%srsd: reload refused, keeping the running calibration: %s\n", nl, why.c_str());
-  else std::fprintf(stderr, "%srsd: calibration reloaded: applied from the next frame\n", nl);
+  if (!why.empty()) spdlog::error("reload refused, keeping the running calibration: {}", why);
+  else spdlog::info("calibration reloaded: applied from the next frame");
   sd.ready();
   return true;
 }
@@ -239,7 +291,8 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   s.start_pipeline();
   // Start-up has allocated what the hot path uses: lock it in memory, when asked and permitted.
   if (const RealtimeConfig& rt = cfg.pipeline.realtime; rt.enabled && rt.lock_memory)
-    if (const std::string why = lock_memory(); !why.empty()) std::fprintf(stderr, "rsd: warning: %s\n", why.c_str());
+    if (const std::string why = lock_memory(); !why.empty()) spdlog::warn("{}", why);
+  log_start(s);
   sd.ready();
   const auto t_start = Clock::now();
   auto t_health = t_start, t_progress = t_start;
@@ -247,7 +300,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   const bool progress = limits.progress && s.playback();
   const bool line = limits.status_line && !progress;
   while (!flags.stop.load()) {
-    if (flags.reload.load() && (!reloader || !handle_reload(s, flags, reloader, line || progress, sd))) break;
+    if (flags.reload.load() && (!reloader || !handle_reload(s, flags, reloader, sd))) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     sd.watchdog();
     s.collect_retired();
@@ -266,7 +319,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
     }
     if (limits.max_seconds > 0 && now - t_start >= std::chrono::duration<double>(limits.max_seconds)) break;
     if (s.pipeline->camera_lost()) {  // reconnect: stop, reopen with backoff, restart
-      std::fprintf(stderr, "\nrsd: camera lost: %s\n", s.pipeline->camera_error().c_str());
+      spdlog::error("camera lost: {}", s.pipeline->camera_error());
       s.pipeline->stop();
       s.source->stop();
       ++s.reconnects;
@@ -277,9 +330,10 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
       s.pub->publish_health();
       if (!open_with_backoff(s.active(), flags, sd, deadline).empty()) break;
       s.start_pipeline();
+      spdlog::info("{} reopened (reconnect {})", s.source->name(), s.reconnects);
     }
     if (now - t_health >= std::chrono::seconds(1)) {
-      report_health(s, "streaming", std::chrono::duration<double>(now - t_health).count(), last_in, last_out, line, sd);
+      report_health(s, nullptr, std::chrono::duration<double>(now - t_health).count(), last_in, last_out, line, sd);
       t_health = now;
     }
   }
@@ -291,9 +345,9 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   s.velocity_in->stop();
   const double seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
   if (progress) print_progress(*s.playback(), seconds);
-  report_health(s, "stopped", std::max(1e-3, std::chrono::duration<double>(Clock::now() - t_health).count()), last_in,
+  report_health(s, "stopping", std::max(1e-3, std::chrono::duration<double>(Clock::now() - t_health).count()), last_in,
                 last_out, line, sd);
-  if (line || progress) std::fprintf(stderr, "\n");
+  if (line || progress) end_status_line();
   RunSummary out;
   out.frames_out = s.frames_out();
   out.reconnects = s.reconnects;
@@ -305,19 +359,17 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
       out.skipped = r->reader()->skipped_total();
       out.skips = r->reader()->skip_summary();
     }
-    if (limits.status_line) std::fprintf(stderr, "rsd: %s\n", p->summary(seconds).c_str());
+    if (limits.status_line) spdlog::info("{}", p->summary(seconds));
   }
   if (s.files && limits.status_line) {
     std::string where = cfg.output.dir.empty() ? "" : cfg.output.dir + "/";
     if (!cfg.output.video.empty()) where += (where.empty() ? "" : " and ") + cfg.output.video;
-    std::fprintf(stderr, "rsd: wrote %llu rectified frames to %s\n", static_cast<unsigned long long>(s.files->written()),
-                 where.c_str());
+    spdlog::info("wrote {} rectified frames to {}", s.files->written(), where);
   }
   if (s.recorder) {
     s.recorder->flush();
     if (limits.status_line)
-      std::fprintf(stderr, "rsd: recorded %llu events to %s\n", static_cast<unsigned long long>(s.recorder->events()),
-                   s.recorder->path().c_str());
+      spdlog::info("recorded {} events to {}", s.recorder->events(), s.recorder->path());
   }
   if (summary) *summary = out;
   // A run with nothing to show ends as a failure, whatever stopped it (a camera that opened

@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <cstring>
 
+#include <spdlog/spdlog.h>
+
 #include "drivers/monotonic_clock.hpp"  // monotonic_ns
 
 namespace rsd::drivers {
@@ -16,7 +18,7 @@ LcmSource::~LcmSource() {
 
 void LcmSource::skip(formats::LogSkip r, const std::string& detail) {
   if (++skips_[static_cast<size_t>(r)] <= 3)
-    std::fprintf(stderr, "rsd: lcm source %s: message skipped: %s: %s\n", cfg_.url.c_str(), to_string(r), detail.c_str());
+    spdlog::warn("lcm source {}: message skipped: {}: {}", cfg_.url, to_string(r), detail);
 }
 
 void LcmSource::open() {

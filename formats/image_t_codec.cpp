@@ -117,6 +117,7 @@ bool parse_frame(const bot_core::image_t& img, RecordedFrame& out, std::string& 
   if (parse_number(value_of(img, "frame_ns"), ns)) out.meta.first_row_ns = ns;
   else if (parse_number(value_of(img, "frame_utime"), us)) out.meta.first_row_ns = us * 1000;
   else out.meta.first_row_ns = img.utime * 1000;
+  out.meta.wall_ns = img.utime * 1000;  // libbot2's convention; older rsd logs: their monotonic time
   uint64_t seq = 0;
   if (parse_number(value_of(img, "sequence"), seq)) out.meta.sequence = seq;
   double x = 0;
@@ -212,11 +213,11 @@ void RawFrameEncoder::set(size_t index, const char* text) {
 }
 
 size_t RawFrameEncoder::encode(const dsp::ImageView& img, const FrameMeta& meta) {
-  msg_.utime = meta.first_row_ns / 1000;
+  msg_.utime = (meta.wall_ns ? meta.wall_ns : meta.first_row_ns) / 1000;
   const size_t row = static_cast<size_t>(img.width) * dsp::bytes_per_pixel(img.format);
   for (int y = 0; y < img.height; ++y) std::memcpy(msg_.data.data() + y * row, img.row(y), row);
   char text[64];
-  std::snprintf(text, sizeof text, "%" PRId64, msg_.utime);
+  std::snprintf(text, sizeof text, "%" PRId64, meta.first_row_ns / 1000);
   set(0, text);
   std::snprintf(text, sizeof text, "%.17g", meta.exposure_s * 1e9);
   set(3, text);

@@ -18,6 +18,7 @@ struct FrameFormat {
 
 struct FrameMeta {
   int64_t first_row_ns = 0;  // CLOCK_MONOTONIC: start of exposure of the first row read
+  int64_t wall_ns = 0;       // the same instant in Unix time (CLOCK_REALTIME); 0: not yet known
   uint64_t sequence = 0;     // the source's own counter; gaps mean the source dropped frames
   double exposure_s = 0;     // row exposure, if the source knows it
 };

@@ -13,5 +13,5 @@ setpriv --reuid=65534 --regid=65534 --clear-groups --inh-caps=-all --bounding-se
 cat "$work/out"
 [ "$(grep -c 'SCHED_FIFO 50 is not permitted' "$work/out")" -eq 1 ] || { echo "no single SCHED_FIFO warning"; exit 1; }
 [ "$(grep -c 'memory stays pageable' "$work/out")" -eq 1 ] || { echo "no single mlockall warning"; exit 1; }
-grep -Eq 'stopped: in [0-9]+ .* out (1[0-9]|[2-9][0-9])' "$work/out" || { echo "frames did not come out"; exit 1; }
+grep -Eq 'stopping: in [0-9]+ .* out (1[0-9]|[2-9][0-9])' "$work/out" || { echo "frames did not come out"; exit 1; }
 echo "OK"

@@ -77,6 +77,16 @@ struct Recording {
   int raw = 0, velocity = 0;
 };
 
+// The rectified image's first-row time on the monotonic clock (its utime is Unix time, which
+// frame_info_t does not carry): the key that pairs it with its frame_info_t.
+int64_t frame_utime(const bot_core::image_t& img) {
+  for (int i = 0; i < img.nmetadata; ++i)
+    if (img.metadata[i].key == "frame_utime")
+      return std::stoll(std::string(img.metadata[i].value.begin(), img.metadata[i].value.end()));
+  ADD_FAILURE() << "a rectified image without frame_utime";
+  return -1;
+}
+
 Recording read_recording(const std::string& path) {
   Recording r;
   formats::LcmLogReader reader(path);
@@ -88,7 +98,7 @@ Recording read_recording(const std::string& path) {
     if (ev.channel == "RSD_RECT") {
       bot_core::image_t img;
       EXPECT_EQ(formats::decode_checked(ev.data.data(), ev.data.size(), img, why), formats::DecodeStatus::Ok);
-      Output& o = r.by_utime[img.utime];
+      Output& o = r.by_utime[frame_utime(img)];
       o.rect_event = ev.data;
       o.rect = img;
       o.has_rect = true;

@@ -1,0 +1,200 @@
+// What a run tells its watchers, through the whole service (run_service, in process, recorded
+// to an LCM log): the source state in rsd.health_t as a camera streams, stalls and comes back,
+// with one warning for the stall and one line for its end; a warning when a camera stays
+// below its configured rate; and the images' times: utime in Unix microseconds (libbot2's
+// convention), the per-row base on the monotonic clock in metadata and frame info, and a
+// replay that keeps the recorded Unix times.
+#include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
+
+#include <bot_core/image_t.hpp>
+#include <rsd/frame_info_t.hpp>
+#include <rsd/health_t.hpp>
+
+#include <chrono>
+#include <map>
+#include <sstream>
+#include <thread>
+
+#include "daemon/service.hpp"
+#include "drivers/monotonic_clock.hpp"
+#include "drivers/replay_source.hpp"
+#include "drivers/sim_source.hpp"
+#include "formats/image_t_codec.hpp"
+#include "formats/lcm_log.hpp"
+#include "tests/support/temp_dir.hpp"
+
+using namespace rsd;
+
+namespace {
+
+const test::TempDir& g_tmp = test::register_temp_dir("rsd_test_service_health_");
+
+// The simulated camera (a live one: 30 fps, paced), silent between `silent_from` and
+// `silent_until` seconds after start, and delivering one frame in `keep_one_in`.
+class Unreliable final : public drivers::CameraSource {
+ public:
+  Unreliable(const drivers::SimSourceConfig& c, double silent_from, double silent_until, int keep_one_in)
+      : sim_(c), silent_from_(silent_from), silent_until_(silent_until), keep_one_in_(keep_one_in) {}
+  std::string name() const override { return "unreliable-sim"; }
+  void open() override { sim_.open(); }
+  drivers::FrameFormat format() const override { return sim_.format(); }
+  dsp::RowTiming timing() const override { return sim_.timing(); }
+  void start() override {
+    sim_.start();
+    t0_ = std::chrono::steady_clock::now();
+  }
+  drivers::CaptureStatus capture(const dsp::ImageView& dst, drivers::FrameMeta& meta, std::chrono::milliseconds timeout) override {
+    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+    if (t >= silent_from_ && t < silent_until_) {
+      std::this_thread::sleep_for(std::min(timeout, std::chrono::milliseconds(20)));
+      return drivers::CaptureStatus::Timeout;
+    }
+    drivers::CaptureStatus st = sim_.capture(dst, meta, timeout);
+    for (int i = 1; i < keep_one_in_ && st == drivers::CaptureStatus::Frame; ++i) st = sim_.capture(dst, meta, timeout);
+    return st;
+  }
+  void stop() override { sim_.stop(); }
+  void set_velocity_sink(drivers::VelocitySink s) override { sim_.set_velocity_sink(std::move(s)); }
+
+ private:
+  drivers::SimSource sim_;
+  double silent_from_, silent_until_;
+  int keep_one_in_;
+  std::chrono::steady_clock::time_point t0_;
+};
+
+drivers::SimSourceConfig sim_config() {
+  drivers::SimSourceConfig s;
+  s.camera = dsp::CameraModel::from_hfov(160, 120, 1.0);
+  s.fps = 30;
+  s.realtime = true;
+  return s;
+}
+
+// The log lines of a run, captured from spdlog's default logger.
+class CapturedLog {
+ public:
+  CapturedLog() : previous_(spdlog::default_logger()) {
+    spdlog::set_default_logger(std::make_shared<spdlog::logger>("test", std::make_shared<spdlog::sinks::ostream_sink_mt>(text_)));
+  }
+  ~CapturedLog() { spdlog::set_default_logger(previous_); }
+  std::string text() const { return text_.str(); }
+
+ private:
+  std::ostringstream text_;
+  std::shared_ptr<spdlog::logger> previous_;
+};
+
+void run(const daemon::Config& cfg, double seconds, const daemon::SourceFactory& factory = {}) {
+  daemon::StopFlags flags;
+  daemon::RunLimits limits;
+  limits.max_seconds = seconds;
+  limits.status_line = false;
+  daemon::run_service(cfg, flags, limits, factory);
+}
+
+template <class Msg>
+std::vector<Msg> messages(const std::string& log, const std::string& channel) {
+  std::vector<Msg> out;
+  formats::LcmLogReader reader(log);
+  formats::LogEvent ev;
+  std::string why;
+  while (reader.next(ev))
+    if (ev.channel == channel) {
+      Msg m;
+      EXPECT_EQ(formats::decode_checked(ev.data.data(), ev.data.size(), m, why), formats::DecodeStatus::Ok) << why;
+      out.push_back(m);
+    }
+  return out;
+}
+
+std::string meta(const bot_core::image_t& img, const std::string& key) {
+  for (const auto& m : img.metadata)
+    if (m.key == key) return std::string(m.value.begin(), m.value.end());
+  return "";
+}
+
+}  // namespace
+
+TEST(ServiceHealth, StreamingStalledStreamingAgainThenStopping) {
+  daemon::Config cfg;
+  cfg.source.settings_of<drivers::SimSourceConfig>("sim") = sim_config();
+  cfg.record_file = g_tmp.path("stall.lcmlog");
+  cfg.health.stall_after_s = 0.5;
+  CapturedLog log;
+  run(cfg, 4.5, [](const daemon::Config&) { return std::make_unique<Unreliable>(sim_config(), 1.3, 3.0, 1); });
+  const auto health = messages<rsd::health_t>(cfg.record_file, "RSD_HEALTH");
+  ASSERT_GE(health.size(), 4u);
+  std::vector<std::string> seen;  // the states in order, repeats collapsed
+  for (const auto& h : health)
+    if (seen.empty() || seen.back() != h.source_state) seen.push_back(h.source_state);
+  EXPECT_EQ(seen, (std::vector<std::string>{"streaming", "stalled", "streaming", "stopping"}));
+  const int64_t now_us = drivers::realtime_ns() / 1000;
+  for (const auto& h : health) {
+    EXPECT_EQ(h.source, "unreliable-sim");
+    EXPECT_DOUBLE_EQ(h.fps_configured, 30);
+    EXPECT_NEAR(static_cast<double>(now_us - h.utime) * 1e-6, 3, 3);  // Unix time, within the run
+    EXPECT_EQ(h.latency_over_range, 0);
+    EXPECT_LE(h.latency_p99_ms, h.latency_max_ms + 0.01);
+    if (h.source_state == "stalled") {
+      EXPECT_GT(h.seconds_since_frame, 0.5);
+    }
+    if (h.source_state == "streaming") {
+      EXPECT_LT(h.seconds_since_frame, 0.5);
+    }
+  }
+  const std::string text = log.text();
+  EXPECT_NE(text.find("unreliable-sim 160x120 mono8 at 30.0 fps"), std::string::npos) << text;  // the start-up line
+  EXPECT_NE(text.find("unreliable-sim: stalled: no frame for"), std::string::npos) << text;
+  EXPECT_NE(text.find("unreliable-sim: streaming again after a stall"), std::string::npos) << text;
+  EXPECT_EQ(text.find("below the configured"), std::string::npos) << text;  // a stall is its own warning
+}
+
+TEST(ServiceHealth, CameraBelowItsConfiguredRateIsWarnedOnce) {
+  daemon::Config cfg;
+  cfg.source.settings_of<drivers::SimSourceConfig>("sim") = sim_config();
+  cfg.health.low_fps_after_s = 1;
+  CapturedLog log;
+  run(cfg, 3.5, [](const daemon::Config&) { return std::make_unique<Unreliable>(sim_config(), 99, 99, 2); });
+  const std::string text = log.text();
+  const size_t at = text.find("unreliable-sim: delivering 1");  // about 15 fps
+  ASSERT_NE(at, std::string::npos) << text;
+  EXPECT_NE(text.find("below the configured 30.0 fps", at), std::string::npos) << text;
+  EXPECT_EQ(text.find("delivering", at + std::string("unreliable-sim: delivering").size()), std::string::npos) << "said twice: " << text;
+}
+
+TEST(ServiceHealth, ImagesCarryUnixTimeAndMonotonicRowTimesAndReplaysKeepThem) {
+  daemon::Config cfg;
+  cfg.record_file = g_tmp.path("live.lcmlog");
+  cfg.source.settings_of<drivers::SimSourceConfig>("sim") = sim_config();
+  run(cfg, 1.5);
+  const int64_t offset_us = (drivers::realtime_ns() - drivers::monotonic_ns()) / 1000;
+  const auto rect = messages<bot_core::image_t>(cfg.record_file, "RSD_RECT");
+  const auto raw = messages<bot_core::image_t>(cfg.record_file, "RSD_RAW");
+  const auto info = messages<rsd::frame_info_t>(cfg.record_file, "RSD_FRAME_INFO");
+  ASSERT_GE(rect.size(), 20u);
+  ASSERT_EQ(info.size(), rect.size());
+  ASSERT_GE(raw.size(), rect.size());
+  for (size_t i = 0; i < rect.size(); ++i) {
+    const int64_t mono_us = std::stoll(meta(rect[i], "frame_utime"));
+    // utime - frame_utime is the clocks' offset (up to NTP's slew over the run)
+    EXPECT_NEAR(static_cast<double>(rect[i].utime - mono_us - offset_us), 0, 2000) << "frame " << i;
+    EXPECT_EQ(info[i].utime, mono_us) << "frame info on the monotonic clock, frame " << i;
+  }
+  std::map<int64_t, int64_t> raw_unix;  // monotonic us -> Unix us, as recorded at capture
+  for (const auto& r : raw) raw_unix[std::stoll(meta(r, "frame_utime"))] = r.utime;
+  for (const auto& r : rect) EXPECT_EQ(raw_unix.at(std::stoll(meta(r, "frame_utime"))), r.utime);
+
+  // Replayed as fast as possible, days later as far as the clocks know: the recorded Unix times.
+  daemon::Config rc;
+  rc.source.driver = "replay";
+  rc.source.settings_of<drivers::ReplayConfig>("replay").file = cfg.record_file;
+  rc.source.settings_of<drivers::ReplayConfig>("replay").speed = 0;
+  rc.record_file = g_tmp.path("replayed.lcmlog");
+  run(rc, 60);
+  const auto replayed = messages<bot_core::image_t>(rc.record_file, "RSD_RECT");
+  ASSERT_EQ(replayed.size(), raw.size());
+  for (size_t i = 0; i < replayed.size(); ++i) EXPECT_EQ(replayed[i].utime, raw[i].utime) << "frame " << i;
+}
