@@ -56,11 +56,11 @@ void visit_velocity(formats::ConfigSection& c, Config& cfg) {
   c.value("channel", cfg.velocity_channel, "rsd.velocity_t");
   VelocityLimits& l = cfg.velocity_limits;
   c.value("max_age_s", l.max_age_s, "no sample this close to the frame: publish unrectified");
-  c.check(l.max_age_s > 0, "max_age_s", "must be positive");
+  c.check(l.max_age_s > 0 && l.max_age_s <= 10, "max_age_s", "must be positive, at most 10 s");
   c.value("max_angular_rad_s", l.max_angular_rad_s, "samples beyond these limits are rejected as faults");
-  c.check(l.max_angular_rad_s > 0, "max_angular_rad_s", "must be positive");
+  c.check(l.max_angular_rad_s > 0 && l.max_angular_rad_s <= 1000, "max_angular_rad_s", "must be positive, at most 1000 rad/s");
   c.value("max_linear_m_s", l.max_linear_m_s);
-  c.check(l.max_linear_m_s > 0, "max_linear_m_s", "must be positive");
+  c.check(l.max_linear_m_s > 0 && l.max_linear_m_s <= 10000, "max_linear_m_s", "must be positive, at most 10000 m/s");
   VelocityInputConfig& in = cfg.velocity_input;
   c.value("pose_channel", in.pose_channel, "also read bot_core.pose_t here (rotation_rate, vel: body frame); \"\": off");
   c.check(in.pose_channel.empty() || in.pose_channel != cfg.velocity_channel, "pose_channel", "must differ from velocity.channel");
@@ -69,6 +69,9 @@ void visit_velocity(formats::ConfigSection& c, Config& cfg) {
   c.value("body_to_camera", in.body_to_camera, "bot_core.pose_t: w_camera = R w_body (row-major)");
   c.check(is_rotation(in.body_to_camera, 1e-6), "body_to_camera", "must be a rotation matrix (row-major, orthonormal, determinant +1)");
   c.value("gyro_only", in.gyro_only, "drop linear velocity at input (every sample has_linear: false)");
+  c.value("max_clock_offset_s", in.max_clock_offset_s,
+          "with a live camera, refuse messages stamped further than this from the camera clock (0: no check)");
+  c.check(in.max_clock_offset_s >= 0 && in.max_clock_offset_s <= 3600, "max_clock_offset_s", "must be 0..3600 s");
 }
 
 void visit_lcm(formats::ConfigSection& c, Config& cfg) {

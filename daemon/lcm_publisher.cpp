@@ -41,12 +41,17 @@ template <class Msg>
 void LcmPublisher::publish(const std::string& channel, const Msg& msg, std::vector<uint8_t>& buf, bool record) {
   const int len = msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
   if (len <= 0) return;
-  lcm_publish(lcm_, channel.c_str(), buf.data(), static_cast<unsigned>(len));
+  send(channel.c_str(), buf.data(), static_cast<size_t>(len));
   if (record && record_) record_->write(channel.c_str(), formats::wall_clock_us(), buf.data(), static_cast<size_t>(len));
 }
 
+void LcmPublisher::send(const char* channel, const void* data, size_t size) {
+  std::lock_guard lock(publish_mutex_);
+  lcm_publish(lcm_, channel, data, static_cast<unsigned>(size));
+}
+
 void LcmPublisher::publish_encoded(const std::string& channel, const void* data, size_t size) {
-  lcm_publish(lcm_, channel.c_str(), data, static_cast<unsigned>(size));
+  send(channel.c_str(), data, size);
   if (record_) record_->write(channel.c_str(), formats::wall_clock_us(), data, size);
 }
 

@@ -8,6 +8,7 @@
 #include <rsd/frame_info_t.hpp>
 #include <rsd/health_t.hpp>
 
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,11 @@ class LcmPublisher {
   std::vector<uint8_t> buf_;
   std::vector<uint8_t> health_buf_;  // health goes out from the service's thread, the rest from the publisher's
   formats::LcmLogWriter* record_ = nullptr;
+  // The publisher's, the service's and the source's threads publish through one handle, and
+  // LCM's file:// provider does not serialise its writers: events interleaved and a frame was
+  // lost. Held for one lcm_publish call (a memcpy, or a buffered write to a log).
+  std::mutex publish_mutex_;
+  void send(const char* channel, const void* data, size_t size);
 };
 
 }  // namespace rsd::daemon

@@ -168,6 +168,9 @@ int main(int argc, char** argv) {
   } catch (const rsd::formats::RecordingError& e) {
     rsd::daemon::log_fatal(std::string("--replay: ") + e.what());
     return 2;
+  } catch (const std::exception& e) {  // anything a parser let through is still the file's fault
+    rsd::daemon::log_fatal(std::string("configuration error: ") + (cl.config_file.empty() ? "" : cl.config_file + ": ") + e.what());
+    return 2;
   }
   if (log_level.empty()) spdlog::set_level(*rsd::daemon::parse_log_level(cfg.log_level));
   if (check) {

@@ -93,6 +93,7 @@ struct Session {
     pub = std::make_unique<LcmPublisher>(cfg.lcm_url, cfg.channels, source->format());
     pub->set_recorder(recorder.get());
     velocity_in = std::make_unique<VelocityInput>(pub->handle(), cfg.velocity_channel, velocity, cfg.velocity_input);
+    velocity_in->set_clock_check(!playback() && !messages());  // a live camera: messages share its clock
     // The source's own velocity goes into the buffer on the source's thread, before the frame
     // it precedes (see VelocityInput::deliver), and out on LCM (and into the recording).
     auto publish = [this](const rsd::velocity_t& m) {
@@ -230,6 +231,9 @@ void report_health(Session& s, const char* state, double dt, uint64_t& last_in, 
   h.fps_configured = s.watch->configured_fps();
   h.seconds_since_frame = last_ns > 0 ? static_cast<double>(now_ns - last_ns) * 1e-9 : -1;
   h.reconnects = s.reconnects;
+  h.frames_refused = static_cast<int64_t>(s.source->refused());
+  h.velocity_malformed = static_cast<int64_t>(s.velocity_in ? s.velocity_in->malformed() : 0);
+  h.velocity_rejected = static_cast<int64_t>(s.velocity.rejected());
   const SourceWatch::Verdict v = s.watch->update(static_cast<double>(now_ns) * 1e-9, st.frames_in.load(),
                                                  static_cast<double>(last_ns) * 1e-9, h.fps_in);
   h.source_state = state ? state : v.state;

@@ -1,5 +1,6 @@
 #include "daemon/velocity_buffer.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace rsd::daemon {
@@ -25,8 +26,38 @@ drivers::VelocitySample lerp(const drivers::VelocitySample& a, const drivers::Ve
 bool VelocityBuffer::sane(const drivers::VelocitySample& s) const {
   for (int i = 0; i < 3; ++i)
     if (!std::isfinite(s.w[i]) || (s.has_linear && !std::isfinite(s.v[i]))) return false;
-  return norm3(s.w) <= limits_.max_angular_rad_s && (!s.has_linear || norm3(s.v) <= limits_.max_linear_m_s) &&
-         s.t_ns > last_t_ns_;
+  return norm3(s.w) <= limits_.max_angular_rad_s && (!s.has_linear || norm3(s.v) <= limits_.max_linear_m_s);
+}
+
+bool VelocityBuffer::on_time_line(int64_t t_ns) const {
+  return last_t_ns_ == INT64_MIN || (t_ns > last_t_ns_ && t_ns - last_t_ns_ <= max_jump_ns_);
+}
+
+void VelocityBuffer::append(const drivers::VelocitySample& s) {
+  const uint64_t n = count_.load(std::memory_order_relaxed);
+  ring_[n % kCapacity] = s;
+  last_t_ns_ = s.t_ns;
+  count_.store(n + 1, std::memory_order_release);
+  newest_ns_.store(s.t_ns, std::memory_order_release);
+}
+
+// An off-line sample: kept while the held ones form a time line with it; when they are
+// kNewTimeLine, that line replaces the current one (readers see only its samples).
+bool VelocityBuffer::hold_candidate(const drivers::VelocitySample& s) {
+  const bool continues = n_candidates_ > 0 && s.t_ns > candidates_[n_candidates_ - 1].t_ns &&
+                         s.t_ns - candidates_[n_candidates_ - 1].t_ns <= max_jump_ns_;
+  if (!continues) n_candidates_ = 0;  // the held ones were strays after all
+  // Counted as rejected while held (what a reader cannot see), uncounted if confirmed.
+  rejected_.fetch_add(1, std::memory_order_relaxed);
+  candidates_[n_candidates_++] = s;
+  if (n_candidates_ < kNewTimeLine) return false;
+  rejected_.fetch_sub(static_cast<uint64_t>(n_candidates_), std::memory_order_relaxed);
+  // Published before the samples' count, so a reader that sees them sees the new epoch.
+  epoch_.store(count_.load(std::memory_order_relaxed), std::memory_order_release);
+  time_lines_.fetch_add(1, std::memory_order_relaxed);
+  for (int i = 0; i < n_candidates_; ++i) append(candidates_[i]);
+  n_candidates_ = 0;
+  return true;
 }
 
 bool VelocityBuffer::push(const drivers::VelocitySample& s) {
@@ -34,11 +65,9 @@ bool VelocityBuffer::push(const drivers::VelocitySample& s) {
     rejected_.fetch_add(1, std::memory_order_relaxed);
     return false;
   }
-  const uint64_t n = count_.load(std::memory_order_relaxed);
-  ring_[n % kCapacity] = s;
-  last_t_ns_ = s.t_ns;
-  count_.store(n + 1, std::memory_order_release);
-  newest_ns_.store(s.t_ns, std::memory_order_release);
+  if (!on_time_line(s.t_ns)) return hold_candidate(s);
+  n_candidates_ = 0;  // back on the current line: whatever was held was strays
+  append(s);
   return true;
 }
 
@@ -48,13 +77,17 @@ VelocityStatus VelocityBuffer::at(int64_t t_ns, VelocityEstimate& out) const {
     const uint64_t n = count_.load(std::memory_order_acquire);
     if (n == 0) return VelocityStatus::NoData;
     // Read only the newer half of the ring, so a writer running ahead cannot lap the reader
-    // unless it writes half a ring of samples meanwhile (checked below).
-    const uint64_t lo = n > kCapacity / 2 ? n - kCapacity / 2 : 0;
+    // unless it writes half a ring of samples meanwhile (checked below), and only the current
+    // time line.
+    const uint64_t epoch = epoch_.load(std::memory_order_acquire);
+    if (epoch >= n) continue;  // a new time line is being written: read again
+    const uint64_t lo = std::max(n > kCapacity / 2 ? n - kCapacity / 2 : 0, epoch);
     uint64_t i = n - 1;
     while (i > lo && ring_[i % kCapacity].t_ns > t_ns) --i;
     const drivers::VelocitySample a = ring_[i % kCapacity];
     const drivers::VelocitySample b = i + 1 < n ? ring_[(i + 1) % kCapacity] : a;
     if (count_.load(std::memory_order_acquire) - lo > kCapacity) continue;  // lapped: read again
+    if (epoch_.load(std::memory_order_acquire) != epoch) continue;        // a new time line meanwhile
     if (a.t_ns > t_ns) return VelocityStatus::Stale;  // older than anything we hold
     if (b.t_ns > t_ns) {  // bracketed: interpolate, unless the samples are too far apart
       if (b.t_ns - a.t_ns > 2 * max_age_ns) return VelocityStatus::Stale;

@@ -4,6 +4,7 @@
 // the writer did not lap it meanwhile (a seqlock on the whole window).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -32,10 +33,23 @@ class VelocityBuffer {
   // samples over ahead of the frames that the pipeline still holds (its slots, plus the clock
   // offset): a few hundred milliseconds of them must stay readable.
   static constexpr size_t kCapacity = 4096;
-  explicit VelocityBuffer(VelocityLimits limits = {}) : limits_(limits) {}
+  explicit VelocityBuffer(VelocityLimits limits = {})
+      : limits_(limits), max_jump_ns_(std::max<int64_t>(1'000'000'000, static_cast<int64_t>(2e9 * limits.max_age_s))) {}
 
-  // Writer: rejects (and counts) samples that break the sanity limits or go back in time.
+  // A sample more than max_jump_ns() after the newest (1 s, or twice max_age_s if longer: the
+  // widest gap the buffer interpolates across), or not after it, is off the current time line.
+  int64_t max_jump_ns() const { return max_jump_ns_; }
+  // This many consecutive off-line samples that form a time line of their own replace the
+  // current one: the clock jumped or restarted, or the current line began with a wild stamp
+  // (one far-future sample must not make every later one "late" until a restart).
+  static constexpr int kNewTimeLine = 8;
+
+  // Writer: rejects (and counts) samples that break the sanity limits; holds samples off the
+  // current time line until they confirm a new one (see kNewTimeLine), then takes them all.
   bool push(const drivers::VelocitySample& s);
+  // Writer: counts a sample refused before it could be pushed (a stamp out of range, far from
+  // the clock).
+  void reject() { rejected_.fetch_add(1, std::memory_order_relaxed); }
 
   // Reader: the velocity at t_ns, linearly interpolated between the samples around it (or
   // the newest one, if t is after it but within max_age).
@@ -45,11 +59,21 @@ class VelocityBuffer {
   int64_t newest_ns() const { return newest_ns_.load(std::memory_order_acquire); }
 
   uint64_t rejected() const { return rejected_.load(std::memory_order_relaxed); }
+  // How often a new time line replaced the current one.
+  uint64_t time_line_changes() const { return time_lines_.load(std::memory_order_relaxed); }
   uint64_t count() const { return count_.load(std::memory_order_acquire); }
 
  private:
   bool sane(const drivers::VelocitySample& s) const;
+  bool on_time_line(int64_t t_ns) const;
+  bool hold_candidate(const drivers::VelocitySample& s);
+  void append(const drivers::VelocitySample& s);
   VelocityLimits limits_;
+  int64_t max_jump_ns_;
+  std::array<drivers::VelocitySample, kNewTimeLine> candidates_{};  // writer only
+  int n_candidates_ = 0;
+  std::atomic<uint64_t> epoch_{0};  // index of the current time line's first sample
+  std::atomic<uint64_t> time_lines_{0};
   std::array<drivers::VelocitySample, kCapacity> ring_{};
   std::atomic<uint64_t> count_{0};
   std::atomic<uint64_t> rejected_{0};

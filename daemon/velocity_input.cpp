@@ -1,5 +1,7 @@
 #include "daemon/velocity_input.hpp"
 
+#include "drivers/monotonic_clock.hpp"
+
 #include <bot_core/pose_t.hpp>
 
 #include <Eigen/Geometry>
@@ -26,7 +28,21 @@ VelocityInput::~VelocityInput() {
   if (pose_sub_) lcm_unsubscribe(lcm_, pose_sub_);
 }
 
-void VelocityInput::push(int64_t utime, const Eigen::Matrix3d& r, const double* w, const double* v, bool has_linear) {
+namespace {
+
+// Stamps beyond +-4e15 us (127 years from either epoch) are wild: refused before any
+// arithmetic on them (the shift by the clock offset, the scaling to ns) could overflow.
+constexpr int64_t kMaxStampUs = 4'000'000'000'000'000;
+bool stamp_in_range(int64_t us) { return us >= -kMaxStampUs && us <= kMaxStampUs; }
+
+}  // namespace
+
+void VelocityInput::push(int64_t utime, const Eigen::Matrix3d& r, const double* w, const double* v, bool has_linear,
+                         bool live) {
+  if (!stamp_in_range(utime)) return buffer_.reject();
+  if (live && clock_check_.load() && cfg_.max_clock_offset_s > 0 &&
+      std::abs(static_cast<double>(utime * 1000 - drivers::monotonic_ns())) > cfg_.max_clock_offset_s * 1e9)
+    return buffer_.reject();  // far in the future or the past of the camera's clock
   const Eigen::Vector3d wc = r * Eigen::Vector3d(w[0], w[1], w[2]);
   const Eigen::Vector3d vc = r * Eigen::Vector3d(v[0], v[1], v[2]);
   drivers::VelocitySample s;
@@ -48,7 +64,7 @@ void VelocityInput::on_velocity(const lcm_recv_buf_t* rbuf, const char*, void* u
     self->malformed_.fetch_add(1);
     return;
   }
-  self->accept(m);
+  self->accept(m, true);
 }
 
 int64_t VelocityInput::camera_utime(int64_t utime_motion) {
@@ -64,26 +80,29 @@ void VelocityInput::at_camera_origin(const double* w, const double* v, double* o
   for (int i = 0; i < 3; ++i) out[i] = c[i];
 }
 
-void VelocityInput::push_imu(int64_t utime_imu, const double* w_measured, const double* v, bool has_linear) {
+void VelocityInput::push_imu(int64_t utime_imu, const double* w_measured, const double* v, bool has_linear, bool live) {
+  if (!stamp_in_range(utime_imu)) return buffer_.reject();
   double w[3], vc[3];
   for (int i = 0; i < 3; ++i) w[i] = cfg_.gyro_scale[i] * (w_measured[i] - cfg_.gyro_bias_rad_s[i]);
   at_camera_origin(w, v, vc);
-  push(camera_utime(utime_imu), cfg_.imu_to_camera, w, vc, has_linear);
+  push(camera_utime(utime_imu), cfg_.imu_to_camera, w, vc, has_linear, live);
 }
 
-void VelocityInput::accept(const rsd::velocity_t& m) {
+void VelocityInput::accept(const rsd::velocity_t& m, bool live) {
   std::lock_guard<std::mutex> lock(writer_);
-  if (m.frame == rsd::velocity_t::FRAME_CAMERA)  // onto the camera clock
-    push(camera_utime(m.utime), Eigen::Matrix3d::Identity(), m.angular_velocity, m.linear_velocity, m.has_linear);
+  if (m.frame == rsd::velocity_t::FRAME_CAMERA && !stamp_in_range(m.utime))
+    buffer_.reject();
+  else if (m.frame == rsd::velocity_t::FRAME_CAMERA)  // onto the camera clock
+    push(camera_utime(m.utime), Eigen::Matrix3d::Identity(), m.angular_velocity, m.linear_velocity, m.has_linear, live);
   else if (m.frame == rsd::velocity_t::FRAME_IMU)
-    push_imu(m.utime, m.angular_velocity, m.linear_velocity, m.has_linear);
+    push_imu(m.utime, m.angular_velocity, m.linear_velocity, m.has_linear, live);
   else
     malformed_.fetch_add(1);  // a frame this version does not know
 }
 
 void VelocityInput::deliver(const rsd::velocity_t& m) {
   source_feeds_.store(true);
-  accept(m);
+  accept(m, false);
 }
 
 void VelocityInput::deliver(const drivers::VelocitySample& s) {
@@ -92,9 +111,9 @@ void VelocityInput::deliver(const drivers::VelocitySample& s) {
   // On the time line of rsd.velocity_t (us), so that a replay of the published samples
   // reproduces the live run.
   if (s.imu_frame)
-    push_imu(s.t_ns / 1000, s.w, s.v, s.has_linear);
+    push_imu(s.t_ns / 1000, s.w, s.v, s.has_linear, false);
   else
-    push(s.t_ns / 1000, Eigen::Matrix3d::Identity(), s.w, s.v, s.has_linear);
+    push(s.t_ns / 1000, Eigen::Matrix3d::Identity(), s.w, s.v, s.has_linear, false);
 }
 
 void VelocityInput::set_calibration(const VelocityInputConfig& c) {
@@ -130,22 +149,23 @@ void VelocityInput::on_pose(const lcm_recv_buf_t* rbuf, const char*, void* user)
     return;
   }
   std::lock_guard<std::mutex> lock(self->writer_);
-  self->push_pose(m);
+  self->push_pose(m, true);
 }
 
-void VelocityInput::push_pose(const bot_core::pose_t& m) {
+void VelocityInput::push_pose(const bot_core::pose_t& m, bool live) {
+  if (!stamp_in_range(m.utime)) return buffer_.reject();
   double v[3];
   at_camera_origin(m.rotation_rate, m.vel, v);
   // A calibration learned from a trajectory holds the body-to-camera rotation in T_cam_imu;
   // velocity.body_to_camera, when set, says the same and comes first.
   const bool calibrated_rotation = cfg_.pose_calibrated && cfg_.body_to_camera.isIdentity();
-  push(camera_utime(m.utime), calibrated_rotation ? cfg_.imu_to_camera : cfg_.body_to_camera, m.rotation_rate, v, true);
+  push(camera_utime(m.utime), calibrated_rotation ? cfg_.imu_to_camera : cfg_.body_to_camera, m.rotation_rate, v, true, live);
 }
 
 void VelocityInput::deliver(const bot_core::pose_t& m) {
   source_feeds_pose_.store(true);
   std::lock_guard<std::mutex> lock(writer_);
-  push_pose(m);
+  push_pose(m, false);
 }
 
 void VelocityInput::start() {

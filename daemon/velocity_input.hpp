@@ -48,6 +48,9 @@ struct VelocityInputConfig {
   // A calibration was given: bot_core.pose_t messages (a tracked body, on the motion clock) go
   // through its clock offset and drift too, and through its rotation unless body_to_camera is set.
   bool pose_calibrated = false;
+  // Messages received over LCM while a live camera runs (set_clock_check) whose camera time
+  // is further than this from the camera clock are refused and counted (0: no check).
+  double max_clock_offset_s = 5;
 };
 
 // Whether m is a proper rotation (orthonormal, determinant +1) to within tol.
@@ -78,6 +81,9 @@ class VelocityInput {
   // The same for bot_core.pose_t on the pose channel (a replayed log's, the lcm source's).
   void deliver(const bot_core::pose_t& m);
   uint64_t ignored() const { return ignored_.load(); }
+  // Checks messages received over LCM against the camera clock (CLOCK_MONOTONIC): on for a live
+  // camera, whose clock the stamps share; a replay's or a source's own samples are not checked.
+  void set_clock_check(bool on) { clock_check_.store(on); }
   // A new calibration (SIGHUP): the rotations and the IMU's clock, bias, scale and lever arm of
   // `c`, for every sample from now on (the channels stay). Any thread.
   void set_calibration(const VelocityInputConfig& c);
@@ -88,16 +94,17 @@ class VelocityInput {
  private:
   static void on_velocity(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
   static void on_pose(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
-  void accept(const rsd::velocity_t& m);
-  void push(int64_t utime, const Eigen::Matrix3d& r, const double* w, const double* v, bool has_linear);
+  // `live`: received over LCM (checked against the clock), not delivered by the source.
+  void accept(const rsd::velocity_t& m, bool live);
+  void push(int64_t utime, const Eigen::Matrix3d& r, const double* w, const double* v, bool has_linear, bool live);
   // A motion-clock stamp on the camera clock, through the offset and drift.
   int64_t camera_utime(int64_t utime_motion);
   // A body's linear velocity carried to the camera's origin (the lever arm).
   void at_camera_origin(const double* w, const double* v, double* out) const;
   // A tracked body's pose message (body axes, motion clock) through the calibration.
-  void push_pose(const bot_core::pose_t& m);
+  void push_pose(const bot_core::pose_t& m, bool live);
   // A motion-sensor measurement (IMU axes and clock) through the calibration.
-  void push_imu(int64_t utime_imu, const double* w_measured, const double* v, bool has_linear);
+  void push_imu(int64_t utime_imu, const double* w_measured, const double* v, bool has_linear, bool live);
   lcm_t* lcm_;
   std::string channel_;
   VelocityBuffer& buffer_;
@@ -107,6 +114,7 @@ class VelocityInput {
   std::atomic<bool> running_{false};
   std::atomic<uint64_t> malformed_{0}, ignored_{0};
   std::atomic<bool> source_feeds_{false}, source_feeds_pose_{false};
+  std::atomic<bool> clock_check_{false};
   std::optional<int64_t> t0_us_;  // camera time of the first sample (the drift's reference)
   formats::LcmLogWriter* record_ = nullptr;
   // The source's thread and the LCM thread (pose_t) both push, and set_calibration() changes

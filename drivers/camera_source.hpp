@@ -49,6 +49,9 @@ class CameraSource {
   virtual void stop() = 0;
   // Sources that know the camera's motion report it here (called from capture()).
   virtual void set_velocity_sink(VelocitySink) {}
+  // What the source received and refused (a damaged, inconsistent or out-of-order frame or
+  // message), each counted and its reason logged; any thread may ask.
+  virtual uint64_t refused() const { return 0; }
 };
 
 }  // namespace rsd::drivers

@@ -16,9 +16,21 @@ LcmSource::~LcmSource() {
   if (lcm_) lcm_destroy(lcm_);
 }
 
+// The first three skips of a reason are logged each, later ones at 10, 100, 1000, ... so
+// that a flood is seen growing without a line per message.
 void LcmSource::skip(formats::LogSkip r, const std::string& detail) {
-  if (++skips_[static_cast<size_t>(r)] <= 3)
-    spdlog::warn("lcm source {}: message skipped: {}: {}", cfg_.url, to_string(r), detail);
+  const uint64_t n = skips_[static_cast<size_t>(r)].fetch_add(1, std::memory_order_relaxed) + 1;
+  uint64_t decade = 10;
+  while (decade < n && decade <= UINT64_MAX / 10) decade *= 10;
+  if (n <= 3 || n == decade)
+    spdlog::warn("lcm source {}: message skipped: {}: {}{}", cfg_.url, to_string(r), detail,
+                 n > 3 ? " (" + std::to_string(n) + " skipped for this reason so far)" : "");
+}
+
+uint64_t LcmSource::refused() const {
+  uint64_t n = 0;
+  for (const auto& k : skips_) n += k.load(std::memory_order_relaxed);
+  return n;
 }
 
 void LcmSource::open() {
@@ -52,7 +64,14 @@ void LcmSource::on_image(const lcm_recv_buf_t* rbuf, const char* channel, void* 
   const auto* data = static_cast<const uint8_t*>(rbuf->data);
   const formats::DecodeStatus st = formats::decode_frame(data, rbuf->data_size, self->img_, self->frame_, self->why_);
   if (st != formats::DecodeStatus::Ok) return self->skip(formats::to_skip(st), std::string(channel) + ": " + self->why_);
+  // A frame must come after the previous one: a repeated or backward stamp would make the
+  // pipeline's row times (and the velocity it looks up) go back.
+  if (self->frame_.meta.first_row_ns <= self->last_frame_ns_)
+    return self->skip(formats::LogSkip::OutOfOrder, std::string(channel) + ": first row at " +
+                                                        std::to_string(self->frame_.meta.first_row_ns) + " ns, not after " +
+                                                        std::to_string(self->last_frame_ns_) + " ns");
   if (self->opening_) {
+    self->last_frame_ns_ = self->frame_.meta.first_row_ns;
     self->first_ = self->frame_;
     const FrameFormat& f = self->first_.format;
     self->pending_image_ = dsp::Image(f.width, f.height, f.format);
@@ -65,6 +84,7 @@ void LcmSource::on_image(const lcm_recv_buf_t* rbuf, const char* channel, void* 
   if (!self->target_ || f.width != self->first_.format.width || f.height != self->first_.format.height ||
       f.format != self->first_.format.format)
     return self->skip(formats::LogSkip::Undecodable, std::string(channel) + ": frame size or format changed");
+  self->last_frame_ns_ = self->frame_.meta.first_row_ns;
   formats::copy_pixels(self->img_, *self->target_);
   *self->target_meta_ = self->frame_.meta;
   self->got_frame_ = true;

@@ -13,6 +13,7 @@
 #include <lcm/lcm.h>
 
 #include <array>
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -45,7 +46,9 @@ class LcmSource final : public MessageSource {
   CaptureStatus capture(const dsp::ImageView& dst, FrameMeta& meta, std::chrono::milliseconds timeout) override;
   void stop() override {}
   std::optional<dsp::CameraModel> recorded_camera() const override { return first_.camera; }
-  uint64_t skipped(formats::LogSkip r) const { return skips_[static_cast<size_t>(r)]; }
+  uint64_t skipped(formats::LogSkip r) const { return skips_[static_cast<size_t>(r)].load(std::memory_order_relaxed); }
+  // Messages on the frame, velocity and pose channels refused, all reasons.
+  uint64_t refused() const override;
 
  private:
   static void on_image(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
@@ -65,7 +68,8 @@ class LcmSource final : public MessageSource {
   std::vector<bot_core::pose_t> early_pose_;
   const dsp::ImageView* target_ = nullptr;
   FrameMeta* target_meta_ = nullptr;
-  std::array<uint64_t, formats::kLogSkipKinds> skips_{};
+  std::array<std::atomic<uint64_t>, formats::kLogSkipKinds> skips_{};  // written by the capture thread
+  int64_t last_frame_ns_ = INT64_MIN;  // the newest frame's first row: the next must come after
 };
 
 // The driver's entry (drivers/driver_registry.cpp) and its config section (source.lcm).

@@ -20,6 +20,22 @@ using File = std::unique_ptr<std::FILE, FileCloser>;
   throw std::runtime_error(path + ": " + why);
 }
 
+// A header's size against the documented limits, before the image is allocated.
+void check_size(const std::string& path, long long w, long long h) {
+  if (w > kMaxImageSide || h > kMaxImageSide || w * h > kMaxImagePixels)
+    fail(path, "claims " + std::to_string(w) + "x" + std::to_string(h) + " pixels, beyond rsd's limit (sides up to " +
+                   std::to_string(kMaxImageSide) + ", " + std::to_string(kMaxImagePixels) + " pixels in all)");
+}
+
+// The bytes left in a stream after its read position.
+long long bytes_left(std::ifstream& in) {
+  const auto here = in.tellg();
+  in.seekg(0, std::ios::end);
+  const auto end = in.tellg();
+  in.seekg(here);
+  return here < 0 || end < 0 ? 0 : static_cast<long long>(end - here);
+}
+
 bool has_suffix(const std::string& s, const std::string& suf) {
   return s.size() >= suf.size() && s.compare(s.size() - suf.size(), suf.size(), suf) == 0;
 }
@@ -43,6 +59,11 @@ dsp::Image read_pgm(const std::string& path) {
   };
   const int w = next_int("width"), h = next_int("height"), maxval = next_int("maxval");
   in.get();  // the single whitespace byte before the raster
+  check_size(path, w, h);
+  const long long need = static_cast<long long>(w) * h * (maxval > 255 ? 2 : 1);
+  if (bytes_left(in) < need)  // before allocating what the header claims
+    fail(path, "truncated PGM raster: expected " + std::to_string(need) + " bytes, the file holds " +
+                   std::to_string(bytes_left(in)));
   dsp::Image img(w, h, maxval > 255 ? dsp::PixelFormat::Mono16 : dsp::PixelFormat::Mono8);
   if (!in.read(reinterpret_cast<char*>(img.data.data()), static_cast<std::streamsize>(img.data.size())))
     fail(path, "truncated PGM raster: expected " + std::to_string(img.data.size()) + " bytes");
@@ -55,6 +76,11 @@ dsp::Image read_png(const std::string& path) {
   png_image png{};
   png.version = PNG_IMAGE_VERSION;
   if (!png_image_begin_read_from_file(&png, path.c_str())) fail(path, std::string("not a readable PNG: ") + png.message);
+  if (png.width > static_cast<png_uint_32>(kMaxImageSide) || png.height > static_cast<png_uint_32>(kMaxImageSide) ||
+      static_cast<long long>(png.width) * png.height > kMaxImagePixels) {
+    png_image_free(&png);
+    check_size(path, png.width, png.height);
+  }
   const bool grey = (png.format & PNG_FORMAT_FLAG_COLOR) == 0;
   const bool deep = (png.format & PNG_FORMAT_FLAG_LINEAR) != 0;
   dsp::Image img;

@@ -1,6 +1,7 @@
 #include "formats/image_t_codec.hpp"
 
 #include <charconv>
+#include <cmath>
 #include <cinttypes>
 #include <cstdio>
 #include <cstdlib>
@@ -102,6 +103,74 @@ DecodeStatus check_image_t(const uint8_t* data, size_t n, std::string& why) {
   return DecodeStatus::Ok;
 }
 
+namespace {
+
+// Microseconds as nanoseconds, unless that overflows (a stamp beyond the year 2262).
+bool us_to_ns(int64_t us, int64_t& ns) {
+  if (us > INT64_MAX / 1000 || us < INT64_MIN / 1000) return false;
+  ns = us * 1000;
+  return true;
+}
+
+// The first row's time (monotonic), the Unix time and the sequence.
+bool parse_times(const bot_core::image_t& img, RecordedFrame& out, std::string& why) {
+  int64_t ns = 0, us = img.utime;
+  if (!us_to_ns(img.utime, out.meta.wall_ns))  // libbot2's convention; older rsd logs: their monotonic time
+    return why = "utime " + std::to_string(img.utime) + " is out of range", false;
+  if (parse_number(value_of(img, "frame_ns"), ns)) {
+    out.meta.first_row_ns = ns;
+  } else if (parse_number(value_of(img, "frame_utime"), us)) {
+    if (!us_to_ns(us, out.meta.first_row_ns)) return why = "metadata frame_utime " + std::to_string(us) + " is out of range", false;
+  } else {
+    out.meta.first_row_ns = out.meta.wall_ns;
+  }
+  uint64_t seq = 0;
+  if (parse_number(value_of(img, "sequence"), seq)) out.meta.sequence = seq;
+  return true;
+}
+
+// Exposure, readout, line delay, frame rate and first row, each checked for range: a NaN or
+// absurd value here would stamp every row of the frame wrong.
+bool parse_timing(const bot_core::image_t& img, RecordedFrame& out, std::string& why) {
+  auto bad = [&](const char* key, double v) { return why = std::string("metadata ") + key + " " + std::to_string(v) + " is out of range", false; };
+  double x = 0;
+  if (parse_number(value_of(img, "exposure_s"), x)) out.meta.exposure_s = x;
+  else if (parse_number(value_of(img, "exposure_ns"), x)) out.meta.exposure_s = x * 1e-9;
+  if (!(out.meta.exposure_s >= 0 && out.meta.exposure_s <= 10)) return bad("exposure", out.meta.exposure_s);
+  dsp::Readout r;
+  if (dsp::parse_readout(value_of(img, "readout"), r)) out.readout = r;
+  double t[4];
+  if (parse_numbers(value_of(img, "timing"), t, 4)) {
+    if (!(t[0] >= 0 && t[0] < 1)) return bad("timing (line delay)", t[0]);
+    if (!(t[1] > 0 && t[1] <= 1e5)) return bad("timing (frame rate)", t[1]);
+    // -1: the readout's natural first row (dsp::RowTiming::first_row)
+    if (!(t[3] >= -1 && t[3] < img.height && t[3] == std::floor(t[3]))) return bad("timing (first row)", t[3]);
+    out.line_delay_s = t[0];
+    out.frame_rate_hz = t[1];
+    out.first_row = static_cast<int>(t[3]);
+  } else if (parse_number(value_of(img, "line_delay_ns"), x)) {
+    if (!(x >= 0 && x < 1e9)) return bad("line_delay_ns", x);
+    out.line_delay_s = x * 1e-9;
+  }
+  return true;
+}
+
+bool parse_intrinsics(const bot_core::image_t& img, RecordedFrame& out, std::string& why) {
+  double k[9];
+  if (!parse_numbers(value_of(img, "intrinsics"), k, 9)) return true;
+  for (double v : k)
+    if (!std::isfinite(v)) return why = "metadata intrinsics hold a value that is not finite", false;
+  if (!(k[0] > 0 && k[1] > 0)) return why = "metadata intrinsics have a focal length that is not positive", false;
+  dsp::CameraModel c;
+  c.width = img.width, c.height = img.height;
+  c.fx = k[0], c.fy = k[1], c.cx = k[2], c.cy = k[3];
+  c.dist = {k[4], k[5], k[6], k[7], k[8]};
+  out.camera = c;
+  return true;
+}
+
+}  // namespace
+
 bool parse_frame(const bot_core::image_t& img, RecordedFrame& out, std::string& why) {
   const auto fmt = pixel_format(img.pixelformat);
   if (!fmt) return why = "pixel format " + std::to_string(img.pixelformat) + " is not mono8, mono16 or rgb8", false;
@@ -113,35 +182,7 @@ bool parse_frame(const bot_core::image_t& img, RecordedFrame& out, std::string& 
                  " bytes do not hold " + std::to_string(img.width) + "x" + std::to_string(img.height) + " pixels", false;
   out = {};
   out.format = {img.width, img.height, *fmt};
-  int64_t ns = 0, us = img.utime;
-  if (parse_number(value_of(img, "frame_ns"), ns)) out.meta.first_row_ns = ns;
-  else if (parse_number(value_of(img, "frame_utime"), us)) out.meta.first_row_ns = us * 1000;
-  else out.meta.first_row_ns = img.utime * 1000;
-  out.meta.wall_ns = img.utime * 1000;  // libbot2's convention; older rsd logs: their monotonic time
-  uint64_t seq = 0;
-  if (parse_number(value_of(img, "sequence"), seq)) out.meta.sequence = seq;
-  double x = 0;
-  if (parse_number(value_of(img, "exposure_s"), x)) out.meta.exposure_s = x;
-  else if (parse_number(value_of(img, "exposure_ns"), x)) out.meta.exposure_s = x * 1e-9;
-  dsp::Readout r;
-  if (dsp::parse_readout(value_of(img, "readout"), r)) out.readout = r;
-  double t[4];
-  if (parse_numbers(value_of(img, "timing"), t, 4)) {
-    out.line_delay_s = t[0];
-    out.frame_rate_hz = t[1];
-    out.first_row = static_cast<int>(t[3]);
-  } else if (parse_number(value_of(img, "line_delay_ns"), x)) {
-    out.line_delay_s = x * 1e-9;
-  }
-  double k[9];
-  if (parse_numbers(value_of(img, "intrinsics"), k, 9)) {
-    dsp::CameraModel c;
-    c.width = img.width, c.height = img.height;
-    c.fx = k[0], c.fy = k[1], c.cx = k[2], c.cy = k[3];
-    c.dist = {k[4], k[5], k[6], k[7], k[8]};
-    out.camera = c;
-  }
-  return true;
+  return parse_times(img, out, why) && parse_timing(img, out, why) && parse_intrinsics(img, out, why);
 }
 
 DecodeStatus decode_frame(const uint8_t* data, size_t n, bot_core::image_t& img, RecordedFrame& out, std::string& why) {

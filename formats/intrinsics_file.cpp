@@ -65,8 +65,8 @@ dsp::CameraModel read_kalibr_camera(YamlMap& c) {
 
   const std::vector<double> res = c.numbers("resolution", 2);
   for (double v : res)
-    if (!(v >= 1) || v != std::floor(v) || v > 1e6)
-      c.fail("resolution", "must be two positive whole numbers [width, height]");
+    if (!(v >= 1) || v != std::floor(v) || v > 16384)
+      c.fail("resolution", "must be two whole numbers [width, height] of 1..16384 pixels");
   cam.width = static_cast<int>(res[0]);
   cam.height = static_cast<int>(res[1]);
   return cam;
@@ -133,8 +133,8 @@ Intrinsics load_ros(const std::string& file, YamlMap& root, const std::string& c
   Intrinsics out;
   const int w = required_int(root, "image_width");
   const int h = required_int(root, "image_height");
-  if (w < 1) root.fail("image_width", "must be positive");
-  if (h < 1) root.fail("image_height", "must be positive");
+  if (w < 1 || w > 16384) root.fail("image_width", "must be 1..16384 pixels");
+  if (h < 1 || h > 16384) root.fail("image_height", "must be 1..16384 pixels");
   out.cam.width = w;
   out.cam.height = h;
 
@@ -214,6 +214,9 @@ dsp::CameraModel read_camera_section(YamlMap m, const dsp::CameraModel& defaults
   dsp::CameraModel c = defaults;
   c.width = m.integer("width", c.width);
   c.height = m.integer("height", c.height);
+  // Before anything is computed from them (a width of -2^31 overflowed the default cx).
+  if (c.width < 2 || c.height < 2 || c.width > 16384 || c.height > 16384)
+    m.fail(c.width < 2 || c.width > 16384 ? "width" : "height", "must be 2..16384 pixels");
   c.fx = m.number("fx", c.fx);
   c.fy = m.number("fy", c.fx);
   c.cx = m.number("cx", 0.5 * (c.width - 1));
@@ -222,7 +225,6 @@ dsp::CameraModel read_camera_section(YamlMap m, const dsp::CameraModel& defaults
     const auto d = m.numbers("distortion", 4);
     c.dist = {d[0], d[1], d[2], d[3], 0};
   }
-  if (c.width < 2 || c.height < 2) m.fail("width", "and height must be at least 2 pixels");
   if (!(c.fx > 0 && c.fy > 0)) m.fail("fx", "and fy must be positive");
   m.finish();
   return c;

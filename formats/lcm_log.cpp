@@ -40,6 +40,7 @@ const char* to_string(LogSkip s) {
     case LogSkip::UnknownChannel: return "unknown channel";
     case LogSkip::WrongFingerprint: return "wrong fingerprint";
     case LogSkip::Undecodable: return "undecodable";
+    case LogSkip::OutOfOrder: return "out of order";
   }
   return "?";
 }

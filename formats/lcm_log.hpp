@@ -35,8 +35,9 @@ enum class LogSkip {
   UnknownChannel,    // a channel the reader has no use for (callers decide)
   WrongFingerprint,  // the payload is a different LCM type than the channel's
   Undecodable,       // right type, but the payload does not decode (or is inconsistent)
+  OutOfOrder,        // a frame whose first-row time does not come after the previous frame's
 };
-inline constexpr size_t kLogSkipKinds = 6;
+inline constexpr size_t kLogSkipKinds = 7;
 const char* to_string(LogSkip s);
 
 struct LogLimits {

@@ -118,15 +118,23 @@ YamlMap YamlMap::map(const std::string& key) {
   return YamlMap(file_, n, path(key));
 }
 
+// A mapping key as a name. YAML allows any node as a key ("? [a, b]: 1"); none of ours is one,
+// and yaml-cpp would throw its own exception converting it.
+std::string YamlMap::key_name(const YAML::Node& key) const {
+  if (!key.IsScalar())
+    throw ConfigError(where(key) + ": '" + (path_.empty() ? "document" : path_) + "' has a key that is not a plain name");
+  return key.Scalar();
+}
+
 std::vector<std::string> YamlMap::keys() const {
   std::vector<std::string> k;
-  for (const auto& kv : node_) k.push_back(kv.first.as<std::string>());
+  for (const auto& kv : node_) k.push_back(key_name(kv.first));
   return k;
 }
 
 void YamlMap::finish() const {
   for (const auto& kv : node_) {
-    const std::string k = kv.first.as<std::string>();
+    const std::string k = key_name(kv.first);
     if (!used_.count(k)) throw ConfigError(where(kv.first) + ": unknown key '" + path(k) + "'");
   }
 }

@@ -42,6 +42,7 @@ class YamlMap {
  private:
   YAML::Node child(const std::string& key);
   std::string where(const YAML::Node& n) const;
+  std::string key_name(const YAML::Node& key) const;
   std::string file_;
   YAML::Node node_;
   std::string path_;

@@ -65,6 +65,11 @@ int describe(const Options& o) {
       }
     }
   }
+  if (per_channel.empty()) {  // a random or empty file is not a log with nothing in it
+    std::fprintf(stderr, "rsd-replay: %s: no readable LCM event: not an LCM log%s%s\n", o.log.c_str(),
+                 reader.skipped_total() ? "; skipped " : "", reader.skip_summary().c_str());
+    return 1;
+  }
   std::printf("%s: %.3f s of events\n", o.log.c_str(), static_cast<double>(t1 - t0) * 1e-6);
   for (const auto& [c, n] : per_channel) std::printf("  %-20s %llu\n", c.c_str(), static_cast<unsigned long long>(n));
   std::printf("raw frames: %llu\nframe infos: %llu (rectified %llu)\nskipped: %llu%s%s\n",

@@ -23,6 +23,7 @@ PACKAGES=(
   help2man dpkg-dev procps               # man pages from --help; the Debian package (cpack, dpkg-shlibdeps); kill
   libcamera-dev                          # the libcamera driver
   libaravis-dev aravis-tools libusb-1.0-0-dev iproute2 util-linux  # Aravis driver; fake GigE camera tests in a private netns
+  clang libfuzzer-14-dev                 # fuzzing the parsers (tests/fuzz/run.sh)
 )
 
 missing=()

@@ -160,7 +160,25 @@ TEST(Config, BadValuesNameFileLineAndKey) {
   // URL stands in the tests, so none can be used by mistake).
   const std::string multicast = std::string("udp") + "m://239.255.76.67:7667";
   EXPECT_NE(error_of("lcm: {url: \"" + multicast + "\"}\n").find("'lcm.url' is multicast"), std::string::npos);
+  // Issue 16, defect 6: a width of -2^31 overflowed the default principal point.
+  EXPECT_NE(error_of("source:\n  camera: {width: -2147483648, height: 480, fx: 500}\n").find("'source.camera.width' must be 2..16384 pixels"),
+            std::string::npos)
+      << error_of("source:\n  camera: {width: -2147483648, height: 480, fx: 500}\n");
   EXPECT_NE(error_of("velocity: {imu_to_camera: [1, 0, 0, 0, 1, 0, 0, 0, 2]}\n").find("must be a rotation matrix"), std::string::npos);
+}
+
+// Issue 16, defect 2: a complex key (YAML's "? [a, b]") made yaml-cpp throw its own exception
+// past the configuration's error handling; it is a ConfigError naming file, line and section.
+TEST(Config, AComplexKeyIsAConfigErrorNotAYamlException) {
+  const std::string top = error_of("? [a, b]\n: 1\n");
+  EXPECT_NE(top.find("bad.yaml:1:3: 'document' has a key that is not a plain name"), std::string::npos) << top;
+  const std::string nested = error_of("pipeline:\n  ? {x: 1}\n  : 2\n");
+  EXPECT_NE(nested.find("bad.yaml:2:5: 'pipeline' has a key that is not a plain name"), std::string::npos) << nested;
+  try {
+    load("bad.yaml", "source:\n  ? [sim]\n  : 1\n");
+    ADD_FAILURE() << "no error";
+  } catch (const formats::ConfigError&) {
+  }
 }
 
 }  // namespace

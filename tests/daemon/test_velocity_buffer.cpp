@@ -64,3 +64,52 @@ TEST(VelocityBuffer, ManySamplesWrapTheRing) {
   ASSERT_EQ(b.at(4990500000LL, e), VelocityStatus::Ok);  // t = 4990.5 ms
   EXPECT_NEAR(e.sample.w[2], 4.9905, 1e-9);
 }
+
+// Issue 16, defect 1: one plausible far-future stamp made every later sample "not after the
+// previous one": rectification stopped until a restart. Now a stray off the time line is held,
+// then dropped (counted) when the line goes on.
+TEST(VelocityBuffer, OneFarFutureSampleIsDroppedAndTheLineGoesOn) {
+  VelocityBuffer b;
+  for (int t = 0; t < 100; ++t) ASSERT_TRUE(b.push(sample(t, 1.0)));
+  EXPECT_FALSE(b.push(sample(1000LL * 86400 * 365, 1.0)));  // a year ahead
+  EXPECT_FALSE(b.push(sample(99, 1.0)));                    // a repeated stamp
+  for (int t = 100; t < 200; ++t) ASSERT_TRUE(b.push(sample(t, 2.0))) << t;
+  VelocityEstimate e;
+  ASSERT_EQ(b.at(150 * 1000000, e), VelocityStatus::Ok);
+  EXPECT_EQ(e.sample.w[2], 2.0);
+  EXPECT_EQ(b.rejected(), 2u);
+  EXPECT_EQ(b.time_line_changes(), 0u);
+}
+
+// The wild stamp came first (or the sensor's clock restarted): kNewTimeLine consistent samples
+// replace the line, none of them lost, and readers no longer see the old one.
+TEST(VelocityBuffer, AConsistentNewTimeLineReplacesAWildOne) {
+  VelocityBuffer b;
+  ASSERT_TRUE(b.push(sample(1000LL * 86400 * 365, 5.0)));  // the first sample: a year ahead
+  for (int t = 0; t < VelocityBuffer::kNewTimeLine - 1; ++t) EXPECT_FALSE(b.push(sample(t, 1.0 + t)));
+  EXPECT_TRUE(b.push(sample(VelocityBuffer::kNewTimeLine - 1, 1.0 + VelocityBuffer::kNewTimeLine - 1)));
+  EXPECT_EQ(b.time_line_changes(), 1u);
+  EXPECT_EQ(b.rejected(), 0u);  // the held samples all went in
+  VelocityEstimate e;
+  ASSERT_EQ(b.at(2500000, e), VelocityStatus::Ok);  // 2.5 ms: between the held samples 2 and 3
+  EXPECT_NEAR(e.sample.w[2], 3.5, 1e-12);
+  EXPECT_EQ(b.newest_ns(), (VelocityBuffer::kNewTimeLine - 1) * 1000000LL);
+  for (int t = VelocityBuffer::kNewTimeLine; t < 50; ++t) EXPECT_TRUE(b.push(sample(t, 1.0)));
+  ASSERT_EQ(b.at(40 * 1000000, e), VelocityStatus::Ok);
+  EXPECT_EQ(b.at(1000LL * 86400 * 365 * 1000000, e), VelocityStatus::Stale);  // the wild line is gone
+}
+
+// Strays that do not form a line (alternating wild stamps) never replace the real one.
+TEST(VelocityBuffer, ScatteredStraysNeverReplaceTheLine) {
+  VelocityBuffer b;
+  int64_t t = 0;
+  for (int i = 0; i < 400; ++i) {
+    ASSERT_TRUE(b.push(sample(t++, 1.0)));
+    EXPECT_FALSE(b.push(sample((i % 2 ? 1 : -1) * 1000000LL * (i + 2), 9.0)));
+  }
+  EXPECT_EQ(b.time_line_changes(), 0u);
+  EXPECT_EQ(b.rejected(), 400u);
+  VelocityEstimate e;
+  ASSERT_EQ(b.at(399 * 1000000, e), VelocityStatus::Ok);
+  EXPECT_EQ(e.sample.w[2], 1.0);
+}

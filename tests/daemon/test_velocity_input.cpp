@@ -381,3 +381,43 @@ TEST(VelocityInputConfig, NonRotationIsAnErrorNamingTheKey) {
   EXPECT_THROW(load_text("velocity:\n  body_to_camera: [1, 0, 0]\n"), rsd::formats::ConfigError);
   EXPECT_THROW(load_text("velocity:\n  pose_channel: RSD_VELOCITY\n"), rsd::formats::ConfigError);
 }
+
+// Issue 16, defect 1: utime * 1000 overflowed on extreme stamps (undefined behaviour; the
+// sanitizer build aborted). They are refused and counted, in camera and IMU axes and as poses.
+TEST_F(VelocityInputTest, ExtremeStampsAreRefusedAndCounted) {
+  VelocityInputConfig cfg;
+  cfg.pose_channel = "POSE";
+  cfg.imu_time_offset_s = 0.5;
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_, cfg);
+  for (const int64_t t : {INT64_MAX, INT64_MIN, INT64_MAX / 1000 + 1, -(INT64_MAX / 1000) - 1}) {
+    publish("RSD_VELOCITY", velocity(t, rsd::velocity_t::FRAME_CAMERA, 0.1, 0, 0, 0, 0, 0));
+    publish("RSD_VELOCITY", velocity(t, rsd::velocity_t::FRAME_IMU, 0.1, 0, 0, 0, 0, 0));
+    bot_core::pose_t p{};
+    p.utime = t;
+    p.orientation[0] = 1;
+    publish("POSE", p);
+  }
+  publish("RSD_VELOCITY", velocity(1000, rsd::velocity_t::FRAME_CAMERA, 0.1, 0, 0, 0, 0, 0));
+  drain();
+  EXPECT_EQ(buffer_.rejected(), 12u);
+  EXPECT_EQ(buffer_.count(), 1u);
+  EXPECT_EQ(in.malformed(), 0u);
+}
+
+// With a live camera, messages share its clock (CLOCK_MONOTONIC): one stamped a minute away is
+// refused and counted, one stamped now is taken; without the check (a replay) both would be.
+TEST_F(VelocityInputTest, WithALiveCameraStampsFarFromTheClockAreRefused) {
+  VelocityInputConfig cfg;
+  cfg.max_clock_offset_s = 5;
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_, cfg);
+  in.set_clock_check(true);
+  const int64_t now_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                             std::chrono::steady_clock::now().time_since_epoch()).count();
+  publish("RSD_VELOCITY", velocity(now_us + 60'000'000, rsd::velocity_t::FRAME_CAMERA, 0.1, 0, 0, 0, 0, 0));
+  publish("RSD_VELOCITY", velocity(now_us - 60'000'000, rsd::velocity_t::FRAME_IMU, 0.1, 0, 0, 0, 0, 0));
+  publish("RSD_VELOCITY", velocity(now_us, rsd::velocity_t::FRAME_CAMERA, 0.2, 0, 0, 0, 0, 0));
+  drain();
+  EXPECT_EQ(buffer_.rejected(), 2u);
+  EXPECT_EQ(buffer_.count(), 1u);
+  EXPECT_EQ(at(now_us).w[0], 0.2);
+}

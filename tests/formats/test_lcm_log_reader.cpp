@@ -376,3 +376,55 @@ TEST(ReplayPacer, RealTimeAndFactorsFollowTheLogsClock) {
   EXPECT_FALSE(parse_speed("0", s));
   EXPECT_FALSE(parse_speed("2x", s));
 }
+
+namespace {
+
+// A valid 4x2 mono frame with the given metadata.
+bot_core::image_t frame_with(std::vector<std::pair<std::string, std::string>> meta, int64_t utime = 1700000000000000) {
+  bot_core::image_t img{};
+  img.utime = utime;
+  img.width = 4, img.height = 2, img.row_stride = 4;
+  img.pixelformat = bot_core::image_t::PIXEL_FORMAT_GRAY;
+  img.size = 8;
+  img.data.assign(8, 0);
+  for (const auto& [k, v] : meta) {
+    bot_core::image_metadata_t m;
+    m.key = k;
+    m.value.assign(v.begin(), v.end());
+    img.metadata.push_back(m);
+  }
+  img.nmetadata = static_cast<int32_t>(img.metadata.size());
+  return img;
+}
+
+std::string refusal(const bot_core::image_t& img) {
+  RecordedFrame f;
+  std::string why;
+  return parse_frame(img, f, why) ? "accepted" : why;
+}
+
+}  // namespace
+
+// Issue 16, defect 6: stamps that overflow when scaled to ns and timing that is NaN or absurd
+// (a NaN first row converted to int) were accepted and stamped every row wrong.
+TEST(RecordedFrame, OutOfRangeStampsAndTimingAreRefusedNamingTheField) {
+  EXPECT_EQ(refusal(frame_with({{"frame_utime", "123"}, {"timing", "1e-5 30 0.001 0"}})), "accepted");
+  EXPECT_EQ(refusal(frame_with({{"timing", "1e-5 30 0.001 -1"}})), "accepted");  // the natural first row
+  EXPECT_EQ(refusal(frame_with({}, INT64_MAX)), "utime 9223372036854775807 is out of range");
+  EXPECT_EQ(refusal(frame_with({{"frame_utime", "-9223372036854775807"}})),
+            "metadata frame_utime -9223372036854775807 is out of range");
+  EXPECT_NE(refusal(frame_with({{"timing", "nan 30 0.001 0"}})).find("timing (line delay)"), std::string::npos);
+  EXPECT_NE(refusal(frame_with({{"timing", "1e-5 -30 0.001 0"}})).find("timing (frame rate)"), std::string::npos);
+  EXPECT_NE(refusal(frame_with({{"timing", "1e-5 30 0.001 nan"}})).find("timing (first row)"), std::string::npos);
+  EXPECT_NE(refusal(frame_with({{"timing", "1e-5 30 0.001 2"}})).find("timing (first row)"), std::string::npos);
+  EXPECT_NE(refusal(frame_with({{"timing", "1e-5 30 0.001 -2"}})).find("timing (first row)"), std::string::npos);
+  EXPECT_NE(refusal(frame_with({{"exposure_s", "inf"}})).find("exposure"), std::string::npos);
+  EXPECT_NE(refusal(frame_with({{"line_delay_ns", "-5"}})).find("line_delay_ns"), std::string::npos);
+  EXPECT_NE(refusal(frame_with({{"intrinsics", "500 500 2 1 inf 0 0 0 0"}})).find("not finite"), std::string::npos);
+  EXPECT_NE(refusal(frame_with({{"intrinsics", "0 500 2 1 0 0 0 0 0"}})).find("not positive"), std::string::npos);
+  // Without frame_utime the first row's time is the utime (rsd-sim and older logs).
+  RecordedFrame f;
+  std::string why;
+  ASSERT_TRUE(parse_frame(frame_with({}, 42), f, why)) << why;
+  EXPECT_EQ(f.meta.first_row_ns, 42000);
+}
