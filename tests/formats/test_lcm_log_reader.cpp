@@ -9,6 +9,8 @@
 #include <bot_core/image_t.hpp>
 #include <bot_core/pose_t.hpp>
 #include <lcm/lcm-cpp.hpp>
+#include <rsd/frame_info_t.hpp>
+#include <rsd/health_t.hpp>
 #include <rsd/velocity_t.hpp>
 
 #include <filesystem>
@@ -427,4 +429,39 @@ TEST(RecordedFrame, OutOfRangeStampsAndTimingAreRefusedNamingTheField) {
   std::string why;
   ASSERT_TRUE(parse_frame(frame_with({}, 42), f, why)) << why;
   EXPECT_EQ(f.meta.first_row_ns, 42000);
+}
+
+// Found by fuzzing (tests/fuzz/corpus/lcm_message/crash-health-negative-string-length):
+// lcm-gen's decoders check a string's length against the payload's end but not its sign, and
+// std::string::assign threw std::length_error through decode_checked.
+TEST(RecordedFrame, AStringWithANegativeLengthIsUndecodableNotAnException) {
+  rsd::health_t h{};
+  h.source = "sim";
+  h.source_state = "streaming";
+  std::vector<uint8_t> b(static_cast<size_t>(h.getEncodedSize()));
+  ASSERT_EQ(h.encode(b.data(), 0, static_cast<int>(b.size())), static_cast<int>(b.size()));
+  std::string why;
+  rsd::health_t back;
+  ASSERT_EQ(decode_checked(b.data(), b.size(), back, why), DecodeStatus::Ok);
+  EXPECT_EQ(back.source_state, "streaming");
+  for (const uint32_t len : {0xfffffff0u, 0u}) {
+    const size_t at = 8 + 8;  // fingerprint, utime, then the source's length
+    for (int i = 0; i < 4; ++i) b[at + i] = static_cast<uint8_t>(len >> (24 - 8 * i));
+    EXPECT_EQ(decode_checked(b.data(), b.size(), back, why), DecodeStatus::Undecodable) << len;
+    EXPECT_EQ(why, "a string's length does not fit the payload of health_t");
+  }
+  // frame_info_t's one string, after its fixed fields (StringFields locates it).
+  rsd::frame_info_t info{};
+  info.unrectified_reason = "velocity stale";
+  info.drops_total = 7;
+  std::vector<uint8_t> fb(static_cast<size_t>(info.getEncodedSize()));
+  ASSERT_EQ(info.encode(fb.data(), 0, static_cast<int>(fb.size())), static_cast<int>(fb.size()));
+  rsd::frame_info_t info_back;
+  ASSERT_EQ(decode_checked(fb.data(), fb.size(), info_back, why), DecodeStatus::Ok) << why;
+  EXPECT_EQ(info_back.unrectified_reason, "velocity stale");
+  EXPECT_EQ(info_back.drops_total, 7);
+  const size_t at = 8 + StringFields<rsd::frame_info_t>::gaps[0];
+  ASSERT_EQ(fb[at + 3], 15);  // "velocity stale" and its terminating zero
+  fb[at] = 0x80, fb[at + 1] = fb[at + 2] = fb[at + 3] = 0;  // -2^31: lcm-gen computed len - 1
+  EXPECT_EQ(decode_checked(fb.data(), fb.size(), info_back, why), DecodeStatus::Undecodable);
 }
