@@ -180,6 +180,9 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   std::signal(SIGHUP, on_signal);
+  // A recording that reaches the file size limit (RLIMIT_FSIZE) must fail its writes (counted,
+  // logged, the run goes on), not kill the daemon.
+  std::signal(SIGXFSZ, SIG_IGN);
   // SIGHUP reads both files again: the calibration alone changed (or nothing did) -> applied
   // between two frames; the configuration file changed -> the pipeline restarts with it; a bad
   // file -> refused, the running configuration kept.

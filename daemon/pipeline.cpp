@@ -40,6 +40,7 @@ void Pipeline::start() {
   for (uint32_t i = 0; i < cfg_.out_slots; ++i) out_free_.put(i);
   camera_lost_ = end_of_stream_ = finished_ = false;
   capture_done_ = rectify_done_ = false;
+  last_first_row_ns_ = INT64_MIN;
   running_ = true;
   const RealtimeConfig& rt = cfg_.realtime;
   capture_ = std::thread([this, &rt] {
@@ -136,6 +137,13 @@ void Pipeline::capture_loop() {
     drivers::stamp_wall_clock(r.meta);
     stats_.frames_in.fetch_add(1, std::memory_order_relaxed);
     stats_.last_frame_ns.store(r.ready_ns, std::memory_order_relaxed);
+    // A repeated or backward first-row time (a camera's clock fault) would send row times and
+    // the velocity looked up for them back: refused, counted, the slot reused.
+    if (r.meta.first_row_ns <= last_first_row_ns_) {
+      stats_.refused.fetch_add(1, std::memory_order_relaxed);
+      continue;
+    }
+    last_first_row_ns_ = r.meta.first_row_ns;
     const auto reclaimed = hand_over(to_rectify_, slot);
     slot = reclaimed ? *reclaimed : raw_slot_for_capture();
   }

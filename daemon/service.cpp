@@ -58,8 +58,10 @@ struct Session {
   std::vector<uint8_t> pose_buf = std::vector<uint8_t>(512);
   std::unique_ptr<SourceWatch> watch;  // the source's state, afresh with every pipeline
   int reconnects = 0;
+  uint64_t record_errors_said = 0;  // the recording's write errors last logged
+  uint64_t refused_said = 0;        // frames the pipeline refused, last logged
   // Counters of the pipelines before a reconnect: health and limits count since start.
-  uint64_t in_before = 0, out_before = 0, drops_before = 0;
+  uint64_t in_before = 0, out_before = 0, drops_before = 0, refused_before = 0;
   uint64_t frames_out() const { return out_before + pipeline->stats().frames_out.load(); }
 
   Session(const Config& c, const SourceFactory& factory)
@@ -231,9 +233,23 @@ void report_health(Session& s, const char* state, double dt, uint64_t& last_in, 
   h.fps_configured = s.watch->configured_fps();
   h.seconds_since_frame = last_ns > 0 ? static_cast<double>(now_ns - last_ns) * 1e-9 : -1;
   h.reconnects = s.reconnects;
-  h.frames_refused = static_cast<int64_t>(s.source->refused());
+  h.frames_refused = static_cast<int64_t>(s.source->refused() + s.refused_before + st.refused.load());
   h.velocity_malformed = static_cast<int64_t>(s.velocity_in ? s.velocity_in->malformed() : 0);
   h.velocity_rejected = static_cast<int64_t>(s.velocity.rejected());
+  h.record_errors = s.recorder ? static_cast<int64_t>(s.recorder->errors()) : 0;
+  // A failing recording is said when it starts failing and at every tenfold since.
+  const uint64_t refused = s.refused_before + st.refused.load();
+  if (refused > 0 && (s.refused_said == 0 || refused >= 10 * s.refused_said)) {
+    spdlog::warn("{}: {} frames refused: a first-row time not after the previous frame's (the camera's clock)",
+                 s.source->name(), refused);
+    s.refused_said = refused;
+  }
+  const auto record_errors = static_cast<uint64_t>(h.record_errors);
+  if (record_errors > 0 && (s.record_errors_said == 0 || record_errors >= 10 * s.record_errors_said)) {
+    spdlog::error("recording to {}: {} events not written ({}); the run goes on without them", s.recorder->path(),
+                  h.record_errors, s.recorder->last_error());
+    s.record_errors_said = record_errors;
+  }
   const SourceWatch::Verdict v = s.watch->update(static_cast<double>(now_ns) * 1e-9, st.frames_in.load(),
                                                  static_cast<double>(last_ns) * 1e-9, h.fps_in);
   h.source_state = state ? state : v.state;
@@ -330,6 +346,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
       s.in_before += s.pipeline->stats().frames_in.load();
       s.out_before += s.pipeline->stats().frames_out.load();
       s.drops_before += s.pipeline->stats().drops.load();
+      s.refused_before += s.pipeline->stats().refused.load();
       s.pub->health().source_state = "reconnecting";
       s.pub->publish_health();
       if (!open_with_backoff(s.active(), flags, sd, deadline).empty()) break;

@@ -40,6 +40,7 @@ struct AravisSource::Impl {
   FrameCounter counter;
   Clock::time_point last_frame;
   AravisStats stats;
+  std::atomic<uint64_t> refused{0};  // stats.incomplete + stats.mismatched, for any thread
 
   explicit Impl(AravisConfig c) : cfg(std::move(c)) {}
   ~Impl() { close(); }
@@ -333,6 +334,7 @@ const uint8_t* AravisSource::Impl::image_bytes(ArvBuffer* b, size_t& size) const
 bool AravisSource::Impl::usable(ArvBuffer* b) {
   if (arv_buffer_get_status(b) != ARV_BUFFER_STATUS_SUCCESS) {
     ++stats.incomplete;
+    refused.fetch_add(1, std::memory_order_relaxed);
     return false;
   }
   size_t size = 0;
@@ -344,6 +346,7 @@ bool AravisSource::Impl::usable(ArvBuffer* b) {
   if (!data || size < need || arv_buffer_get_image_width(b) != fmt.width ||
       arv_buffer_get_image_height(b) != fmt.height || arv_buffer_get_image_pixel_format(b) != pixel->arv) {
     ++stats.mismatched;
+    refused.fetch_add(1, std::memory_order_relaxed);
     return false;
   }
   return true;
@@ -424,6 +427,8 @@ void AravisSource::stop() { impl_->stop(); }
 CaptureStatus AravisSource::capture(const dsp::ImageView& dst, FrameMeta& meta, std::chrono::milliseconds timeout) {
   return impl_->capture(dst, meta, timeout);
 }
+
+uint64_t AravisSource::refused() const { return impl_ ? impl_->refused.load(std::memory_order_relaxed) : 0; }
 
 AravisStats AravisSource::stats() const {
   AravisStats s = impl_->stats;

@@ -76,6 +76,8 @@ class AravisSource final : public CameraSource {
   CaptureStatus capture(const dsp::ImageView& dst, FrameMeta& meta, std::chrono::milliseconds timeout) override;
   void stop() override;
   AravisStats stats() const;  // from the thread that calls capture()
+  // Incomplete and mismatched buffers, skipped (any thread).
+  uint64_t refused() const override;
 
  private:
   struct Impl;

@@ -214,12 +214,14 @@ V4l2Source::Delivery V4l2Source::deliver(const v4l2_buffer& b, const dsp::ImageV
   stats_.restarts = sequence_.restarts();
   if (b.flags & V4L2_BUF_FLAG_ERROR) {
     ++stats_.error_frames;
+    refused_.fetch_add(1, std::memory_order_relaxed);
     return Delivery::Skipped;
   }
   const auto mem = ring_->data(b.index);
   const std::size_t used = std::min<std::size_t>(b.bytesused, mem.size());
   if (!v4l2::copy_frame(mem.data(), used, negotiated_.bytesperline, negotiated_.layout, dst)) {
     ++stats_.short_frames;
+    refused_.fetch_add(1, std::memory_order_relaxed);
     return Delivery::Skipped;
   }
   const v4l2::FirstRowTime t =

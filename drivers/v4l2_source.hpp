@@ -7,6 +7,7 @@
 // device in tests; open_v4l2_device() is the real one.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -62,6 +63,8 @@ class V4l2Source final : public CameraSource {
   // How the negotiated format differs from the request (empty when it does not).
   const std::vector<std::string>& notes() const { return negotiated_.notes; }
   const V4l2Stats& stats() const { return stats_; }
+  // Error-flagged and short frames, skipped (any thread).
+  uint64_t refused() const override { return refused_.load(std::memory_order_relaxed); }
 
  private:
   enum class Delivery { Delivered, Skipped };
@@ -80,6 +83,7 @@ class V4l2Source final : public CameraSource {
   dsp::RowTiming timing_;
   v4l2::SequenceTracker sequence_;
   V4l2Stats stats_;
+  std::atomic<uint64_t> refused_{0};
   bool streaming_ = false;
 };
 

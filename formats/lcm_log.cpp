@@ -1,5 +1,6 @@
 #include "formats/lcm_log.hpp"
 
+#include <cerrno>
 #include <cstring>
 #include <ctime>
 #include <stdexcept>
@@ -185,9 +186,19 @@ bool LcmLogWriter::write(const char* channel, int64_t timestamp_us, const void* 
   put32(h + 24, static_cast<uint32_t>(size));
   const bool ok = std::fwrite(h, 1, kHeader, f_) == kHeader && std::fwrite(channel, 1, chan_len, f_) == chan_len &&
                   std::fwrite(data, 1, size, f_) == size;
-  if (ok) ++events_;
-  else ++errors_;
+  if (ok) {
+    events_.fetch_add(1, std::memory_order_relaxed);
+  } else {
+    last_errno_.store(errno ? errno : EIO, std::memory_order_relaxed);
+    errors_.fetch_add(1, std::memory_order_relaxed);
+    std::clearerr(f_);  // the next event tries again (space may have been freed)
+  }
   return ok;
+}
+
+std::string LcmLogWriter::last_error() const {
+  const int e = last_errno_.load(std::memory_order_relaxed);
+  return e ? std::strerror(e) : "";
 }
 
 void LcmLogWriter::flush() {

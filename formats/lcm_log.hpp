@@ -17,6 +17,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <cstdio>
 #include <functional>
@@ -107,15 +108,20 @@ class LcmLogWriter {
   // the differences). Returns false on I/O errors (counted in errors()).
   bool write(const char* channel, int64_t timestamp_us, const void* data, size_t size);
   void flush();
-  uint64_t events() const { return events_; }
-  uint64_t errors() const { return errors_; }
+  // Any thread.
+  uint64_t events() const { return events_.load(std::memory_order_relaxed); }
+  uint64_t errors() const { return errors_.load(std::memory_order_relaxed); }
+  // The system's reason for the newest failed write ("" if none failed): a full disk, a file
+  // size limit.
+  std::string last_error() const;
   const std::string& path() const { return path_; }
 
  private:
   std::string path_;
   std::FILE* f_ = nullptr;
   std::mutex mutex_;
-  uint64_t events_ = 0, errors_ = 0;
+  std::atomic<uint64_t> events_{0}, errors_{0};
+  std::atomic<int> last_errno_{0};
 };
 
 // CLOCK_REALTIME in microseconds: what lcm-logger stamps events with.

@@ -225,3 +225,59 @@ TEST(ServiceHealth, AFileUrlLogHoldsEveryEventWhole) {
     EXPECT_EQ(health.back().velocity_rejected, 0);
   }
 }
+
+namespace {
+
+// The simulated camera with a faulty clock: its n-th frame's first-row time is replaced by
+// stamps_ms[n] (milliseconds), repeating and going back where the list says.
+class FaultyClock final : public drivers::CameraSource {
+ public:
+  FaultyClock(const drivers::SimSourceConfig& c, std::vector<int64_t> stamps_ms) : sim_(c), stamps_ms_(std::move(stamps_ms)) {}
+  std::string name() const override { return "faulty-clock-sim"; }
+  void open() override { sim_.open(); }
+  drivers::FrameFormat format() const override { return sim_.format(); }
+  dsp::RowTiming timing() const override { return sim_.timing(); }
+  void start() override { sim_.start(); }
+  drivers::CaptureStatus capture(const dsp::ImageView& dst, drivers::FrameMeta& meta, std::chrono::milliseconds timeout) override {
+    if (n_ >= stamps_ms_.size()) return drivers::CaptureStatus::EndOfStream;
+    const drivers::CaptureStatus st = sim_.capture(dst, meta, timeout);
+    if (st == drivers::CaptureStatus::Frame) meta.first_row_ns = base_ns_ + stamps_ms_[n_++] * 1000000;
+    return st;
+  }
+  void stop() override { sim_.stop(); }
+
+ private:
+  drivers::SimSource sim_;
+  std::vector<int64_t> stamps_ms_;
+  size_t n_ = 0;
+  const int64_t base_ns_ = drivers::monotonic_ns();
+};
+
+}  // namespace
+
+// Issue 16, fault matrix: a camera whose stamps repeat or go back. Those frames are refused and
+// counted (rsd.health_t.frames_refused, a warning); the others go out in order; every frame
+// the camera delivered is accounted for: frames_in = frames_out + drops + refused.
+TEST(ServiceHealth, FramesWhoseStampsDoNotAdvanceAreRefusedAndCounted) {
+  daemon::Config cfg;
+  cfg.source.settings_of<drivers::SimSourceConfig>("sim") = sim_config();
+  cfg.record_file = g_tmp.path("faulty-clock.lcmlog");
+  cfg.pipeline.lossless = true;  // nothing dropped: the accounting is exact
+  const std::vector<int64_t> stamps = {0, 33, 66, 66, 50, 100, 133, 133, 100, 5000, 5033};
+  CapturedLog log;
+  run(cfg, 10, [&](const daemon::Config& c) {
+    return std::make_unique<FaultyClock>(c.source.settings_of<drivers::SimSourceConfig>("sim"), stamps);
+  });
+  const auto info = messages<rsd::frame_info_t>(cfg.record_file, "RSD_FRAME_INFO");
+  std::vector<int64_t> out_ms;
+  for (const auto& i : info) out_ms.push_back((i.utime - info.front().utime) / 1000);
+  EXPECT_EQ(out_ms, (std::vector<int64_t>{0, 33, 66, 100, 133, 5000, 5033}));
+  const auto health = messages<rsd::health_t>(cfg.record_file, "RSD_HEALTH");
+  ASSERT_FALSE(health.empty());
+  EXPECT_EQ(health.back().frames_in, 11);
+  EXPECT_EQ(health.back().frames_out, 7);
+  EXPECT_EQ(health.back().frames_refused, 4);
+  EXPECT_EQ(health.back().frames_in, health.back().frames_out + health.back().drops + health.back().frames_refused);
+  EXPECT_NE(log.text().find("faulty-clock-sim: 4 frames refused: a first-row time not after the previous frame's"), std::string::npos)
+      << log.text();
+}

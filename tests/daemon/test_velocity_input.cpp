@@ -7,6 +7,7 @@
 #include <rsd/velocity_t.hpp>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <fstream>
 #include <thread>
@@ -420,4 +421,38 @@ TEST_F(VelocityInputTest, WithALiveCameraStampsFarFromTheClockAreRefused) {
   EXPECT_EQ(buffer_.rejected(), 2u);
   EXPECT_EQ(buffer_.count(), 1u);
   EXPECT_EQ(at(now_us).w[0], 0.2);
+}
+
+// Issue 16, fault matrix: a second of a 10 kHz flood in which every other message is NaN,
+// infinite, wildly stamped or not a velocity at all. Every good sample goes in, every bad one
+// is counted, and the buffer answers for the good time line afterwards.
+TEST_F(VelocityInputTest, AFloodOfBadMessagesLosesNoGoodSample) {
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer_);
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::nan("");
+  int good = 0, bad = 0, garbage = 0;
+  for (int i = 0; i < 10000; ++i) {
+    const int64_t t = 1'000'000 + i * 100;  // 10 kHz
+    switch (i % 6) {
+      case 1: publish("RSD_VELOCITY", velocity(t, rsd::velocity_t::FRAME_CAMERA, nan, 0, 0, 0, 0, 0)), ++bad; break;
+      case 3: publish("RSD_VELOCITY", velocity(t, rsd::velocity_t::FRAME_IMU, 0, inf, 0, 0, 0, 0)), ++bad; break;
+      case 5: {
+        const int64_t wild = (i % 12 == 5) ? INT64_MAX - i : t + 3'600'000'000LL;  // beyond range, or an hour ahead
+        publish("RSD_VELOCITY", velocity(wild, rsd::velocity_t::FRAME_CAMERA, 0.1, 0, 0, 0, 0, 0)), ++bad;
+        break;
+      }
+      case 4: {
+        const uint8_t junk[13] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13};
+        publish_raw("RSD_VELOCITY", junk, sizeof junk), ++garbage;
+        break;
+      }
+      default: publish("RSD_VELOCITY", velocity(t, rsd::velocity_t::FRAME_CAMERA, 0.001 * i, 0, 0, 0, 0, 0)), ++good;
+    }
+    if (i % 500 == 499) drain();  // memq's queue is served as the LCM thread would
+  }
+  drain();
+  EXPECT_EQ(buffer_.count(), static_cast<uint64_t>(good));
+  EXPECT_EQ(buffer_.rejected(), static_cast<uint64_t>(bad));
+  EXPECT_EQ(in.malformed(), static_cast<uint64_t>(garbage));
+  EXPECT_EQ(buffer_.time_line_changes(), 0u);
+  EXPECT_NEAR(at(1'000'000 + 9996 * 100).w[0], 0.001 * 9996, 1e-12);
 }

@@ -139,6 +139,7 @@ TEST_F(V4l2SourceFake, CountsSequenceGapsAndSkipsErrorAndShortFrames) {
   EXPECT_EQ(src->stats().dropped, 2u);  // 4 and 5 never came
   EXPECT_EQ(src->stats().error_frames, 1u);
   EXPECT_EQ(src->stats().short_frames, 1u);
+  EXPECT_EQ(src->refused(), 2u);  // both counted where rsd.health_t reads them
   EXPECT_EQ(src->stats().estimated_stamps, 0u);
 }
 
