@@ -40,6 +40,13 @@ void LcmSource::open() {
     // Kept across reopen attempts: messages that arrive meanwhile wait in LCM's queue.
     lcm_ = lcm_create(cfg_.url.c_str());
     if (!lcm_) throw CameraError("lcm source: cannot open '" + cfg_.url + "'");
+    // tcpq:// hands out an instance even when its hub is down, with no descriptor to wait on.
+    if (lcm_get_fileno(lcm_) < 0) {
+      lcm_destroy(lcm_);
+      lcm_ = nullptr;
+      throw CameraError("lcm source: cannot connect to '" + cfg_.url + "'");
+    }
+    last_frame_ns_ = INT64_MIN;  // a new connection is a new stream (a player started again)
     lcm_subscribe(lcm_, cfg_.channel.c_str(), &LcmSource::on_image, this);
     lcm_subscribe(lcm_, cfg_.velocity_channel.c_str(), &LcmSource::on_velocity, this);
     if (!pose_channel_.empty()) lcm_subscribe(lcm_, pose_channel_.c_str(), &LcmSource::on_pose, this);
@@ -141,6 +148,10 @@ CaptureStatus LcmSource::capture(const dsp::ImageView& dst, FrameMeta& meta, std
       // A log being read has ended (file:// provider), or the connection failed.
       target_ = nullptr;
       if (cfg_.url.rfind("file://", 0) == 0) return CaptureStatus::EndOfStream;
+      // A failed tcpq connection is not re-established by LCM (its descriptor stays -1, and
+      // handling it again aborts in FD_SET): the reconnect builds a new instance (open()).
+      lcm_destroy(lcm_);
+      lcm_ = nullptr;
       throw CameraError("lcm source: " + cfg_.url + " stopped delivering");
     }
   }
