@@ -1,5 +1,5 @@
 // The lcm source on what a network may bring (issue 16, defect 6): frames with NaN timing or
-// stamps that repeat or go back were published. Here a log played through LCM's own file
+// stamps that repeat or go back were published; a frame of another size. Here a log played through LCM's own file
 // provider feeds the source: every good frame comes out in order, each bad one is refused and
 // counted by reason.
 #include <gtest/gtest.h>
@@ -22,17 +22,18 @@ constexpr int kW = 16, kH = 8;
 struct Sent {
   int64_t first_row_ns;
   double line_delay_s;
+  int width = kW;  // another size than the first frame's: refused
 };
 
 std::string write_log(const std::vector<Sent>& frames) {
   const std::string path = g_tmp.path("frames.lcmlog");
   formats::LcmLogWriter log(path);
-  dsp::Image img(kW, kH, dsp::PixelFormat::Mono8);
   int64_t t_us = 1;
   for (size_t i = 0; i < frames.size(); ++i) {
+    dsp::Image img(frames[i].width, kH, dsp::PixelFormat::Mono8);
     dsp::RowTiming timing = dsp::RowTiming::full_frame(kH, 30);
     timing.line_delay_s = frames[i].line_delay_s;
-    formats::RawFrameEncoder enc({kW, kH, dsp::PixelFormat::Mono8}, timing, std::nullopt);
+    formats::RawFrameEncoder enc({frames[i].width, kH, dsp::PixelFormat::Mono8}, timing, std::nullopt);
     FrameMeta meta;
     meta.first_row_ns = frames[i].first_row_ns;
     meta.sequence = i;
@@ -51,6 +52,7 @@ TEST(LcmSource, RefusesFramesWithBadTimingOrStampsThatDoNotAdvance) {
                                      {1'033'000'000, good},   // repeated
                                      {500'000'000, good},     // backwards
                                      {1'050'000'000, std::numeric_limits<double>::quiet_NaN()},
+                                     {1'060'000'000, good, kW / 2},  // another size
                                      {1'066'000'000, good}});
   LcmSourceConfig cfg;
   cfg.url = "file://" + log + "?speed=0";
@@ -66,10 +68,10 @@ TEST(LcmSource, RefusesFramesWithBadTimingOrStampsThatDoNotAdvance) {
     pixels.push_back(img.data[0]);
   }
   EXPECT_EQ(stamps, (std::vector<int64_t>{1'000'000'000, 1'033'000'000, 1'066'000'000}));
-  EXPECT_EQ(pixels, (std::vector<int>{0, 1, 5}));
+  EXPECT_EQ(pixels, (std::vector<int>{0, 1, 6}));
   EXPECT_EQ(src.skipped(formats::LogSkip::OutOfOrder), 2u);
-  EXPECT_EQ(src.skipped(formats::LogSkip::Undecodable), 1u);
-  EXPECT_EQ(src.refused(), 3u);
+  EXPECT_EQ(src.skipped(formats::LogSkip::Undecodable), 2u);  // NaN timing, another size
+  EXPECT_EQ(src.refused(), 4u);
 }
 
 }  // namespace
