@@ -10,6 +10,7 @@
 #include "daemon/source_watch.hpp"
 #include "daemon/systemd_notify.hpp"
 #include "daemon/velocity_input.hpp"
+#include "drivers/tenfold_log.hpp"
 #include "drivers/message_source.hpp"
 #include "drivers/monotonic_clock.hpp"
 #include "drivers/replay_source.hpp"
@@ -58,8 +59,7 @@ struct Session {
   std::vector<uint8_t> pose_buf = std::vector<uint8_t>(512);
   std::unique_ptr<SourceWatch> watch;  // the source's state, afresh with every pipeline
   int reconnects = 0;
-  uint64_t record_errors_said = 0;  // the recording's write errors last logged
-  uint64_t refused_said = 0;        // frames the pipeline refused, last logged
+  drivers::TenfoldLog refused_log, record_log;  // frames the pipeline refused; the recording's write errors
   // Counters of the pipelines before a reconnect: health and limits count since start.
   uint64_t in_before = 0, out_before = 0, drops_before = 0, refused_before = 0;
   uint64_t frames_out() const { return out_before + pipeline->stats().frames_out.load(); }
@@ -210,6 +210,17 @@ std::string latency_text(const rsd::health_t& h) {
   return text;
 }
 
+// Faults that repeat, said at the first and at every tenfold: frames the pipeline refused for
+// their stamps, events the recording could not write.
+void log_faults(Session& s, uint64_t refused, uint64_t record_errors) {
+  if (s.refused_log.due(refused))
+    spdlog::warn("{}: {} frames refused: a first-row time not after the previous frame's (the camera's clock)",
+                 s.source->name(), refused);
+  if (s.record_log.due(record_errors))
+    spdlog::error("recording to {}: {} events not written ({}); the run goes on without them", s.recorder->path(),
+                  record_errors, s.recorder->last_error());
+}
+
 // Health once a second (and once at the end): LCM, systemd STATUS, the status line, and a log
 // line when the source's state says something new. `state`: the service's own (reconnecting,
 // stopping), or nullptr for what the source watch makes of the frames.
@@ -237,19 +248,7 @@ void report_health(Session& s, const char* state, double dt, uint64_t& last_in, 
   h.velocity_malformed = static_cast<int64_t>(s.velocity_in ? s.velocity_in->malformed() : 0);
   h.velocity_rejected = static_cast<int64_t>(s.velocity.rejected());
   h.record_errors = s.recorder ? static_cast<int64_t>(s.recorder->errors()) : 0;
-  // A failing recording is said when it starts failing and at every tenfold since.
-  const uint64_t refused = s.refused_before + st.refused.load();
-  if (refused > 0 && (s.refused_said == 0 || refused >= 10 * s.refused_said)) {
-    spdlog::warn("{}: {} frames refused: a first-row time not after the previous frame's (the camera's clock)",
-                 s.source->name(), refused);
-    s.refused_said = refused;
-  }
-  const auto record_errors = static_cast<uint64_t>(h.record_errors);
-  if (record_errors > 0 && (s.record_errors_said == 0 || record_errors >= 10 * s.record_errors_said)) {
-    spdlog::error("recording to {}: {} events not written ({}); the run goes on without them", s.recorder->path(),
-                  h.record_errors, s.recorder->last_error());
-    s.record_errors_said = record_errors;
-  }
+  log_faults(s, s.refused_before + st.refused.load(), static_cast<uint64_t>(h.record_errors));
   const SourceWatch::Verdict v = s.watch->update(static_cast<double>(now_ns) * 1e-9, st.frames_in.load(),
                                                  static_cast<double>(last_ns) * 1e-9, h.fps_in);
   h.source_state = state ? state : v.state;

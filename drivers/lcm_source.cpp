@@ -16,13 +16,10 @@ LcmSource::~LcmSource() {
   if (lcm_) lcm_destroy(lcm_);
 }
 
-// The first three skips of a reason are logged each, later ones at 10, 100, 1000, ... so
-// that a flood is seen growing without a line per message.
+// The first three skips of a reason are logged each, later ones at every tenfold.
 void LcmSource::skip(formats::LogSkip r, const std::string& detail) {
   const uint64_t n = skips_[static_cast<size_t>(r)].fetch_add(1, std::memory_order_relaxed) + 1;
-  uint64_t decade = 10;
-  while (decade < n && decade <= UINT64_MAX / 10) decade *= 10;
-  if (n <= 3 || n == decade)
+  if (skip_log_[static_cast<size_t>(r)].due(n) || n <= 3)
     spdlog::warn("lcm source {}: message skipped: {}: {}{}", cfg_.url, to_string(r), detail,
                  n > 3 ? " (" + std::to_string(n) + " skipped for this reason so far)" : "");
 }

@@ -20,6 +20,7 @@
 #include "formats/lcm_log.hpp"
 #include "drivers/message_source.hpp"
 #include "drivers/driver.hpp"
+#include "drivers/tenfold_log.hpp"
 #include "formats/image_t_codec.hpp"
 
 namespace rsd::drivers {
@@ -69,6 +70,7 @@ class LcmSource final : public MessageSource {
   const dsp::ImageView* target_ = nullptr;
   FrameMeta* target_meta_ = nullptr;
   std::array<std::atomic<uint64_t>, formats::kLogSkipKinds> skips_{};  // written by the capture thread
+  std::array<TenfoldLog, formats::kLogSkipKinds> skip_log_{};
   int64_t last_frame_ns_ = INT64_MIN;  // the newest frame's first row: the next must come after
 };
 
