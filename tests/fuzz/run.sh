@@ -42,7 +42,7 @@ fuzz_one() {
   "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
       -artifact_prefix="$corpus/" "$work" "$corpus" >"$log" 2>&1 || status=$?
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
-  size=$(ls "$work" "$corpus" | wc -l)
+  size=$(find "$work" "$corpus" -type f | wc -l)
   result=clean; [ "$status" -eq 0 ] || result="DEFECT (status $status, see $log)"
   if [ "$merge" -eq 1 ] && [ "$status" -eq 0 ]; then
     "$build/tests/fuzz/fuzz_$t" -merge=1 "$corpus" "$work" >>"$log" 2>&1 || true
