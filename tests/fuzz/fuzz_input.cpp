@@ -30,7 +30,9 @@ Scratch& scratch() {
 std::string scratch_dir() { return scratch().dir.string(); }
 
 std::string write_file(const std::string& name, const uint8_t* data, size_t size) {
-  const std::string path = (scratch().dir / name).string();
+  const std::filesystem::path file = scratch().dir / name;
+  std::filesystem::create_directories(file.parent_path());
+  const std::string path = file.string();
   std::ofstream(path, std::ios::binary | std::ios::trunc).write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
   return path;
 }
@@ -51,6 +53,12 @@ std::vector<std::string_view> split_parts(const uint8_t* data, size_t size) {
   }
   parts.push_back(all.substr(start));
   return parts;
+}
+
+std::string write_parts(const uint8_t* data, size_t size, const std::vector<std::string>& names) {
+  const auto parts = split_parts(data, size);
+  for (size_t i = 0; i < names.size(); ++i) write_file(names[i], i < parts.size() ? parts[i] : "");
+  return scratch_dir();
 }
 
 }  // namespace rsd::fuzz

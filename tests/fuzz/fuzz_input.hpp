@@ -25,6 +25,10 @@ std::string scratch_dir();
 // An input that stands for several files: its parts, separated by lines holding only "%%".
 std::vector<std::string_view> split_parts(const uint8_t* data, size_t size);
 
+// Writes the input's parts as the files `names` in the scratch directory (subdirectories made
+// as needed; a part not given is an empty file); returns the directory.
+std::string write_parts(const uint8_t* data, size_t size, const std::vector<std::string>& names);
+
 }  // namespace rsd::fuzz
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size);
