@@ -12,8 +12,18 @@ namespace rsd::drivers {
 
 LcmSource::LcmSource(LcmSourceConfig cfg) : cfg_(std::move(cfg)) {}
 
-LcmSource::~LcmSource() {
-  if (lcm_) lcm_destroy(lcm_);
+LcmSource::~LcmSource() { close_lcm(); }
+
+// Unsubscribing before lcm_destroy: liblcm's tcpq provider frees a channel's name only when it is
+// unsubscribed (lcm_destroy leaves them allocated, which LeakSanitizer reports).
+void LcmSource::close_lcm() {
+  if (!lcm_) return;
+  for (lcm_subscription_t*& s : subs_) {
+    if (s) lcm_unsubscribe(lcm_, s);
+    s = nullptr;
+  }
+  lcm_destroy(lcm_);
+  lcm_ = nullptr;
 }
 
 // The first three skips of a reason are logged each, later ones at every tenfold.
@@ -39,14 +49,13 @@ void LcmSource::open() {
     if (!lcm_) throw CameraError("lcm source: cannot open '" + cfg_.url + "'");
     // tcpq:// hands out an instance even when its hub is down, with no descriptor to wait on.
     if (lcm_get_fileno(lcm_) < 0) {
-      lcm_destroy(lcm_);
-      lcm_ = nullptr;
+      close_lcm();
       throw CameraError("lcm source: cannot connect to '" + cfg_.url + "'");
     }
     last_frame_ns_ = INT64_MIN;  // a new connection is a new stream (a player started again)
-    lcm_subscribe(lcm_, cfg_.channel.c_str(), &LcmSource::on_image, this);
-    lcm_subscribe(lcm_, cfg_.velocity_channel.c_str(), &LcmSource::on_velocity, this);
-    if (!pose_channel_.empty()) lcm_subscribe(lcm_, pose_channel_.c_str(), &LcmSource::on_pose, this);
+    subs_[0] = lcm_subscribe(lcm_, cfg_.channel.c_str(), &LcmSource::on_image, this);
+    subs_[1] = lcm_subscribe(lcm_, cfg_.velocity_channel.c_str(), &LcmSource::on_velocity, this);
+    if (!pose_channel_.empty()) subs_[2] = lcm_subscribe(lcm_, pose_channel_.c_str(), &LcmSource::on_pose, this);
   }
   if (first_.format.width > 0) return;  // reopened after a loss: the format is known
   opening_ = true;
@@ -147,8 +156,7 @@ CaptureStatus LcmSource::capture(const dsp::ImageView& dst, FrameMeta& meta, std
       if (cfg_.url.rfind("file://", 0) == 0) return CaptureStatus::EndOfStream;
       // A failed tcpq connection is not re-established by LCM (its descriptor stays -1, and
       // handling it again aborts in FD_SET): the reconnect builds a new instance (open()).
-      lcm_destroy(lcm_);
-      lcm_ = nullptr;
+      close_lcm();
       throw CameraError("lcm source: " + cfg_.url + " stopped delivering");
     }
   }

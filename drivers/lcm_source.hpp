@@ -56,8 +56,10 @@ class LcmSource final : public MessageSource {
   static void on_velocity(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
   static void on_pose(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
   void skip(formats::LogSkip r, const std::string& detail);
+  void close_lcm();
   LcmSourceConfig cfg_;
   lcm_t* lcm_ = nullptr;
+  std::array<lcm_subscription_t*, 3> subs_{};  // frame, velocity, pose (null when not subscribed)
   formats::RecordedFrame first_, frame_;
   dsp::RowTiming timing_;
   bot_core::image_t img_;

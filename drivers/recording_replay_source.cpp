@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 
 namespace rsd::drivers {
 
@@ -82,22 +83,21 @@ void RecordingReplaySource::start() {
   while (next_motion_ < motion_.size() && motion_[next_motion_].t_ns < from) ++next_motion_;
 }
 
-void RecordingReplaySource::deliver_motion_until(double t_motion) {
-  const auto until = std::llround(t_motion * 1e9);
-  for (; next_motion_ < motion_.size() && motion_[next_motion_].t_ns <= until; ++next_motion_)
+void RecordingReplaySource::deliver_motion_until(int64_t until_ns) {
+  for (; next_motion_ < motion_.size() && motion_[next_motion_].t_ns <= until_ns; ++next_motion_)
     if (sink_) sink_(motion_[next_motion_]);
 }
 
 CaptureStatus RecordingReplaySource::capture(const dsp::ImageView& dst, FrameMeta& meta, std::chrono::milliseconds timeout) {
   if (next_frame_ >= rec_.rec.frames.size()) {
-    deliver_motion_until(INFINITY);
+    deliver_motion_until(std::numeric_limits<int64_t>::max());  // the rest: nothing lost
     return CaptureStatus::EndOfStream;
   }
   const double t = rec_.rec.frames[next_frame_].t;
   if (!pacer_.wait(std::llround(t * 1e6), timeout)) return CaptureStatus::Timeout;
   // The motion over this frame's readout (on the motion clock, at the nominal offset), and a
   // margin for a calibrated offset that differs from it.
-  deliver_motion_until(t + timing_.frame_readout_s() + offset_s() + cfg_.motion_lead_s);
+  deliver_motion_until(std::llround((t + timing_.frame_readout_s() + offset_s() + cfg_.motion_lead_s) * 1e9));
   const CaptureStatus st = images_->capture(dst, meta, timeout);
   if (st == CaptureStatus::Frame) {
     ++next_frame_;

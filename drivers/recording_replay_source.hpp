@@ -64,7 +64,7 @@ class RecordingReplaySource final : public CameraSource, public Playback {
   const formats::ImagesRecording& recording() const { return rec_; }
 
  private:
-  void deliver_motion_until(double t_motion);
+  void deliver_motion_until(int64_t until_ns);  // every motion sample stamped up to until_ns
   double offset_s() const;
   RecordingReplayConfig cfg_;
   formats::ImagesRecording rec_;
