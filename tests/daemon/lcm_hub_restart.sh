@@ -6,6 +6,7 @@
 #   lcm_hub_restart.sh RSD RSD_REPLAY LOG
 set -u
 rsd=$1 replay=$2 log=$3
+. "$(dirname "$0")/../support/rss.sh"
 work=$(mktemp -d); server= rsd_pid=
 cleanup() {
   [ -n "$rsd_pid" ] && kill -9 "$rsd_pid" 2>/dev/null
@@ -34,6 +35,7 @@ wait_clients 1
 sleep 0.5
 "$replay" "$log" --lcm-url "tcpq://127.0.0.1:$port" --quiet || fail "the first playing failed"
 sleep 1
+rss0=$(rss_kb "$rsd_pid")
 kill "$server"; wait "$server" 2>/dev/null; server=
 sleep 3
 kill -0 "$rsd_pid" 2>/dev/null || fail "rsd ended when the hub died"
@@ -42,6 +44,8 @@ wait_clients 1
 sleep 0.5
 "$replay" "$log" --lcm-url "tcpq://127.0.0.1:$port" --quiet || fail "the second playing failed"
 sleep 1.5
+rss1=$(rss_kb "$rsd_pid")
+rss_bounded "$rss0" "$rss1" || fail "memory grew from $rss0 kB to $rss1 kB across the hub's restart"
 kill -TERM "$rsd_pid"; status=0; wait "$rsd_pid" || status=$?; rsd_pid=
 [ "$status" -eq 0 ] || fail "rsd exited $status"
 grep -q "camera lost" "$work/err" || fail "the hub's death was not said"
@@ -49,4 +53,4 @@ grep -q "reopened" "$work/err" || fail "no reconnection was said"
 frames=$("$replay" "$log" --info | sed -n 's/^raw frames: //p')
 infos=$("$replay" "$work/out.lcmlog" --info | sed -n 's/^frame infos: \([0-9]*\) .*/\1/p')
 [ "${infos:-0}" -ge $((2 * frames - 4)) ] || fail "$infos frames came out of rsd for 2 x $frames played"
-echo "OK: 2 x $frames frames played across a hub restart, $infos came out of rsd"
+echo "OK: 2 x $frames frames played across a hub restart, $infos came out of rsd, RSS $rss0 -> $rss1 kB"

@@ -12,6 +12,11 @@ setpriv --reuid=65534 --regid=65534 --clear-groups --inh-caps=-all --bounding-se
   { cat "$work/out"; echo "rsd --realtime failed unprivileged"; exit 1; }
 cat "$work/out"
 [ "$(grep -c 'SCHED_FIFO 50 is not permitted' "$work/out")" -eq 1 ] || { echo "no single SCHED_FIFO warning"; exit 1; }
-[ "$(grep -c 'memory stays pageable' "$work/out")" -eq 1 ] || { echo "no single mlockall warning"; exit 1; }
+# Under a sanitizer (tests/sanitizers/run.sh) mlockall is a no-op that reports success: no warning.
+if [ -n "${RSD_TEST_SANITIZER:-}" ]; then
+  echo "under $RSD_TEST_SANITIZER: mlockall locks nothing and says nothing, not checked"
+else
+  [ "$(grep -c 'memory stays pageable' "$work/out")" -eq 1 ] || { echo "no single mlockall warning"; exit 1; }
+fi
 grep -Eq 'stopping: in [0-9]+ .* out (1[0-9]|[2-9][0-9])' "$work/out" || { echo "frames did not come out"; exit 1; }
 echo "OK"

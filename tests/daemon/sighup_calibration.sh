@@ -10,11 +10,21 @@ cal() {  # cal LINE_DELAY WIDTH HEIGHT
   printf 'cam0:\n  camera_model: pinhole\n  intrinsics: [140, 140, 79.5, 59.5]\n  distortion_model: radtan\n  distortion_coeffs: [0, 0, 0, 0]\n  resolution: [%s, %s]\n  timeshift_cam_imu: 0.004\n  rsd:\n    format: rsd-calibration/1\n    line_delay_s: %s\n' "$2" "$3" "$1" > cal.yaml
 }
 cal 1.0e-4 160 120
+# Each signal waits for the daemon's answer to the one before (not for a fixed time: a
+# sanitizer build starts and answers several times slower).
+said() {  # said TEXT: wait up to 10 s (times RSD_TEST_TIME_SCALE) for TEXT in the daemon's output
+  i=0
+  while [ $i -lt $((100 * ${RSD_TEST_TIME_SCALE:-1})) ]; do
+    grep -q "$1" out.txt && return 0
+    sleep 0.1; i=$((i + 1))
+  done
+  return 1
+}
 "$rsd" -c rsd.yaml --calibration cal.yaml --frames 150 --quiet > out.txt 2>&1 &
 pid=$!
-sleep 1.5; cal 1.5e-4 160 120; kill -HUP $pid
-sleep 1; cal 1.5e-4 320 240; kill -HUP $pid
-sleep 1; printf 'source:\n  driver: sim\n  sim: {width: 160, height: 120, fps: 60}\n' > rsd.yaml; cal 1.5e-4 160 120; kill -HUP $pid
+said 'rsd: info: sim 160x120'; sleep 0.5; cal 1.5e-4 160 120; kill -HUP $pid
+said 'calibration reloaded'; cal 1.5e-4 320 240; kill -HUP $pid
+said 'reload refused'; printf 'source:\n  driver: sim\n  sim: {width: 160, height: 120, fps: 60}\n' > rsd.yaml; cal 1.5e-4 160 120; kill -HUP $pid
 wait $pid; rc=$?
 cat out.txt
 [ $rc -eq 0 ] || { echo "sighup: rsd exited with $rc"; exit 1; }

@@ -1,0 +1,63 @@
+#!/bin/sh
+# run.sh KIND SOURCE_DIR BUILD_DIR [CMAKE_ARG...]: configure, build and test one sanitizer tree
+# beside the normal build (docs/reliability.md, "Sanitizers").
+#   KIND address,undefined  every target; the whole suite runs under ASan, LeakSanitizer and UBSan
+#   KIND thread             the threaded targets; their tests run under ThreadSanitizer
+# Suppressions for third-party libraries live beside this script, each with its reason. Any
+# report the suppressions do not cover fails the test that caused it: ASan, LSan and UBSan end
+# the process with an error status, TSan with status 66.
+set -eu
+kind=$1 src=$2 build=$3
+shift 3
+here=$(cd "$(dirname "$0")" && pwd)
+jobs=$(nproc)
+# The shell tests widen their time limits by this factor (tests/support/sanitizer.hpp says the
+# same to the C++ tests).
+export RSD_TEST_TIME_SCALE=10
+# And which sanitizer runs, for the checks that have nothing to check under one.
+export RSD_TEST_SANITIZER=$kind
+
+case $kind in
+  address,undefined)
+    # detect_leaks: LeakSanitizer at every exit; the tools' man pages (help2man runs them at
+    # build time) are built under the same options.
+    export ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:strict_string_checks=1:detect_stack_use_after_return=0:check_initialization_order=1"
+    export LSAN_OPTIONS="suppressions=$here/lsan.supp:print_suppressions=0"
+    export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:suppressions=$here/ubsan.supp"
+    targets=all
+    tests=""
+    ;;
+  thread)
+    export TSAN_OPTIONS="suppressions=$here/tsan.supp:print_suppressions=0:exitcode=66:second_deadlock_stack=1"
+    # The tests with threads of their own (capture, publish, record, velocity, reload, replay)
+    # and the daemon's live runs; the single-threaded maths gains nothing from TSan.
+    targets="test_drop_oldest_queue test_velocity_buffer test_pipeline test_velocity_input
+             test_service_reconnect test_source_watch test_service_health test_service_reload
+             test_replay test_lcm_source test_recording_replay_source rsd rsd-replay"
+    tests="^(DropOldestQueue|VelocityBuffer|Pipeline|VelocityInput|ServiceReconnect|SourceWatch|ServiceHealth|ServiceReload|Replay|LcmSource|RecordingReplaySource)[A-Za-z]*\.|^daemon_(runs_on_simulated_camera|sighup_storm|sighup_calibration|record_sim|replay_fast)$"
+    ;;
+  *)
+    echo "run.sh: KIND must be address,undefined or thread, not '$kind'" >&2
+    exit 2
+    ;;
+esac
+
+mkdir -p "$(dirname "$build")"
+generator=""
+command -v ninja >/dev/null 2>&1 && generator="-G Ninja"
+[ -f "$build/CMakeCache.txt" ] || generator_arg=$generator
+# shellcheck disable=SC2086  # generator and targets are word lists on purpose
+cmake -S "$src" -B "$build" ${generator_arg:-} -DCMAKE_BUILD_TYPE=None -DRSD_SANITIZE="$kind" "$@" >"$build.configure.log" 2>&1 ||
+  { cat "$build.configure.log" >&2; exit 1; }
+start=$(date +%s)
+# shellcheck disable=SC2086
+cmake --build "$build" -j"$jobs" --target $targets >"$build.build.log" 2>&1 ||
+  { tail -n 60 "$build.build.log" >&2; exit 1; }
+echo "run.sh: $kind tree built in $(( $(date +%s) - start )) s"
+start=$(date +%s)
+if [ -n "$tests" ]; then
+  ctest --test-dir "$build" -j"$jobs" --output-on-failure -R "$tests"
+else
+  ctest --test-dir "$build" -j"$jobs" --output-on-failure
+fi
+echo "run.sh: $kind tests ran in $(( $(date +%s) - start )) s"

@@ -1,0 +1,37 @@
+// Whether this test binary runs under a sanitizer (tests/sanitizers/run.sh builds such trees), so
+// that a test with a time limit can widen it, or skip itself, saying so. AddressSanitizer costs
+// about 2x, ThreadSanitizer 5-15x; limits that hold on a loaded two-core machine at full speed do
+// not hold there, while what the test checks (order, counts, values) still must.
+#pragma once
+
+namespace rsd::test {
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+inline constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+inline constexpr bool kSanitized = true;
+#else
+inline constexpr bool kSanitized = false;
+#endif
+#else
+inline constexpr bool kSanitized = false;
+#endif
+
+// How much longer a timed step may take under a sanitizer than at full speed.
+inline constexpr double kTimeScale = kSanitized ? 10.0 : 1.0;
+
+inline constexpr const char* kSanitizedNote = "under a sanitizer: time limits widened tenfold";
+
+}  // namespace rsd::test
+
+// A test whose arithmetic alone takes tens of seconds at full speed (a diagnosis over a whole
+// recording) would take ten to twenty times that under AddressSanitizer, beyond any budget: it
+// skips itself there, naming the faster tests that run the same code under the sanitizer. Its
+// numbers are checked in the normal tree.
+#define RSD_SKIP_LONG_UNDER_SANITIZER(covered_by)                                                   \
+  do {                                                                                              \
+    if (::rsd::test::kSanitized)                                                                    \
+      GTEST_SKIP() << "a long numerical run, skipped under a sanitizer; its code runs there in " \
+                   << covered_by;                                                                   \
+  } while (0)
