@@ -202,12 +202,15 @@ int main(int argc, char** argv) {
     return r;
   };
   for (;;) {
+    rsd::daemon::RunSummary summary;
     try {
-      rsd::daemon::run_service(cfg, g_flags, limits, {}, nullptr, reloader);
+      rsd::daemon::run_service(cfg, g_flags, limits, {}, &summary, reloader);
     } catch (const std::exception& e) {
       rsd::daemon::log_fatal(e.what());
       return 1;
     }
+    // SIGTERM just after a restart, before its first frame, is no failure of the whole run.
+    limits.frames_before = limits.frames_before || summary.frames_out > 0;
     if (!g_flags.reload.exchange(false) || g_flags.stop.load()) return 0;
     spdlog::info("configuration reloaded: restarting the pipeline");
     cfg = restart_cfg;

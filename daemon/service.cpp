@@ -393,9 +393,10 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   }
   if (summary) *summary = out;
   // A run with nothing to show ends as a failure, whatever stopped it (a camera that opened
-  // and never delivered, a log without frames).
+  // and never delivered, a log without frames); a process that restarted for a new configuration
+  // had something to show before.
   const uint64_t frames_in = s.in_before + s.pipeline->stats().frames_in.load();
-  if (frames_in == 0 && !flags.reload.load())
+  if (frames_in == 0 && !flags.reload.load() && !limits.frames_before)
     throw std::runtime_error("no frame ever arrived from " + s.active().name() + " in " +
                              std::to_string(static_cast<int>(std::lround(seconds))) + " s");
 }

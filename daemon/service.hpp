@@ -18,6 +18,9 @@ struct RunLimits {
   double max_seconds = 0;   // 0: run until stopped
   bool status_line = true;
   bool progress = false;  // a progress bar for replays (instead of the status line)
+  // Frames arrived in an earlier run of this process (before a restart for a changed
+  // configuration): a stop before this run's first frame is then no failure.
+  bool frames_before = false;
 };
 
 // What a run did, for tests and the exit message.

@@ -106,3 +106,18 @@ TEST(ServiceReconnect, NoFrameEverIsAFailureThatSaysSo) {
     EXPECT_NE(std::string(e.what()).find("no frame ever arrived from silent-test"), std::string::npos) << e.what();
   }
 }
+
+// After a restart for a changed configuration, a SIGTERM before the new pipeline's first frame
+// ended the daemon with status 1 ("no frame ever arrived"): seen as a flaky
+// systemd_notify_ready_watchdog_stop on a loaded machine. The frames before the restart count.
+TEST(ServiceReconnect, AStopJustAfterARestartIsNoFailureWhenFramesCameBefore) {
+  daemon::Config cfg;
+  cfg.source.settings_of<drivers::SimSourceConfig>("sim").camera = dsp::CameraModel::from_hfov(160, 120, 1.0);
+  daemon::StopFlags flags;
+  daemon::RunLimits limits;
+  limits.max_seconds = 0.3;
+  limits.status_line = false;
+  limits.frames_before = true;
+  EXPECT_NO_THROW(
+      daemon::run_service(cfg, flags, limits, [](const daemon::Config&) { return std::make_unique<Silent>(); }));
+}
