@@ -10,21 +10,36 @@ cal() {  # cal LINE_DELAY WIDTH HEIGHT
   printf 'cam0:\n  camera_model: pinhole\n  intrinsics: [140, 140, 79.5, 59.5]\n  distortion_model: radtan\n  distortion_coeffs: [0, 0, 0, 0]\n  resolution: [%s, %s]\n  timeshift_cam_imu: 0.004\n  rsd:\n    format: rsd-calibration/1\n    line_delay_s: %s\n' "$2" "$3" "$1" > cal.yaml
 }
 cal 1.0e-4 160 120
-# Each signal waits for the daemon's answer to the one before (not for a fixed time: a
-# sanitizer build starts and answers several times slower).
-said() {  # said TEXT: wait up to 10 s (times RSD_TEST_TIME_SCALE) for TEXT in the daemon's output
+# Each step waits for the daemon's answer to the one before (not for a fixed time: a sanitizer
+# build starts and answers several times slower), and signals again each second until the
+# answer comes (a SIGHUP while the previous calibration is still being taken up is refused
+# with "send SIGHUP again").
+scale=${RSD_TEST_TIME_SCALE:-1}
+said() {  # said TEXT: wait up to 10 s (times the scale) for TEXT in the daemon's output
   i=0
-  while [ $i -lt $((100 * ${RSD_TEST_TIME_SCALE:-1})) ]; do
+  while [ $i -lt $((100 * scale)) ]; do
     grep -q "$1" out.txt && return 0
     sleep 0.1; i=$((i + 1))
   done
   return 1
 }
+hup_until() {  # hup_until TEXT: SIGHUP, again each second, until TEXT is in the output
+  i=0
+  while [ $i -lt $((10 * scale)) ]; do
+    kill -HUP $pid
+    j=0
+    while [ $j -lt 10 ]; do grep -q "$1" out.txt && return 0; sleep 0.1; j=$((j + 1)); done
+    i=$((i + 1))
+  done
+  return 1
+}
 "$rsd" -c rsd.yaml --calibration cal.yaml --frames 150 --quiet > out.txt 2>&1 &
 pid=$!
-said 'rsd: info: sim 160x120'; sleep 0.5; cal 1.5e-4 160 120; kill -HUP $pid
-said 'calibration reloaded'; cal 1.5e-4 320 240; kill -HUP $pid
-said 'reload refused'; printf 'source:\n  driver: sim\n  sim: {width: 160, height: 120, fps: 60}\n' > rsd.yaml; cal 1.5e-4 160 120; kill -HUP $pid
+said 'rsd: info: sim 160x120'; sleep 0.5
+cal 1.5e-4 160 120; hup_until 'calibration reloaded'
+cal 1.5e-4 320 240; hup_until 'says 320x240'
+printf 'source:\n  driver: sim\n  sim: {width: 160, height: 120, fps: 60}\n' > rsd.yaml; cal 1.5e-4 160 120
+hup_until 'configuration reloaded: restarting the pipeline'
 wait $pid; rc=$?
 cat out.txt
 [ $rc -eq 0 ] || { echo "sighup: rsd exited with $rc"; exit 1; }
