@@ -88,19 +88,25 @@ class Silent final : public drivers::CameraSource {
   void stop() override {}
 };
 
+// A quiet run of the service on a camera that never delivers, for `seconds`.
+void run_silent(double seconds, bool frames_before) {
+  daemon::Config cfg;
+  cfg.source.settings_of<drivers::SimSourceConfig>("sim").camera = dsp::CameraModel::from_hfov(160, 120, 1.0);
+  daemon::StopFlags flags;
+  daemon::RunLimits limits;
+  limits.max_seconds = seconds;
+  limits.status_line = false;
+  limits.frames_before = frames_before;
+  daemon::run_service(cfg, flags, limits, [](const daemon::Config&) { return std::make_unique<Silent>(); });
+}
+
 }  // namespace
 
 // A run in which no frame ever arrived ends as a failure that says so, whether the camera never
 // opened or opened and stayed silent.
 TEST(ServiceReconnect, NoFrameEverIsAFailureThatSaysSo) {
-  daemon::Config cfg;
-  cfg.source.settings_of<drivers::SimSourceConfig>("sim").camera = dsp::CameraModel::from_hfov(160, 120, 1.0);
-  daemon::StopFlags flags;
-  daemon::RunLimits limits;
-  limits.max_seconds = 0.6;
-  limits.status_line = false;
   try {
-    daemon::run_service(cfg, flags, limits, [](const daemon::Config&) { return std::make_unique<Silent>(); });
+    run_silent(0.6, false);
     ADD_FAILURE() << "a silent camera's run ended as a success";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("no frame ever arrived from silent-test"), std::string::npos) << e.what();
@@ -111,13 +117,5 @@ TEST(ServiceReconnect, NoFrameEverIsAFailureThatSaysSo) {
 // ended the daemon with status 1 ("no frame ever arrived"): seen as a flaky
 // systemd_notify_ready_watchdog_stop on a loaded machine. The frames before the restart count.
 TEST(ServiceReconnect, AStopJustAfterARestartIsNoFailureWhenFramesCameBefore) {
-  daemon::Config cfg;
-  cfg.source.settings_of<drivers::SimSourceConfig>("sim").camera = dsp::CameraModel::from_hfov(160, 120, 1.0);
-  daemon::StopFlags flags;
-  daemon::RunLimits limits;
-  limits.max_seconds = 0.3;
-  limits.status_line = false;
-  limits.frames_before = true;
-  EXPECT_NO_THROW(
-      daemon::run_service(cfg, flags, limits, [](const daemon::Config&) { return std::make_unique<Silent>(); }));
+  EXPECT_NO_THROW(run_silent(0.3, true));
 }
