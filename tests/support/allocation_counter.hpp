@@ -24,6 +24,12 @@ void* operator new(std::size_t n) { return rsd::test::counted(n); }
 void* operator new[](std::size_t n) { return rsd::test::counted(n); }
 void* operator new(std::size_t n, std::align_val_t a) { return rsd::test::counted(n, static_cast<std::size_t>(a)); }
 void* operator new[](std::size_t n, std::align_val_t a) { return rsd::test::counted(n, static_cast<std::size_t>(a)); }
+// These operators replace the global ones, so free() is the right partner of counted()'s malloc;
+// GCC, seeing operator delete call free, warns of a mismatch at -O1 (the sanitizer trees).
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#endif
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete[](void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
@@ -32,3 +38,6 @@ void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
