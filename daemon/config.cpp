@@ -1,4 +1,5 @@
 #include "daemon/config.hpp"
+#include "daemon/worker_pool.hpp"
 
 #include <sched.h>
 
@@ -50,6 +51,8 @@ void visit_rectification(formats::ConfigSection& c, RectifyConfig& r) {
   c.check(r.threshold_px > 0, "threshold_px", "must be positive");
   c.value("imu_wait_ms", r.imu_wait_ms, "wait this long at most for IMU samples covering a frame's last row");
   c.check(std::isfinite(r.imu_wait_ms) && r.imu_wait_ms >= 0 && r.imu_wait_ms <= 1000, "imu_wait_ms", "must be 0..1000 ms");
+  c.value("workers", r.workers, "threads that resample each frame together (the rectify thread included), created at start");
+  c.check(r.workers >= 1 && r.workers <= WorkerPool::kMaxWorkers, "workers", "must be 1..64");
 }
 
 void visit_velocity(formats::ConfigSection& c, Config& cfg) {

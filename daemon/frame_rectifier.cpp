@@ -9,11 +9,13 @@
 namespace rsd::daemon {
 
 FrameRectifier::FrameRectifier(const RectifyConfig& cfg, const dsp::CameraModel& cam, const dsp::RowTiming& timing,
-                               const drivers::FrameFormat& fmt)
+                               const drivers::FrameFormat& fmt, dsp::RowExecutor* pool)
     : cfg_(cfg), cam_(cam), timing_(timing) {
   dsp::RectifierConfig rc;
   rc.initial_spacing = cfg.grid_px;
+  rc.max_bands = pool ? pool->concurrency() : 1;
   rect_ = std::make_unique<dsp::Rectifier>(cam, timing, fmt.format, rc);
+  rect_->set_executor(pool);
 }
 
 FrameRectifier::~FrameRectifier() = default;

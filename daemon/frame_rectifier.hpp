@@ -29,6 +29,9 @@ struct RectifyConfig {
   // The longest the rectifier waits for the IMU samples covering a frame's last row (a live
   // IMU's message may arrive a little after the frame); beyond it the newest rate is held.
   double imu_wait_ms = 5.0;
+  // Threads that resample each frame together: the rectify thread and workers - 1 helpers,
+  // created at start (daemon/worker_pool). 1: the rectify thread alone.
+  int workers = 1;
 };
 
 struct RectifyResult {
@@ -48,8 +51,10 @@ struct RectifyResult {
 
 class FrameRectifier {
  public:
+  // pool: the threads that share the resampling (nullptr: the calling thread alone); it must
+  // outlive this object.
   FrameRectifier(const RectifyConfig& cfg, const dsp::CameraModel& cam, const dsp::RowTiming& timing,
-                 const drivers::FrameFormat& fmt);
+                 const drivers::FrameFormat& fmt, dsp::RowExecutor* pool = nullptr);
   ~FrameRectifier();
   // Never allocates: everything is sized in the constructor.
   RectifyResult process(const dsp::ImageView& src, const dsp::ImageView& dst, const drivers::FrameMeta& meta,

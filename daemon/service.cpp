@@ -1,4 +1,5 @@
 #include "daemon/service.hpp"
+#include "daemon/worker_pool.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -51,6 +52,7 @@ struct Session {
   std::unique_ptr<LcmPublisher> pub;
   VelocityBuffer velocity;
   std::unique_ptr<VelocityInput> velocity_in;
+  std::unique_ptr<WorkerPool> workers;  // the rectifiers' helper threads (rectification.workers)
   std::unique_ptr<FrameRectifier> rectifier;
   std::unique_ptr<FrameRectifier> next_rectifier;  // a SIGHUP calibration, until the pipeline takes it up
   int calibrations_applied = 0;
@@ -142,7 +144,7 @@ struct Session {
     if (next_rectifier) return "the previous calibration is still being taken up; send SIGHUP again";
     try {
       const auto [cam, timing] = geometry(next);
-      next_rectifier = std::make_unique<FrameRectifier>(rectify_config(), cam, timing, source->format());
+      next_rectifier = std::make_unique<FrameRectifier>(rectify_config(), cam, timing, source->format(), workers.get());
     } catch (const std::exception& e) {
       return e.what();
     }
@@ -164,7 +166,11 @@ struct Session {
     next_rectifier.reset();  // a stopped pipeline uses neither: the new one starts with cfg's
     const auto [cam, timing] = geometry(cfg);
     if (recording) recording->set_camera(cam);
-    rectifier = std::make_unique<FrameRectifier>(rectify_config(), cam, timing, source->format());
+    if (!workers || workers->concurrency() != cfg.rectify.workers) {
+      rectifier.reset();  // the old pool's users first
+      workers = std::make_unique<WorkerPool>(cfg.rectify.workers);
+    }
+    rectifier = std::make_unique<FrameRectifier>(rectify_config(), cam, timing, source->format(), workers.get());
     PipelineConfig pc = cfg.pipeline;
     if (playback() && playback()->fast()) pc.lossless = true;  // every frame, reproducibly
     const bool to_files = !cfg.output.dir.empty() || !cfg.output.video.empty();

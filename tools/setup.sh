@@ -24,7 +24,13 @@ PACKAGES=(
   libcamera-dev                          # the libcamera driver
   libaravis-dev aravis-tools libusb-1.0-0-dev iproute2 util-linux  # Aravis driver; fake GigE camera tests in a private netns
   clang libfuzzer-14-dev                 # fuzzing the parsers (tests/fuzz/run.sh)
+  libhwy-dev                             # Google Highway: the SIMD kernels (dsp/rectify)
 )
+# On x86-64: the arm64 cross build and its tests under qemu (tests/cross), with Highway for arm64
+# from Debian's multiarch archive beside the native one. An arm64 machine tests its own kernels.
+if [ "$(dpkg --print-architecture)" = amd64 ]; then
+  PACKAGES+=(g++-aarch64-linux-gnu qemu-user-static libhwy-dev:arm64)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
@@ -39,5 +45,9 @@ SUDO=""
 [ "$(id -u)" -eq 0 ] || SUDO="sudo"
 echo "setup: installing ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
+# arm64 packages on x86-64 (multiarch) need the architecture known to dpkg before apt-get update.
+if [ "$(dpkg --print-architecture)" = amd64 ] && ! dpkg --print-foreign-architectures | grep -qx arm64; then
+  $SUDO dpkg --add-architecture arm64
+fi
 $SUDO apt-get update -q
 $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"

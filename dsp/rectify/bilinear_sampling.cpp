@@ -5,32 +5,21 @@ namespace rsd::dsp::rectify_detail {
 namespace {
 
 template <class T, int C>
-Samplers scalar_samplers() {
+Samplers scalar_of() {
   return {sample_row_scalar<T, C>, sample_affine_scalar<T, C>};
 }
 
 }  // namespace
 
-Samplers pick_samplers(PixelFormat f, bool simd) {
-#ifdef RSD_HAVE_AVX2_KERNELS
-  if (simd) return avx2_samplers(f);
-#else
-  (void)simd;
-#endif
+Samplers scalar_samplers(PixelFormat f) {
   switch (f) {
-    case PixelFormat::Mono8: return scalar_samplers<std::uint8_t, 1>();
-    case PixelFormat::Mono16: return scalar_samplers<std::uint16_t, 1>();
-    case PixelFormat::Rgb8: return scalar_samplers<std::uint8_t, 3>();
+    case PixelFormat::Mono8: return scalar_of<std::uint8_t, 1>();
+    case PixelFormat::Mono16: return scalar_of<std::uint16_t, 1>();
+    case PixelFormat::Rgb8: return scalar_of<std::uint8_t, 3>();
   }
   return {};
 }
 
-bool cpu_has_avx2() {
-#ifdef RSD_HAVE_AVX2_KERNELS
-  return __builtin_cpu_supports("avx2");
-#else
-  return false;
-#endif
-}
+Samplers pick_samplers(PixelFormat f, bool simd) { return simd ? dispatched_samplers(f) : scalar_samplers(f); }
 
 }  // namespace rsd::dsp::rectify_detail

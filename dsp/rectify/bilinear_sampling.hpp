@@ -1,10 +1,12 @@
 // Bilinear sampling of a source image at 16.16 fixed-point positions: the scalar reference
-// every kernel must agree with bit for bit (bilinear_sampling_avx2.cpp), and the choice of
-// kernels for a pixel format at run time.
+// every kernel must agree with bit for bit (the SIMD kernels, bilinear_sampling_simd.cpp), and
+// the choice of kernels for a pixel format at run time.
 #pragma once
 
 #include <cstdint>
 #include <cstring>
+#include <string>
+#include <vector>
 
 #include "dsp/core/image.hpp"
 #include "dsp/rectify/rs_rectifier.hpp"
@@ -16,7 +18,7 @@ namespace rsd::dsp::rectify_detail {
 // A position (16.16) is rounded to 1/256 px: integer tap x0 and 8-bit weight fx. The blend
 // rounds after each direction, top = (p00 (256 - fx) + p01 fx + 128) >> 8, then
 // out = (top (256 - fy) + bot fy + 128) >> 8: for 8-bit pixels every intermediate fits 16 bits,
-// which lets the AVX2 kernel work on 16 pixels per instruction. The scalar code computes the
+// which lets the SIMD kernels work on 16 pixels per instruction. The scalar code computes the
 // same integers, so both paths agree bit for bit; the result is within 1 grey level of exact
 // bilinear interpolation at the rounded position. A tap outside the image reads 0 (black).
 
@@ -93,8 +95,11 @@ using Affine = Rectifier::Affine;
 
 template <class T, int C>
 inline void sample_affine_scalar(const ImageView& src, const Affine& a, std::uint8_t* out, int n) {
-  std::int32_t x = a.ax, y = a.ay;
-  for (int i = 0; i < n; ++i, x += a.sx, y += a.sy) sample_pixel<T, C>(src, x, y, out + i * C * sizeof(T));
+  // Running sums in wrapping 32-bit arithmetic (the kernels' lanes wrap alike; a signed int
+  // would be undefined where a far segment overflows).
+  std::uint32_t x = static_cast<std::uint32_t>(a.ax), y = static_cast<std::uint32_t>(a.ay);
+  for (int i = 0; i < n; ++i, x += static_cast<std::uint32_t>(a.sx), y += static_cast<std::uint32_t>(a.sy))
+    sample_pixel<T, C>(src, static_cast<std::int32_t>(x), static_cast<std::int32_t>(y), out + i * C * sizeof(T));
 }
 
 // Row samplers for one pixel format: positions given per pixel, or affine along a cell.
@@ -103,14 +108,19 @@ struct Samplers {
   void (*affine)(const ImageView&, const Affine&, std::uint8_t*, int);
 };
 
-// The AVX2 kernels when `simd` and the build has them, else the scalar reference.
+// The SIMD kernels of the best target this CPU runs when `simd`, else the scalar reference.
 Samplers pick_samplers(PixelFormat f, bool simd);
-bool cpu_has_avx2();
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#define RSD_HAVE_AVX2_KERNELS 1
-// The AVX2 kernels for a format (bilinear_sampling_avx2.cpp).
-Samplers avx2_samplers(PixelFormat f);
-#endif
+// The scalar reference's kernels.
+Samplers scalar_samplers(PixelFormat f);
+// The SIMD kernels (bilinear_sampling_simd.cpp, Google Highway's runtime dispatch).
+Samplers dispatched_samplers(PixelFormat f);
+// The name of the instruction set the SIMD kernels run on here ("AVX2", "NEON", ...).
+std::string simd_target_name();
+// For tests: every target compiled in that this CPU runs (Highway's bits, best first), its
+// name, and making one of them the only target (0: all again). Not thread-safe.
+std::vector<std::int64_t> simd_targets();
+std::string target_name(std::int64_t target);
+void force_simd_target(std::int64_t target);
 
 }  // namespace rsd::dsp::rectify_detail

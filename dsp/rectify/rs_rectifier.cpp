@@ -53,17 +53,18 @@ Rectifier::Rectifier(const CameraModel& cam, const RowTiming& timing, const Came
     throw std::invalid_argument("Rectifier: spacings must be powers of two, 2 <= min_spacing <= initial_spacing");
   if (!(cfg.tolerance_px > 0) || cfg.table_step_rows < 1)
     throw std::invalid_argument("Rectifier: tolerance must be positive and the table step at least one row");
+  if (cfg.max_bands < 1 || cfg.max_bands > 256) throw std::invalid_argument("Rectifier: max_bands must be 1..256");
+  bands_.resize(cfg.max_bands);
+  for (RowScratch& b : bands_) b.xs.assign(out_.width, 0), b.ys.assign(out_.width, 0);
   allocate_levels();
   // Pose table over the capture window of rs_projection.hpp: rows -H/2 .. 1.5 H - 1.
   // Room for a step of one row: fast motions refine the table as well as the grid.
   table_v0_ = -0.5 * timing_.height;
   table_.resize(2 * static_cast<std::size_t>(timing_.height));
-  simd_ = cfg_.use_simd && cpu_has_avx2();
+  simd_ = cfg_.use_simd;
   const Samplers k = pick_samplers(format_, simd_);
   sample_row_ = k.row;
   sample_affine_ = k.affine;
-  xs_.assign(out_.width, 0);
-  ys_.assign(out_.width, 0);
 }
 
 // Levels from the initial spacing down to the minimum; a level needs three nodes each way for
@@ -95,7 +96,9 @@ void Rectifier::allocate_levels() {
   }
   rho_.resize(most);
   cell_mode_.resize(most);
-  for (auto* v : {&row_px_, &row_py_, &row_ix_, &row_iy_, &row_rho_, &v_start_}) v->resize(widest);
+  v_start_.resize(widest);
+  for (RowScratch& b : bands_)
+    for (auto* v : {&b.px, &b.py, &b.ix, &b.iy, &b.rho}) v->resize(widest);
 }
 
 // ---- The exact map at one node ---------------------------------------------------------
@@ -181,11 +184,14 @@ bool Rectifier::solve_node(const double* Y, double rho, double& v, double* px, d
 // that the map continues smoothly past the horizon) or infinity. Warm start: the solution of
 // the node above, one spacing on; nodes of a row do not depend on each other, so the CPU
 // overlaps their Newton iterations.
-void Rectifier::solve_branch(Branch& b, bool plane_branch) {
+// Node columns [i0, i1): each column solved top to bottom, Newton starting from the row above;
+// returns the largest table-error gain.
+double Rectifier::solve_columns(Branch& b, bool plane_branch, int i0, int i1) {
   const Level& L = levels_[level_];
-  for (int i = 0; i < L.nx; ++i) v_start_[i] = 0;
+  double gain_max = 0;
+  for (int i = i0; i < i1; ++i) v_start_[i] = 0;
   for (int j = 0; j < L.ny; ++j)
-    for (int i = 0; i < L.nx; ++i) {
+    for (int i = i0; i < i1; ++i) {
       const std::size_t n = static_cast<std::size_t>(j) * L.nx + i;
       b.ok[n] = 0, b.x[n] = b.y[n] = 0;
       double& v = v_start_[i];
@@ -199,8 +205,31 @@ void Rectifier::solve_branch(Branch& b, bool plane_branch) {
       double root = v, px[2], gain = 0;
       if (!solve_node(Y, rho, root, px, &gain)) continue;
       b.x[n] = px[0], b.y[n] = px[1], b.ok[n] = 1, v = root;
-      gain_max_ = std::max(gain_max_, gain);
+      gain_max = std::max(gain_max, gain);
     }
+  return gain_max;
+}
+
+// The columns are independent (each column's Newton starts follow its own rows), so bands of
+// them go to the executor's threads as the rows of the remap do; the result is the same.
+void Rectifier::solve_branch(Branch& b, bool plane_branch) {
+  const int nx = levels_[level_].nx;
+  const int parts = executor_ ? std::clamp(std::min(executor_->concurrency(), nx), 1, static_cast<int>(bands_.size())) : 1;
+  if (parts == 1) {
+    gain_max_ = std::max(gain_max_, solve_columns(b, plane_branch, 0, nx));
+  } else {
+    struct Job {
+      Rectifier* self;
+      Branch* b;
+      bool plane;
+      int parts, nx;
+    } job{this, &b, plane_branch, parts, nx};
+    executor_->run(parts, [](void* ctx, int k) {
+      const Job& j = *static_cast<const Job*>(ctx);
+      j.self->bands_[k].gain = j.self->solve_columns(*j.b, j.plane, j.nx * k / j.parts, j.nx * (k + 1) / j.parts);
+    }, &job);
+    for (int k = 0; k < parts; ++k) gain_max_ = std::max(gain_max_, bands_[k].gain);
+  }
   second_differences(b);
 }
 

@@ -7,7 +7,7 @@
 // (Meingast, Geyer, Sastry 2005, Sec. 2). That exact map is evaluated only at the nodes of a
 // coarse grid and interpolated bilinearly in between; the grid is refined until an error bound
 // (from the map's second differences, docs/rectification.md) is below the tolerance. The
-// image is then resampled bilinearly in fixed point (AVX2 when the CPU has it).
+// image is then resampled bilinearly in fixed point (SIMD kernels for the CPU's instruction set).
 //
 // Nothing is allocated after construction: the daemon's hot path calls rectify() per frame.
 #pragma once
@@ -33,12 +33,26 @@ double reference_time(const RowTiming& timing, ReferenceRow ref);
 // depth, which is where the plane's points tend as they approach the horizon.
 DepthModel ground_plane(double camera_height_m);
 
+// Threads the caller owns, lent to rectify() for the resampling (dsp starts none; the daemon's
+// worker pool implements this). run(parts, fn, ctx) calls fn(ctx, part) exactly once for every
+// part in [0, parts), possibly concurrently, and returns when every call has returned; it must
+// not allocate. concurrency() is how many calls may run at once.
+class RowExecutor {
+ public:
+  virtual ~RowExecutor() = default;
+  virtual int concurrency() const = 0;
+  virtual void run(int parts, void (*fn)(void* ctx, int part), void* ctx) = 0;
+};
+
 struct RectifierConfig {
   int initial_spacing = 32;     // node spacing tried first (output px, a power of two >= 2)
   int min_spacing = 4;          // the refinement halves the spacing down to this
   double tolerance_px = 0.05;   // wanted bound on |interpolated - exact source position|
   int table_step_rows = 8;      // pose table step (rows); halved while its error share is large
-  bool use_simd = true;         // AVX2 kernels where the CPU has them (same output bit for bit)
+  bool use_simd = true;         // SIMD kernels of the CPU's best instruction set (same output bit for bit)
+  // Row bands resampled at once through the executor (set_executor); scratch for this many is
+  // allocated at construction. 1: the calling thread does every row.
+  int max_bands = 1;
 };
 
 struct RectifyReport {
@@ -83,6 +97,11 @@ class Rectifier {
   // positions the sampler uses, to 1/65536 px); NaN where the output is black by construction.
   void map_row(int y, double* sx, double* sy);
 
+  // Solve the map's node columns and resample the rows in up to min(executor->concurrency(),
+  // cfg.max_bands) bands, one per thread (nullptr: all on the calling thread). The map and the
+  // output are the same byte for byte.
+  void set_executor(RowExecutor* executor) { executor_ = executor; }
+
   bool uses_simd() const { return simd_; }
   const CameraModel& output_camera() const { return out_; }
 
@@ -103,21 +122,28 @@ class Rectifier {
   struct Affine {                        // source positions along a cell of a row: a + k s, 16.16
     std::int32_t ax, ay, sx, sy;
   };
+  struct RowScratch {                    // one band's state: node values at the row, positions
+    std::vector<double> px, py, ix, iy, rho;
+    std::vector<std::int32_t> xs, ys;
+    double gain = 0;                     // its node columns' largest table-error gain
+  };
 
  private:
   void allocate_levels();
   void build_pose_table(const CameraMotion& motion, int step_rows);
   bool solve_node(const double* Y, double rho, double& v, double* px, double* gain) const;
   void solve_branch(Branch& b, bool plane_branch);
+  double solve_columns(Branch& b, bool plane_branch, int i0, int i1);
   void second_differences(Branch& b) const;
   RectifyReport solve_level();
   RectifyReport assess_level();
   double max_node_displacement() const;
   double cell_bound(const Branch& b, int i, int j) const;
-  int interpolate_row(int y);
-  Affine cell_affine(int i, std::uint8_t mode) const;
-  void generate_row(int y);
-  void kink_segment(int i, int x0, int count);
+  int interpolate_row(int y, RowScratch& s) const;
+  Affine cell_affine(int i, std::uint8_t mode, const RowScratch& s) const;
+  void generate_row(int y, RowScratch& s) const;
+  void kink_segment(int i, int x0, int count, RowScratch& s) const;
+  void remap_rows(const ImageView& src, const ImageView& dst, int y0, int y1, RowScratch& s) const;
   void check_views(const ImageView& src, const ImageView& dst) const;
 
   CameraModel cam_, out_;
@@ -145,9 +171,10 @@ class Rectifier {
   double gain_max_ = 0;                    // table-error sensitivity, max over nodes
   std::vector<double> v_start_;            // Newton's start per node column (row solved last)
   bool map_ready_ = false;
-  // Per row: node values interpolated to the row, and the source coordinates (16.16).
-  std::vector<double> row_px_, row_py_, row_ix_, row_iy_, row_rho_;
-  std::vector<std::int32_t> xs_, ys_;
+  // Per band of rows (max_bands of them): node values interpolated to the row, and the source
+  // coordinates (16.16).
+  std::vector<RowScratch> bands_;
+  RowExecutor* executor_ = nullptr;
 };
 
 }  // namespace rsd::dsp

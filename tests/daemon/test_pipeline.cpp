@@ -15,6 +15,7 @@
 
 #include "daemon/frame_rectifier.hpp"
 #include "daemon/pipeline.hpp"
+#include "daemon/worker_pool.hpp"
 #include "drivers/sim_source.hpp"
 
 #include "tests/support/allocation_counter.hpp"  // every C++ allocation of this process, counted
@@ -49,6 +50,7 @@ void on_info(const lcm_recv_buf_t* rbuf, const char*, void* user) {
 
 // Runs the pipeline until `frames` are published (or 60 s pass).
 struct Rig {
+  std::unique_ptr<daemon::WorkerPool> workers;  // rectification.workers > 1: the helpers
   drivers::SimSource source;
   daemon::VelocityBuffer velocity;
   daemon::LcmPublisher pub;
@@ -56,12 +58,14 @@ struct Rig {
   std::unique_ptr<daemon::Pipeline> pipeline;
   Received rx;
 
-  explicit Rig(bool with_velocity)
-      : source(small_sim(with_velocity)), pub("memq://", {}, {160, 120, dsp::PixelFormat::Mono8}) {
+  explicit Rig(bool with_velocity, int worker_count = 1)
+      : workers(std::make_unique<daemon::WorkerPool>(worker_count)),
+        source(small_sim(with_velocity)),
+        pub("memq://", {}, {160, 120, dsp::PixelFormat::Mono8}) {
     source.set_velocity_sink([this](const drivers::VelocitySample& s) { velocity.push(s); });
     source.open();
     rectifier = std::make_unique<daemon::FrameRectifier>(daemon::RectifyConfig{}, dsp::CameraModel::from_hfov(160, 120, 1.0),
-                                                         source.timing(), source.format());
+                                                         source.timing(), source.format(), workers.get());
     daemon::PipelineConfig pc;
     pc.queue_depth = 64;  // keep every frame: this test wants all of them
     pc.raw_slots = pc.out_slots = 66;
@@ -128,8 +132,10 @@ TEST(Pipeline, WithoutVelocityFramesPassThroughAndSayWhy) {
   }
 }
 
-TEST(Pipeline, HotPathAllocatesNothingAfterStartUp) {
-  Rig rig(true);
+namespace {
+
+void expect_no_allocation_per_frame(int worker_count) {
+  Rig rig(true, worker_count);
   rig.rx.decode = false;  // the test's own LCM handlers must not allocate either
   rig.run_until(100);     // warm-up: first frames, first velocity, LCM set-up
   const uint64_t before = g_allocations.load();
@@ -145,5 +151,12 @@ TEST(Pipeline, HotPathAllocatesNothingAfterStartUp) {
   const uint64_t frames = rig.pipeline->stats().frames_out.load() - frames_before;
   rig.pipeline->stop();
   EXPECT_GE(frames, want) << (test::kSanitized ? test::kSanitizedNote : "");
-  EXPECT_EQ(after - before, 0u) << "heap allocations over " << frames << " frames";
+  EXPECT_EQ(after - before, 0u) << "heap allocations over " << frames << " frames, " << worker_count << " workers";
 }
+
+}  // namespace
+
+TEST(Pipeline, HotPathAllocatesNothingAfterStartUp) { expect_no_allocation_per_frame(1); }
+
+// Rows resampled by the rectify thread and two helpers (rectification.workers: 3).
+TEST(Pipeline, HotPathWithWorkersAllocatesNothingAfterStartUp) { expect_no_allocation_per_frame(3); }

@@ -2,21 +2,23 @@
 // - its interpolated map against the exact inverse at every pixel, computed another way: the
 //   output pixel's ray meets the depth model in a Euclidean point, which the paper's bracketed
 //   root finder (project_trajectory, eq. (3)) projects with the exact screw motion;
-// - its images against the renderer's global-shutter frame at t_ref (RsRenderer with a line
-//   delay of 1e-12 s), from the rendered rolling-shutter frame;
+// - (its images against the renderer's global-shutter frame: test_rs_rectifier_render.cpp);
 // - its sampling against a double-precision bilinear interpolation;
-// - zero motion is the identity, SIMD equals scalar bit for bit, and rectify() allocates
-//   nothing (every global operator new counted: tests/support/allocation_counter.hpp).
+// - zero motion is the identity, SIMD equals scalar bit for bit, bands of rows on other threads
+//   equal one thread's image, and rectify() allocates nothing (every global operator new counted: tests/support/allocation_counter.hpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
+#include <thread>
+#include <vector>
 
 #include "dsp/geometry/rs_projection.hpp"
+#include "dsp/rectify/bilinear_sampling.hpp"
 #include "dsp/rectify/rs_rectifier.hpp"
-#include "dsp/sim/rs_renderer.hpp"
 #include "tests/support/allocation_counter.hpp"  // every C++ allocation of this process, counted
 
 using namespace rsd::dsp;
@@ -216,21 +218,24 @@ TEST(RsRectifier, ZeroMotionIsTheIdentity) {
 }
 
 TEST(RsRectifier, SimdEqualsScalarBitForBit) {
-  // Every case: spacings 8 (positions through the row arrays) to 32 (generated per cell).
+  // Every case: spacings 8 (positions through the row arrays) to 32 (generated per cell);
+  // every instruction set compiled in that this CPU runs.
   RectifierConfig scalar_cfg;
   scalar_cfg.use_simd = false;
-  for (const Case& c : cases()) {
-    Rectifier probe(c.cam, c.timing, PixelFormat::Mono8);
-    if (!probe.uses_simd()) GTEST_SKIP() << "no AVX2 on this CPU";
-    for (PixelFormat f : {PixelFormat::Mono8, PixelFormat::Mono16, PixelFormat::Rgb8}) {
-      Rectifier simd(c.cam, c.timing, f), scalar(c.cam, c.timing, f, scalar_cfg);
-      Image src = random_image(c.cam.width, c.cam.height, f, 11);
-      Image a(c.cam.width, c.cam.height, f), b(c.cam.width, c.cam.height, f);
-      simd.rectify(src.view(), a.view(), c.tw, c.depth, c.t_ref);
-      scalar.rectify(src.view(), b.view(), c.tw, c.depth, c.t_ref);
-      EXPECT_EQ(a.data, b.data) << c.name << ", format " << static_cast<int>(f);
-    }
+  for (std::int64_t target : rectify_detail::simd_targets()) {
+    rectify_detail::force_simd_target(target);
+    for (const Case& c : cases())
+      for (PixelFormat f : {PixelFormat::Mono8, PixelFormat::Mono16, PixelFormat::Rgb8}) {
+        Rectifier simd(c.cam, c.timing, f), scalar(c.cam, c.timing, f, scalar_cfg);
+        Image src = random_image(c.cam.width, c.cam.height, f, 11);
+        Image a(c.cam.width, c.cam.height, f), b(c.cam.width, c.cam.height, f);
+        simd.rectify(src.view(), a.view(), c.tw, c.depth, c.t_ref);
+        scalar.rectify(src.view(), b.view(), c.tw, c.depth, c.t_ref);
+        EXPECT_EQ(a.data, b.data) << rectify_detail::target_name(target) << " " << c.name << ", format "
+                                  << static_cast<int>(f);
+      }
   }
+  rectify_detail::force_simd_target(0);
 }
 
 TEST(RsRectifier, SamplingIsBilinearWithABlackBorder) {
@@ -271,87 +276,6 @@ TEST(RsRectifier, SamplingIsBilinearWithABlackBorder) {
   }
 }
 
-namespace {
-
-// Root-mean-square grey-level difference over rows [y0, y1) less a margin on either side.
-double rms_difference(const Image& a, const Image& b, int margin, int y0, int y1) {
-  const int C = channels(a.format);
-  double sum = 0;
-  long n = 0;
-  for (int y = y0; y < y1; ++y)
-    for (int x = margin; x < a.width - margin; ++x)
-      for (int ch = 0; ch < C; ++ch) {
-        const size_t k = (static_cast<size_t>(y) * a.width + x) * C + ch;
-        const double d = double(a.data[k]) - double(b.data[k]);
-        sum += d * d, ++n;
-      }
-  return std::sqrt(sum / n);
-}
-
-struct RenderCheck {
-  double rectified_rms, unrectified_rms;
-};
-
-// Renders the rolling-shutter frame and the global-shutter frame at t_ref of the same scene
-// and motion (world = camera at the frame start), rectifies the first, compares with the second
-// over rows [y0, y1) (margins: rectification leaves black where the rolling shutter saw nothing).
-RenderCheck render_and_rectify(const Scene& scene, const Twist& tw, const DepthModel& depth, PixelFormat f,
-                               int y0 = 30, int y1 = 210) {
-  const CameraModel cam = camera(320, 240, 60);
-  const RowTiming timing = RowTiming::full_frame(240, 30);
-  const double t_ref = reference_time(timing, ReferenceRow::Middle);
-  RenderOptions opt;
-  opt.supersample = 4;
-  RowTiming global = timing;
-  global.line_delay_s = 1e-12;
-  Image rs(cam.width, cam.height, f), gs(cam.width, cam.height, f), out(cam.width, cam.height, f);
-  const ScrewMotion motion(tw);
-  RsRenderer(cam, timing, opt).render(scene, motion, 0.0, rs.view());
-  RsRenderer(cam, global, opt).render(scene, motion, t_ref, gs.view());
-  Rectifier rect(cam, timing, f);
-  const RectifyReport rep = rect.rectify(rs.view(), out.view(), tw, depth, t_ref);
-  EXPECT_TRUE(rep.within_tolerance());
-  return {rms_difference(out, gs, 30, y0, y1), rms_difference(rs, gs, 30, y0, y1)};
-}
-
-Plane textured_plane(Vector3d origin, Vector3d s, Vector3d t, double cell_m) {
-  Plane p;
-  p.origin = origin, p.axis_s = s, p.axis_t = t;
-  p.texture = std::make_shared<NoiseTexture>(3, cell_m);
-  return p;
-}
-
-}  // namespace
-
-TEST(RsRectifier, RectifiedFrameIsTheGlobalShutterFrame) {
-  // A textured wall 2 m ahead; the camera pans, rolls and slides.
-  Scene scene;
-  scene.planes.push_back(textured_plane({-5, -5, 2}, Vector3d::UnitX(), Vector3d::UnitY(), 0.08));
-  const Twist tw = twist({0.8, 0.3, 0.4}, {0.3, 1.5, 0.8});
-  for (PixelFormat f : {PixelFormat::Mono8, PixelFormat::Rgb8}) {
-    const RenderCheck r = render_and_rectify(scene, tw, DepthModel::fronto_parallel(2.0), f);
-    std::printf("[ image ] wall, format %d: RMS rectified %.2f, unrectified %.2f grey levels\n",
-                static_cast<int>(f), r.rectified_rms, r.unrectified_rms);
-    EXPECT_LT(r.rectified_rms, 2.5);
-    EXPECT_GT(r.unrectified_rms, 6 * r.rectified_rms);
-  }
-}
-
-TEST(RsRectifier, RectifiedGroundIsTheGlobalShutterGround) {
-  // Driving at 12 m/s with the camera 1.2 m above a textured road, yawing; uniform sky. Compared
-  // from 50 rows below the horizon (row 119.5) down: nearer the horizon the foreshortened
-  // texture is finer than the pixels, and the two renders alias it differently.
-  Scene scene;
-  scene.planes.push_back(textured_plane({0, 1.2, 0}, Vector3d::UnitX(), Vector3d::UnitZ(), 1.0));
-  scene.background = {0.6f, 0.7f, 0.9f};
-  const Twist tw = twist({0, 0, 12}, {0.02, 0.6, 0.05});
-  const RenderCheck r = render_and_rectify(scene, tw, ground_plane(1.2), PixelFormat::Mono8, 170, 230);
-  std::printf("[ image ] ground: RMS rectified %.2f, unrectified %.2f grey levels\n", r.rectified_rms,
-              r.unrectified_rms);
-  EXPECT_LT(r.rectified_rms, 2.5);
-  EXPECT_GT(r.unrectified_rms, 4 * r.rectified_rms);
-}
-
 TEST(RsRectifier, WithoutAValidVelocityTheFrameGoesOutUnrectified) {
   const CameraModel cam = camera(64, 48, 60);
   Rectifier rect(cam, RowTiming::full_frame(48, 30), PixelFormat::Rgb8);
@@ -374,10 +298,69 @@ TEST(RsRectifier, RejectsViewsThatDoNotMatch) {
   EXPECT_THROW(Rectifier(cam, RowTiming::full_frame(48, 30), PixelFormat::Mono8, bad), std::invalid_argument);
 }
 
+namespace {
+
+// Runs the parts in reverse order on the calling thread: bands out of order, no threads.
+struct ReverseExecutor : RowExecutor {
+  int n;
+  explicit ReverseExecutor(int bands) : n(bands) {}
+  int concurrency() const override { return n; }
+  void run(int parts, void (*fn)(void*, int), void* ctx) override {
+    for (int p = parts - 1; p >= 0; --p) fn(ctx, p);
+  }
+};
+
+// One thread per part, started per call (a test executor; the daemon's pool keeps its threads).
+struct ThreadExecutor : RowExecutor {
+  int n;
+  explicit ThreadExecutor(int bands) : n(bands) {}
+  int concurrency() const override { return n; }
+  void run(int parts, void (*fn)(void*, int), void* ctx) override {
+    std::vector<std::thread> threads;
+    for (int p = 1; p < parts; ++p) threads.emplace_back(fn, ctx, p);
+    fn(ctx, 0);
+    for (auto& t : threads) t.join();
+  }
+};
+
+}  // namespace
+
+TEST(RsRectifier, BandsOfRowsOnOtherThreadsGiveTheSameImage) {
+  // A rotation and the ground plane (cells the horizon crosses), every format: byte for byte the
+  // single-threaded image, in 2 bands on threads and in 3 out of order (max_bands 4; 5 asked of
+  // a rectifier allowed 4 use 4).
+  const std::vector<Case> all = cases();
+  for (const Case& c : {all[0], all[3]})
+    for (PixelFormat f : {PixelFormat::Mono8, PixelFormat::Rgb8, PixelFormat::Mono16}) {
+      Rectifier one(c.cam, c.timing, f);
+      Image src = random_image(c.cam.width, c.cam.height, f, 13), want(c.cam.width, c.cam.height, f);
+      one.rectify(src.view(), want.view(), c.tw, c.depth, c.t_ref);
+      RectifierConfig cfg;
+      cfg.max_bands = 4;
+      Rectifier many(c.cam, c.timing, f, cfg);
+      ThreadExecutor threads(2);
+      ReverseExecutor reverse(3), too_many(5);
+      std::vector<RowExecutor*> executors{&reverse, &too_many};
+      if (!std::getenv("RSD_TEST_NO_THREADS")) executors.push_back(&threads);  // (qemu-user: tests/cross)
+      for (RowExecutor* e : executors) {
+        many.set_executor(e);
+        Image got(c.cam.width, c.cam.height, f);
+        many.rectify(src.view(), got.view(), c.tw, c.depth, c.t_ref);
+        EXPECT_EQ(got.data, want.data) << c.name << ", format " << static_cast<int>(f) << ", " << e->concurrency()
+                                       << " bands asked";
+      }
+    }
+}
+
 TEST(RsRectifier, RectifyAllocatesNothingAfterConstruction) {
+  // Also in bands over an executor that itself allocates nothing.
   const CameraModel cam = camera(320, 240, 60);
   const RowTiming timing = RowTiming::full_frame(240, 30);
-  Rectifier rect(cam, timing, PixelFormat::Mono8);
+  RectifierConfig cfg;
+  cfg.max_bands = 3;
+  Rectifier rect(cam, timing, PixelFormat::Mono8, cfg);
+  ReverseExecutor reverse(3);
+  rect.set_executor(&reverse);
   Image src = random_image(320, 240, PixelFormat::Mono8, 2), dst(320, 240, PixelFormat::Mono8);
   const double mid = reference_time(timing, ReferenceRow::Middle);
   const DepthModel depths[3] = {DepthModel::at_infinity(), DepthModel::fronto_parallel(2), ground_plane(1.5)};
