@@ -9,6 +9,7 @@
 //
 //   cmake --build build-perf --target bench_rs_rectifier && build-perf/tests/bench_rs_rectifier
 //   cmake --build build-perf --target benchmarks     # this and bench_pipeline_latency, 3 repetitions
+//   build-perf/tests/dsp/rectify/bench_rs_rectifier --benchmark_format=json > out.json  # summary on stderr
 //
 // The performance goal (rectification at most 1.0x, aiming for 0.33x, the time of cv::remap
 // with precomputed CV_16SC2 maps) is judged from the summary; docs/performance.md keeps the
@@ -240,16 +241,16 @@ void BM_RectifyThreads(benchmark::State& state) {
                  std::to_string(threads) + " thread" + (threads > 1 ? "s" : ""));
 }
 
-// The console output as usual, and the iteration runs' counters kept for the summary.
-class SummaryReporter : public benchmark::ConsoleReporter {
+// Google Benchmark's own output (console, or JSON with --benchmark_format=json), and the
+// iteration runs' counters kept for the summary.
+class Samples {
  public:
   struct Sample {
     double ns_px = 0, bound_px = 0, spacing = 0;
   };
-  void ReportRuns(const std::vector<Run>& runs) override {
-    ConsoleReporter::ReportRuns(runs);
+  void collect(const std::vector<benchmark::BenchmarkReporter::Run>& runs) {
     for (const auto& r : runs) {
-      if (r.run_type != Run::RT_Iteration || r.error_occurred) continue;
+      if (r.run_type != benchmark::BenchmarkReporter::Run::RT_Iteration || r.error_occurred) continue;
       Sample s;
       const auto get = [&](const char* k) {
         const auto it = r.counters.find(k);
@@ -276,9 +277,22 @@ class SummaryReporter : public benchmark::ConsoleReporter {
   std::map<std::string, std::vector<Sample>> samples_;
 };
 
-void print_summary(const SummaryReporter& rep) {
-  std::printf("\nSummary (medians, ns per output pixel, single-threaded; rectify = map rebuilt every frame + remap)\n");
-  std::printf("%-10s %-6s %-9s %8s %8s %8s %8s %9s %9s %6s\n", "size", "format", "depth", "rectify", "remap",
+template <class Base>
+class Collecting : public Base {
+ public:
+  explicit Collecting(Samples& s) : samples_(s) {}
+  void ReportRuns(const std::vector<benchmark::BenchmarkReporter::Run>& runs) override {
+    Base::ReportRuns(runs);
+    samples_.collect(runs);
+  }
+
+ private:
+  Samples& samples_;
+};
+
+void print_summary(const Samples& rep, std::FILE* out) {
+  std::fprintf(out, "\nSummary (medians, ns per output pixel, single-threaded; rectify = map rebuilt every frame + remap)\n");
+  std::fprintf(out, "%-10s %-6s %-9s %8s %8s %8s %8s %9s %9s %6s\n", "size", "format", "depth", "rectify", "remap",
               "cv16SC2", "memcpy", "rect/cv", "rect/mcpy", "goal");
   int met = 0, total = 0;
   for (int s = 0; s < 3; ++s)
@@ -293,13 +307,13 @@ void print_summary(const SummaryReporter& rep) {
         const double r_cv = rect / cv;
         const char* goal = std::isnan(r_cv) ? "-" : (r_cv <= 0.33 ? "AIM" : (r_cv <= 1.0 ? "PASS" : "MISS"));
         if (!std::isnan(r_cv)) total++, met += r_cv <= 1.0;
-        std::printf("%4dx%-5d %-6s %-9s %8.3f %8.3f %8.3f %8.3f %8.2fx %8.1fx %6s\n", kSizes[s].w, kSizes[s].h,
+        std::fprintf(out, "%4dx%-5d %-6s %-9s %8.3f %8.3f %8.3f %8.3f %8.2fx %8.1fx %6s\n", kSizes[s].w, kSizes[s].h,
                     format_name(rgb), plane ? "plane" : "infinite", rect, remap, cv, mc, r_cv, rect / mc, goal);
       }
-  std::printf("goal rectify <= 1.0x cv::remap (aim 0.33x): %s (%d of %d cases)\n",
+  std::fprintf(out, "goal rectify <= 1.0x cv::remap (aim 0.33x): %s (%d of %d cases)\n",
               total && met == total ? "PASS" : "MISS", met, total);
-  std::printf("\nEvery core (map rebuilt every frame, rows in bands over the worker pool, wall clock; infinite depth)\n");
-  std::printf("%-10s %-6s %10s %10s %8s %12s %9s\n", "size", "format", "1 thread", "2 threads", "speedup", "ms/frame (2)",
+  std::fprintf(out, "\nEvery core (map rebuilt every frame, rows in bands over the worker pool, wall clock; infinite depth)\n");
+  std::fprintf(out, "%-10s %-6s %10s %10s %8s %12s %9s\n", "size", "format", "1 thread", "2 threads", "speedup", "ms/frame (2)",
               "30 fps");
   for (int s = 0; s < 2; ++s)
     for (int rgb = 0; rgb < 2; ++rgb) {
@@ -307,20 +321,20 @@ void print_summary(const SummaryReporter& rep) {
       const double one = rep.median(a + "1"), two = rep.median(a + "2");
       if (std::isnan(one) || std::isnan(two)) continue;
       const double ms = two * kThreadSizes[s].w * kThreadSizes[s].h * 1e-6;
-      std::printf("%4dx%-5d %-6s %10.3f %10.3f %7.2fx %12.2f %8.0f%%\n", kThreadSizes[s].w, kThreadSizes[s].h,
+      std::fprintf(out, "%4dx%-5d %-6s %10.3f %10.3f %7.2fx %12.2f %8.0f%%\n", kThreadSizes[s].w, kThreadSizes[s].h,
                   format_name(rgb), one, two, one / two, ms, 100 * (1 - ms / (1000.0 / 30)));
     }
-  std::printf("goals: two threads >= 1.8x one at 1920x1080; 3840x2160 rgb24 at 30 fps on two cores with 30%% headroom "
+  std::fprintf(out, "goals: two threads >= 1.8x one at 1920x1080; 3840x2160 rgb24 at 30 fps on two cores with 30%% headroom "
               "(<= 23.3 ms a frame); the 30 fps column is the headroom\n");
-  std::printf("\nGrid spacing (1280x720 mono8, map rebuilt every frame; tolerance 0.05 px)\n");
-  std::printf("%-8s %-9s %8s %10s %s\n", "spacing", "depth", "ns/px", "bound_px", "within 0.05 px");
+  std::fprintf(out, "\nGrid spacing (1280x720 mono8, map rebuilt every frame; tolerance 0.05 px)\n");
+  std::fprintf(out, "%-8s %-9s %8s %10s %s\n", "spacing", "depth", "ns/px", "bound_px", "within 0.05 px");
   for (int sp : {4, 8, 16, 32, 64})
     for (int plane = 0; plane < 2; ++plane) {
       const std::string k = "BM_GridSpacing/" + std::to_string(sp) + "/" + std::to_string(plane);
       const double ns = rep.median(k);
       if (std::isnan(ns)) continue;
-      const double b = rep.median(k, &SummaryReporter::Sample::bound_px);
-      std::printf("%-8d %-9s %8.3f %10.4f %s\n", sp, plane ? "plane" : "infinite", ns, b, b <= 0.05 ? "yes" : "no");
+      const double b = rep.median(k, &Samples::Sample::bound_px);
+      std::fprintf(out, "%-8d %-9s %8.3f %10.4f %s\n", sp, plane ? "plane" : "infinite", ns, b, b <= 0.05 ? "yes" : "no");
     }
 }
 
@@ -339,11 +353,16 @@ BENCHMARK(BM_GridSpacing)->ArgsProduct({{4, 8, 16, 32, 64}, {0, 1}})->Unit(bench
 
 int main(int argc, char** argv) {
   cv::setNumThreads(1);
+  // --benchmark_format=json: Google Benchmark's JSON on stdout, the summary on stderr.
+  bool json = false;
+  for (int i = 1; i < argc; ++i) json |= std::string(argv[i]) == "--benchmark_format=json";
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  SummaryReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
+  Samples samples;
+  Collecting<benchmark::ConsoleReporter> console(samples);
+  Collecting<benchmark::JSONReporter> json_out(samples);
+  benchmark::RunSpecifiedBenchmarks(json ? static_cast<benchmark::BenchmarkReporter*>(&json_out) : &console);
   benchmark::Shutdown();
-  print_summary(reporter);
+  print_summary(samples, json ? stderr : stdout);
   return 0;
 }
