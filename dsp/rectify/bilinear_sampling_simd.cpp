@@ -4,14 +4,17 @@
 // Every kernel computes the integers of the scalar reference (bilinear_sampling.hpp) bit for
 // bit; tests/dsp/rectify/test_bilinear_sampling.cpp compares each target with it.
 //
-// The kernels work on 128-bit blocks, four positions per int32 vector: the taps are fetched
-// by byte lookups inside a 16-byte window (TableLookupBytes works within 128-bit blocks on
-// every target), so one width serves all instruction sets alike. Two ways to fetch the taps:
-// - windows: the source rows around a step's taps, loaded as 16 bytes each, the taps picked
-//   out by byte lookup. Taken wherever the taps fit, i.e. almost everywhere, since the map is
-//   locally close to a translation. Mono8 does 8 pixels per step on 16-bit lanes;
-// - gathers, 4 pixels per step: the 32-bit word at each left tap (it holds the right tap too:
-//   bytes 0..1 for Mono8, both halves for Mono16; RGB24 gathers again at +3), only when all
+// The taps are fetched by byte lookups inside 16-byte windows of the source rows, which every
+// instruction set does per 128-bit block; so the kernels work in 128-bit blocks, two per vector
+// where the target has 256 bits or more at a fixed width (AVX2, AVX-512: "wide steps"), one
+// elsewhere (SSE, NEON, EMU128, and SVE whatever its vector length). Per block:
+// - Mono8: 8 pixels through one window per row (two rows, three where the taps straddle a row
+//   boundary), blended on 16-bit lanes (mono8_blocks);
+// - RGB24: 4 pixels through one 5-pixel window per row, each output byte a 16-bit lane that
+//   looks up its own colour's tap pair (rgb8_blocks);
+// - otherwise (Mono16, steps whose taps do not fit a window) 4 pixels on 32-bit lanes: windows
+//   where the taps fit, else a gather of the 32-bit word at each left tap (it holds the right tap
+//   too: bytes 0..1 for Mono8, both halves for Mono16; RGB24 gathers again at +3), only when all
 //   four taps are at least 3 px inside the right edge so that the reads never leave the row.
 // Steps entirely outside the image store zeros; the rest (near the borders) go to the scalar
 // pixel code. Pixels are little-endian in memory (x86-64 and arm64).
