@@ -47,7 +47,6 @@ using D16 = hn::Full128<std::int16_t>;   // eight Mono8 pixels
 using DU16 = hn::Full128<std::uint16_t>;
 using D8 = hn::Full128<std::uint8_t>;    // a 16-byte window, byte lookups
 using V32 = hn::Vec<D32>;
-using VU16 = hn::Vec<DU16>;
 using V8 = hn::Vec<D8>;
 
 // Vectors are passed one by one, never in structs or arrays: SVE's vectors have no size known
@@ -241,8 +240,6 @@ using DWU16 = hn::RebindToUnsigned<DW16>;
 using DW32 = hn::Repartition<std::int32_t, DW16>;
 using DW8 = hn::Repartition<std::uint8_t, DW16>;
 using VW32 = hn::Vec<DW32>;
-using VWU16 = hn::Vec<DWU16>;
-using VW8 = hn::Vec<DW8>;
 constexpr int kBlocks = static_cast<int>(hn::MaxLanes(DW16()) / 8);
 constexpr int kStep = 8 * kBlocks;
 static_assert(kBlocks == 1 || kBlocks == 2, "one or two 128-bit blocks per step");
