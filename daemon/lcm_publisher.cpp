@@ -1,5 +1,6 @@
 #include "daemon/lcm_publisher.hpp"
 
+#include "dsp/core/image_planes.hpp"
 #include "formats/image_t_codec.hpp"
 
 #include <cinttypes>
@@ -57,8 +58,7 @@ void LcmPublisher::publish_encoded(const std::string& channel, const void* data,
 
 void LcmPublisher::publish_image(bool raw, const dsp::ImageView& img, const ImageStamp& s) {
   image_.utime = s.utime;
-  const size_t row_bytes = static_cast<size_t>(img.width) * dsp::bytes_per_pixel(img.format);
-  for (int y = 0; y < img.height; ++y) std::memcpy(image_.data.data() + y * row_bytes, img.row(y), row_bytes);
+  dsp::copy_image(img, {image_.data.data(), img.width, img.height, image_.row_stride, img.format});
   char text[kMetaValueCapacity];
   std::snprintf(text, sizeof text, "%" PRId64, s.frame_utime);
   set_meta(0, text);

@@ -276,7 +276,7 @@ void log_start(const Session& s) {
   const drivers::FrameFormat f = s.source->format();
   const dsp::RowTiming t = s.source->timing();
   const RealtimeConfig& rt = s.cfg.pipeline.realtime;
-  const char* pixels = f.format == dsp::PixelFormat::Rgb8 ? "rgb8" : f.format == dsp::PixelFormat::Mono16 ? "mono16" : "mono8";
+  const char* pixels = dsp::format_name(f.format);
   const std::string calibration = s.cfg.source.calibration ? s.cfg.source.calibration->file : std::string("none");
   spdlog::info("{} {}x{} {} at {:.1f} fps, line delay {:.2f} us {}, intrinsics from {}, calibration file {}; LCM {} ({}, {}, {}); "
                "realtime {}",

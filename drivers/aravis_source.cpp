@@ -1,5 +1,6 @@
 #include "drivers/aravis_source.hpp"
 
+#include "dsp/core/image_planes.hpp"
 #include <arv.h>
 
 #include <algorithm>
@@ -253,7 +254,7 @@ void AravisSource::Impl::fake_fill(ArvBuffer* b, void* self, guint32, guint32, A
   const FrameFormat& f = impl->fmt;
   if (!data) return;  // one of our buffers: payload >= f.bytes() was checked at open
   const dsp::ImageView view{data, f.width, f.height,
-                            static_cast<std::ptrdiff_t>(f.width) * dsp::bytes_per_pixel(f.format), f.format};
+                            static_cast<std::ptrdiff_t>(dsp::row_bytes(f.format, f.width)), f.format};
   impl->cfg.fake_fill(view, arv_buffer_get_frame_id(b));
 }
 
@@ -341,8 +342,7 @@ bool AravisSource::Impl::usable(ArvBuffer* b) {
   const uint8_t* data = image_bytes(b, size);
   gint pad_x = 0, pad_y = 0;
   arv_buffer_get_image_padding(b, &pad_x, &pad_y);
-  const size_t row = static_cast<size_t>(fmt.width) * dsp::bytes_per_pixel(fmt.format);
-  const size_t need = (static_cast<size_t>(fmt.height) - 1) * (row + pad_x) + row;
+  const size_t need = dsp::buffer_bytes(fmt.format, fmt.width, fmt.height, dsp::row_bytes(fmt.format, fmt.width) + pad_x);
   if (!data || size < need || arv_buffer_get_image_width(b) != fmt.width ||
       arv_buffer_get_image_height(b) != fmt.height || arv_buffer_get_image_pixel_format(b) != pixel->arv) {
     ++stats.mismatched;
@@ -357,8 +357,8 @@ void AravisSource::Impl::copy_image(ArvBuffer* b, const dsp::ImageView& dst) con
   const uint8_t* src = image_bytes(b, size);
   gint pad_x = 0, pad_y = 0;
   arv_buffer_get_image_padding(b, &pad_x, &pad_y);
-  const size_t row = static_cast<size_t>(fmt.width) * dsp::bytes_per_pixel(fmt.format);
-  for (int y = 0; y < fmt.height; ++y) std::memcpy(dst.row(y), src + y * (row + pad_x), row);
+  const auto stride = static_cast<std::ptrdiff_t>(dsp::row_bytes(fmt.format, fmt.width) + pad_x);
+  dsp::copy_image({const_cast<uint8_t*>(src), fmt.width, fmt.height, stride, fmt.format}, dst);
 }
 
 void AravisSource::Impl::stamp(ArvBuffer* b, FrameMeta& meta) {

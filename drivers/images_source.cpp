@@ -1,5 +1,6 @@
 #include "drivers/images_source.hpp"
 
+#include "dsp/core/image_planes.hpp"
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -67,8 +68,7 @@ CaptureStatus ImagesSource::capture(const dsp::ImageView& dst, FrameMeta& meta, 
   if (f.width != format_.width || f.height != format_.height)
     throw std::runtime_error(what + ": frame is " + size_text(f) + ", the first was " + size_text(format_));
   if (f.format != format_.format) throw std::runtime_error(what + ": pixel format differs from the first frame's");
-  const size_t row = static_cast<size_t>(f.width) * dsp::bytes_per_pixel(f.format);
-  for (int y = 0; y < f.height; ++y) std::memcpy(dst.row(y), img.data.data() + static_cast<size_t>(y) * img.stride(), row);
+  dsp::copy_image(const_cast<dsp::Image&>(img).view(), dst);
   meta = {};
   meta.sequence = cfg_.numbers.empty() ? next_ : cfg_.numbers.at(next_);
   if (!cfg_.stamps_s.empty()) meta.first_row_ns = std::llround(cfg_.stamps_s[next_] * 1e9);

@@ -1,5 +1,6 @@
 #include "drivers/lcm_source.hpp"
 
+#include "dsp/core/image_planes.hpp"
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -137,8 +138,7 @@ CaptureStatus LcmSource::capture(const dsp::ImageView& dst, FrameMeta& meta, std
     early_velocity_.clear();
     early_pose_.clear();
     const dsp::ImageView src = pending_image_.view();
-    const size_t row = static_cast<size_t>(src.width) * dsp::bytes_per_pixel(src.format);
-    for (int y = 0; y < src.height; ++y) std::memcpy(dst.row(y), src.row(y), row);
+    dsp::copy_image(src, dst);
     meta = pending_meta_;
     return CaptureStatus::Frame;
   }

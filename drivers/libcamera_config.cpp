@@ -9,7 +9,7 @@ void visit_config(formats::ConfigSection& c, LibcameraConfig& l) {
   c.check(l.width >= 1 && l.width <= kMaxSide, "width", "must be 1.." + std::to_string(kMaxSide));
   c.value("height", l.height);
   c.check(l.height >= 1 && l.height <= kMaxSide, "height", "must be 1.." + std::to_string(kMaxSide));
-  c.choice("format", l.format, {{"mono8", dsp::PixelFormat::Mono8}, {"rgb8", dsp::PixelFormat::Rgb8}});
+  c.pixel_format("format", l.format);  // asked for; the camera's nearest is taken
   c.value("role", l.role);
   c.value("fps", l.fps);
   c.check(l.fps > 0 && l.fps <= kMaxRateHz, "fps", "must be positive, at most 10000");

@@ -3,7 +3,7 @@
 #include <libcamera/formats.h>
 
 #include <algorithm>
-#include <array>
+#include <vector>
 
 namespace rsd::drivers::lc {
 
@@ -11,13 +11,27 @@ namespace rsd::drivers::lc {
 
 namespace {
 
-const std::array<FormatInfo, 4>& formats() {
-  static const std::array<FormatInfo, 4> table{{
-      {libcamera::formats::R8, "R8", v4l2::Layout::Grey8},
-      {libcamera::formats::YUYV, "YUYV", v4l2::Layout::YuyvLuma},
-      {libcamera::formats::BGR888, "BGR888", v4l2::Layout::Rgb24},  // memory R, G, B
-      {libcamera::formats::RGB888, "RGB888", v4l2::Layout::Bgr24},  // memory B, G, R
-  }};
+using PF = dsp::PixelFormat;
+
+// libcamera names formats by their packed words, little-endian: BGR888 is R, G, B in memory.
+const std::vector<FormatInfo>& formats() {
+  namespace f = libcamera::formats;
+  static const std::vector<FormatInfo> table{
+      {f::R8, "R8", v4l2::Layout::Grey8},
+      {f::BGR888, "BGR888", v4l2::Layout::Rgb24},  // memory R, G, B
+      {f::RGB888, "RGB888", v4l2::Layout::Bgr24},  // memory B, G, R
+      {f::YUYV, "YUYV", v4l2::native(PF::Yuyv)},
+      {f::NV12, "NV12", v4l2::native(PF::Nv12)},
+      {f::YUV420, "YUV420", v4l2::native(PF::I420)},
+      {f::SRGGB8, "SRGGB8", v4l2::native(PF::BayerRggb8)},
+      {f::SBGGR8, "SBGGR8", v4l2::native(PF::BayerBggr8)},
+      {f::SGRBG8, "SGRBG8", v4l2::native(PF::BayerGrbg8)},
+      {f::SGBRG8, "SGBRG8", v4l2::native(PF::BayerGbrg8)},
+      {f::SRGGB16, "SRGGB16", v4l2::native(PF::BayerRggb16)},
+      {f::SBGGR16, "SBGGR16", v4l2::native(PF::BayerBggr16)},
+      {f::SGRBG16, "SGRBG16", v4l2::native(PF::BayerGrbg16)},
+      {f::SGBRG16, "SGBRG16", v4l2::native(PF::BayerGbrg16)},
+  };
   return table;
 }
 
@@ -29,13 +43,18 @@ const FormatInfo* format_info(const libcamera::PixelFormat& f) {
   return nullptr;
 }
 
-// Grey: R8 is the grey itself; YUYV's luma is the same 8 bits. Colour: BGR888 copies straight
-// into R, G, B slots, RGB888 needs a swap. A 16-bit request gets 8-bit grey: libcamera 0.0.3
-// has no 16-bit grey format an ISP would deliver.
+// The formats that deliver `want` itself first (RGB: BGR888 copies straight into R, G, B slots,
+// RGB888 needs a swap; grey: R8; 16-bit grey: R8 too, libcamera 0.0.3 has no 16-bit grey an
+// ISP would deliver), then YUYV, NV12, I420 (a colour camera's usual output, rectified
+// natively), then the raw mosaics.
 std::vector<FormatInfo> candidates(dsp::PixelFormat want) {
-  const auto& t = formats();
-  if (want == dsp::PixelFormat::Rgb8) return {t[2], t[3]};
-  return {t[0], t[1]};
+  if (want == PF::Mono16) want = PF::Mono8;
+  std::vector<FormatInfo> out;
+  for (const auto& i : formats())
+    if (i.layout.format == want) out.push_back(i);
+  for (const auto& i : formats())
+    if (i.layout.format != want) out.push_back(i);
+  return out;
 }
 
 std::optional<FormatInfo> choose_format(dsp::PixelFormat want, const std::vector<libcamera::PixelFormat>& offered) {

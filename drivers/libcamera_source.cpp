@@ -48,10 +48,6 @@ void check(int ret, std::string_view call, const std::string& id) {
   if (ret < 0) v4l2::throw_errno(-ret, call, "libcamera:" + id);
 }
 
-const char* format_name(dsp::PixelFormat f) {
-  return f == dsp::PixelFormat::Rgb8 ? "Rgb8" : (f == dsp::PixelFormat::Mono16 ? "Mono16" : "Mono8");
-}
-
 }  // namespace
 
 // Everything libcamera: the camera, its configuration, buffers, mappings and requests.
@@ -263,8 +259,8 @@ void LibcameraSource::open() {
   const libcamera::Size size = live->config->at(0).size;
   format_ = {static_cast<int>(size.width), static_cast<int>(size.height), v4l2::output_format(info.layout)};
   if (format_.format != cfg_.format)
-    notes_.push_back(std::string("frames are ") + format_name(format_.format) + ", not the requested " +
-                     format_name(cfg_.format));
+    notes_.push_back(std::string("frames are ") + dsp::format_name(format_.format) + ", not the requested " +
+                     dsp::format_name(cfg_.format));
   timing_ = dsp::RowTiming::full_frame(format_.height, cfg_.fps, cfg_.readout);
   if (cfg_.line_delay_s > 0) timing_.line_delay_s = cfg_.line_delay_s;
   timing_.exposure_s = cfg_.exposure_s;

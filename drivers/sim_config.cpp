@@ -19,7 +19,9 @@ void visit_config(formats::ConfigSection& c, SimSourceConfig& s) {
   c.check(s.line_delay_s >= 0 && s.line_delay_s * h <= 1.0 / s.fps, "line_delay_s", "must be >= 0 and line_delay_s x height <= 1/fps");
   c.choice("readout", s.readout, {{"top_to_bottom", dsp::Readout::TopToBottom}, {"bottom_to_top", dsp::Readout::BottomToTop}});
   c.value("exposure_s", s.exposure_s);
-  c.choice("format", s.format, {{"mono8", dsp::PixelFormat::Mono8}, {"rgb8", dsp::PixelFormat::Rgb8}});
+  c.pixel_format("format", s.format);  // rendered in RGB, then delivered as a camera would
+  std::string why;
+  c.check(dsp::size_fits(s.format, w, h, &why), "format", why);
   c.value("angular_rate_rad_s", s.angular_rate, "the camera's own motion, camera axes");
   c.value("velocity_m_s", s.velocity);
   c.value("wobble_rad_s", s.wobble_rad_s);

@@ -5,6 +5,8 @@
 #include <ctime>
 #include <thread>
 
+#include "dsp/core/pixel_conversion.hpp"
+
 namespace rsd::drivers {
 
 // The camera's pose: its own rate w(t) = w0 + wobble sin(2 pi f t) about each axis and a
@@ -71,6 +73,8 @@ void SimSource::open() {
   ro.noise_sigma = cfg_.noise_grey;
   ro.noise_seed = cfg_.seed;
   renderer_ = std::make_unique<dsp::RsRenderer>(cfg_.camera, timing_, ro);
+  if (cfg_.format != dsp::PixelFormat::Mono8 && cfg_.format != dsp::PixelFormat::Rgb8)
+    rgb_ = dsp::Image(cfg_.camera.width, cfg_.camera.height, dsp::PixelFormat::Rgb8);
   const double z = cfg_.scene_depth_m;
   scene_.planes = {dsp::fronto_parallel(Eigen::Vector3d(-3.0 * z, -3.0 * z, z), baked_noise(cfg_.seed, z))};
 }
@@ -123,7 +127,12 @@ CaptureStatus SimSource::capture(const dsp::ImageView& dst, FrameMeta& meta, std
     }
     if (ready_ns > now) std::this_thread::sleep_for(std::chrono::nanoseconds(ready_ns - now));
   }
-  renderer_->render(scene_, *motion_, t_frame, dst);
+  if (rgb_.data.empty()) {
+    renderer_->render(scene_, *motion_, t_frame, dst);
+  } else {
+    renderer_->render(scene_, *motion_, t_frame, rgb_.view());
+    dsp::convert_from_rgb(rgb_.view(), dst);
+  }
   meta.first_row_ns = t0_ns_ + static_cast<int64_t>(std::llround(t_frame * 1e9));
   meta.sequence = frame_++;
   meta.exposure_s = timing_.exposure_s;

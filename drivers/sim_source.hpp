@@ -78,6 +78,7 @@ class SimSource final : public CameraSource {
   dsp::RowTiming timing_;
   std::unique_ptr<Motion> motion_;
   std::unique_ptr<dsp::RsRenderer> renderer_;
+  dsp::Image rgb_;  // formats other than mono8 and rgb8: rendered here first (allocated at open)
   dsp::Scene scene_;
   VelocitySink sink_;
   int64_t t0_ns_ = 0;

@@ -9,7 +9,7 @@ void visit_config(formats::ConfigSection& c, V4l2Config& v) {
   c.check(v.width >= 1 && v.width <= kMaxSide, "width", "must be 1.." + std::to_string(kMaxSide));
   c.value("height", v.height);
   c.check(v.height >= 1 && v.height <= kMaxSide, "height", "must be 1.." + std::to_string(kMaxSide));
-  c.value("pixel_format", v.pixel_format, "GREY, Y16, YUYV, RGB24");
+  c.value("pixel_format", v.pixel_format, "GREY, Y16, RGB24, BGR3, YUYV, NV12, YU12, or a Bayer fourcc: RGGB .. GB16");
   c.value("fps", v.fps);
   c.check(v.fps > 0 && v.fps <= kMaxRateHz, "fps", "must be positive, at most 10000");
   c.value("buffers", v.buffers);

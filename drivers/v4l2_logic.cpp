@@ -9,31 +9,11 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "dsp/core/image_planes.hpp"
+
 namespace rsd::drivers::v4l2 {
 
 // ---- Pixel layouts -------------------------------------------------------------------------
-
-int source_bytes_per_pixel(Layout l) {
-  switch (l) {
-    case Layout::Grey8: return 1;
-    case Layout::Grey16: return 2;
-    case Layout::Rgb24:
-    case Layout::Bgr24: return 3;
-    case Layout::YuyvLuma: return 2;
-  }
-  return 1;
-}
-
-dsp::PixelFormat output_format(Layout l) {
-  switch (l) {
-    case Layout::Grey16: return dsp::PixelFormat::Mono16;
-    case Layout::Rgb24:
-    case Layout::Bgr24: return dsp::PixelFormat::Rgb8;
-    case Layout::Grey8:
-    case Layout::YuyvLuma: return dsp::PixelFormat::Mono8;
-  }
-  return dsp::PixelFormat::Mono8;
-}
 
 namespace {
 
@@ -42,30 +22,8 @@ void check_destination(Layout l, const dsp::ImageView& dst) {
     throw std::invalid_argument("frame copy: destination slot has no pixels");
   if (dst.format != output_format(l))
     throw std::invalid_argument("frame copy: destination slot has the wrong pixel format");
-  if (dst.stride < static_cast<std::ptrdiff_t>(dst.width) * dsp::bytes_per_pixel(dst.format))
+  if (dst.stride < static_cast<std::ptrdiff_t>(dsp::row_bytes(dst.format, dst.width)))
     throw std::invalid_argument("frame copy: destination stride shorter than a row");
-}
-
-void copy_row(const std::uint8_t* s, std::uint8_t* d, int width, Layout l) {
-  switch (l) {
-    case Layout::Grey8:
-    case Layout::Grey16:
-    case Layout::Rgb24:
-      // Y16 is little-endian, as is every host we build for: a plain copy.
-      std::memcpy(d, s, static_cast<std::size_t>(width) * source_bytes_per_pixel(l));
-      return;
-    case Layout::Bgr24:
-      for (int x = 0; x < width; ++x, s += 3, d += 3) {
-        d[0] = s[2];
-        d[1] = s[1];
-        d[2] = s[0];
-      }
-      return;
-    case Layout::YuyvLuma:
-      // Every pixel's luma sits at byte 2x of the row (Y0 U Y1 V ...), chroma is dropped.
-      for (int x = 0; x < width; ++x) d[x] = s[2 * x];
-      return;
-  }
 }
 
 }  // namespace
@@ -73,11 +31,17 @@ void copy_row(const std::uint8_t* s, std::uint8_t* d, int width, Layout l) {
 bool copy_frame(const std::uint8_t* src, std::size_t src_len, std::size_t src_stride, Layout l,
                 const dsp::ImageView& dst) {
   check_destination(l, dst);
-  const std::size_t row_bytes = static_cast<std::size_t>(dst.width) * source_bytes_per_pixel(l);
+  const std::size_t row_bytes = dsp::row_bytes(l.format, dst.width);
   if (src_stride < row_bytes) src_stride = row_bytes;  // a driver that reports 0 means packed
-  const std::size_t need = src_stride * (dst.height - 1) + row_bytes;
-  if (!src || src_len < need) return false;
-  for (int y = 0; y < dst.height; ++y) copy_row(src + y * src_stride, dst.row(y), dst.width, l);
+  if (l.format == dsp::PixelFormat::I420 && src_stride % 2) return false;  // chroma rows at stride / 2
+  if (!src || src_len < dsp::buffer_bytes(l.format, dst.width, dst.height, src_stride)) return false;
+  const dsp::ImageView buffer{const_cast<std::uint8_t*>(src), dst.width, dst.height, static_cast<std::ptrdiff_t>(src_stride), l.format};
+  if (!l.bgr) return dsp::copy_image(buffer, dst), true;
+  for (int y = 0; y < dst.height; ++y) {
+    const std::uint8_t* s = buffer.row(y);
+    std::uint8_t* d = dst.row(y);
+    for (int x = 0; x < dst.width; ++x, s += 3, d += 3) d[0] = s[2], d[1] = s[1], d[2] = s[0];
+  }
   return true;
 }
 
@@ -85,26 +49,51 @@ bool copy_frame(const std::uint8_t* src, std::size_t src_len, std::size_t src_st
 
 namespace {
 
-constexpr std::array<PixelInfo, 4> kPixels{{
+using PF = dsp::PixelFormat;
+
+constexpr std::array<PixelInfo, 15> kPixels{{
     {V4L2_PIX_FMT_GREY, "GREY", Layout::Grey8},
     {V4L2_PIX_FMT_Y16, "Y16", Layout::Grey16},
-    {V4L2_PIX_FMT_YUYV, "YUYV", Layout::YuyvLuma},
+    {V4L2_PIX_FMT_YUYV, "YUYV", native(PF::Yuyv)},
     {V4L2_PIX_FMT_RGB24, "RGB24", Layout::Rgb24},
+    {V4L2_PIX_FMT_NV12, "NV12", native(PF::Nv12)},
+    {V4L2_PIX_FMT_YUV420, "YU12", native(PF::I420)},
+    {V4L2_PIX_FMT_SRGGB8, "RGGB", native(PF::BayerRggb8)},
+    {V4L2_PIX_FMT_SBGGR8, "BA81", native(PF::BayerBggr8)},
+    {V4L2_PIX_FMT_SGRBG8, "GRBG", native(PF::BayerGrbg8)},
+    {V4L2_PIX_FMT_SGBRG8, "GBRG", native(PF::BayerGbrg8)},
+    {V4L2_PIX_FMT_SRGGB16, "RG16", native(PF::BayerRggb16)},
+    {V4L2_PIX_FMT_SBGGR16, "BYR2", native(PF::BayerBggr16)},
+    {V4L2_PIX_FMT_SGRBG16, "GR16", native(PF::BayerGrbg16)},
+    {V4L2_PIX_FMT_SGBRG16, "GB16", native(PF::BayerGbrg16)},
+    {V4L2_PIX_FMT_BGR24, "BGR3", Layout::Bgr24},
 }};
 
-// For each request, the formats to fall back to, best first. Grey requests prefer YUYV next
-// because its luma is the same 8 bits; a 16-bit request prefers 8-bit grey over colour; an
-// RGB request prefers YUYV (a colour camera) over a grey one.
-std::array<std::uint32_t, 4> preference(std::uint32_t requested) {
+// For each request, the formats to fall back to, best first: the request itself, then (for
+// the four classic ones) grey requests prefer YUYV next because its luma is the same 8 bits, a
+// 16-bit request prefers 8-bit grey over colour, an RGB request prefers YUYV (a colour camera)
+// over a grey one; then the rest of the table, in its order.
+std::vector<std::uint32_t> preference(std::uint32_t requested) {
+  std::vector<std::uint32_t> order;
   switch (requested) {
-    case V4L2_PIX_FMT_Y16: return {V4L2_PIX_FMT_Y16, V4L2_PIX_FMT_GREY, V4L2_PIX_FMT_YUYV, V4L2_PIX_FMT_RGB24};
-    case V4L2_PIX_FMT_YUYV: return {V4L2_PIX_FMT_YUYV, V4L2_PIX_FMT_GREY, V4L2_PIX_FMT_RGB24, V4L2_PIX_FMT_Y16};
-    case V4L2_PIX_FMT_RGB24: return {V4L2_PIX_FMT_RGB24, V4L2_PIX_FMT_YUYV, V4L2_PIX_FMT_GREY, V4L2_PIX_FMT_Y16};
-    default: return {V4L2_PIX_FMT_GREY, V4L2_PIX_FMT_YUYV, V4L2_PIX_FMT_Y16, V4L2_PIX_FMT_RGB24};
+    case V4L2_PIX_FMT_Y16: order = {V4L2_PIX_FMT_Y16, V4L2_PIX_FMT_GREY, V4L2_PIX_FMT_YUYV, V4L2_PIX_FMT_RGB24}; break;
+    case V4L2_PIX_FMT_YUYV: order = {V4L2_PIX_FMT_YUYV, V4L2_PIX_FMT_GREY, V4L2_PIX_FMT_RGB24, V4L2_PIX_FMT_Y16}; break;
+    case V4L2_PIX_FMT_RGB24: order = {V4L2_PIX_FMT_RGB24, V4L2_PIX_FMT_YUYV, V4L2_PIX_FMT_GREY, V4L2_PIX_FMT_Y16}; break;
+    case V4L2_PIX_FMT_GREY: order = {V4L2_PIX_FMT_GREY, V4L2_PIX_FMT_YUYV, V4L2_PIX_FMT_Y16, V4L2_PIX_FMT_RGB24}; break;
+    default: order = {requested};
   }
+  for (const PixelInfo& p : kPixels)
+    if (std::find(order.begin(), order.end(), p.fourcc) == order.end()) order.push_back(p.fourcc);
+  return order;
 }
 
 }  // namespace
+
+std::string pixel_format_names() {
+  std::string s;
+  for (const PixelInfo& p : kPixels) s += (s.empty() ? "" : ", ") + std::string(p.name);
+  return s;
+}
 
 const PixelInfo* pixel_info(std::uint32_t fourcc) {
   for (const auto& p : kPixels)
@@ -280,7 +269,7 @@ void note_differences(const FormatRequest& req, Negotiated& n) {
   if (!same)
     n.notes.push_back("requested " + describe(req.width, req.height, req.fourcc, req.fps) + ", driver gives " +
                       describe(n.width, n.height, n.fourcc, n.fps));
-  const std::uint32_t row = static_cast<std::uint32_t>(n.width) * source_bytes_per_pixel(n.layout);
+  const auto row = static_cast<std::uint32_t>(dsp::row_bytes(n.layout.format, n.width));
   if (n.bytesperline < row) {
     if (n.bytesperline != 0) n.notes.push_back("driver reports bytesperline below a row; assuming packed rows");
     n.bytesperline = row;
@@ -293,8 +282,7 @@ Negotiated negotiate(V4l2Device& dev, const FormatRequest& req, const std::strin
   const std::vector<std::uint32_t> offered = enum_formats(dev, path);
   const std::uint32_t fourcc = choose_pixel_format(req.fourcc, offered);
   if (fourcc == 0)
-    throw std::runtime_error(path + " offers none of GREY, Y16, YUYV, RGB24 (it offers " + offered_list(offered) +
-                             ")");
+    throw std::runtime_error(path + " offers none of " + pixel_format_names() + " (it offers " + offered_list(offered) + ")");
   const Size size = choose_frame_size({req.width, req.height}, enum_sizes(dev, fourcc, path));
   Negotiated n;
   apply_format(dev, fourcc, size, n, path);

@@ -22,15 +22,22 @@ namespace rsd::drivers::v4l2 {
 
 // ---- Pixel layouts: how one row of a buffer becomes one row of a frame slot ----------------
 
-enum class Layout {
-  Grey8,     // 1 byte per pixel -> Mono8
-  Grey16,    // 16-bit little-endian -> Mono16
-  Rgb24,     // R, G, B bytes -> Rgb8
-  Bgr24,     // B, G, R bytes -> Rgb8 (swapped)
-  YuyvLuma,  // Y0 U Y1 V -> Mono8 (the luma; the pipeline works on grey)
+// The frame's pixel format, and whether the buffer's colour bytes come as B, G, R (swapped into
+// R, G, B). Every other layout is the format's own (pixel_format.hpp: V4L2's single-planar
+// layouts, which the frame slots share) and is copied as it is: YUYV, NV12, I420 and the Bayer
+// mosaics reach the rectifier natively.
+struct Layout {
+  dsp::PixelFormat format = dsp::PixelFormat::Mono8;
+  bool bgr = false;
+  bool operator==(const Layout&) const = default;
+  static const Layout Grey8, Grey16, Rgb24, Bgr24;
 };
-int source_bytes_per_pixel(Layout l);
-dsp::PixelFormat output_format(Layout l);
+inline constexpr Layout Layout::Grey8{dsp::PixelFormat::Mono8, false};
+inline constexpr Layout Layout::Grey16{dsp::PixelFormat::Mono16, false};  // little-endian, as every host we build for
+inline constexpr Layout Layout::Rgb24{dsp::PixelFormat::Rgb8, false};
+inline constexpr Layout Layout::Bgr24{dsp::PixelFormat::Rgb8, true};
+inline constexpr Layout native(dsp::PixelFormat f) { return {f, false}; }
+inline dsp::PixelFormat output_format(Layout l) { return l.format; }
 
 // Copies a frame whose rows are `src_stride` bytes apart (padding honoured) into `dst`.
 // Returns false, touching nothing, when `src_len` is too short for dst.height rows (a
@@ -46,9 +53,13 @@ struct PixelInfo {
   const char* name;  // as the config spells it
   Layout layout;
 };
-// GREY, Y16, YUYV and RGB24; nullptr for any other fourcc.
+// GREY, Y16, RGB24, YUYV, NV12, YU12 (I420) and the 8 and 16-bit Bayer mosaics; nullptr for
+// any other fourcc.
 const PixelInfo* pixel_info(std::uint32_t fourcc);
-// Parses a config name ("GREY", "Y16", "YUYV", "RGB24"); false for anything else.
+// Parses a config name ("GREY", "Y16", "YUYV", "RGB24", "NV12", "YU12", "RGGB", "BYR2", ...,
+// V4L2's fourcc names); false for anything else.
+// Every name parse_pixel_format accepts, comma separated.
+std::string pixel_format_names();
 bool parse_pixel_format(std::string_view name, std::uint32_t& fourcc);
 // "GREY", "MJPG", "Y16 ": the four characters, unprintable ones as '?'.
 std::string fourcc_name(std::uint32_t fourcc);

@@ -43,6 +43,14 @@ void ConfigReader::check(bool ok, const char* key, const std::string& why) {
   if (!ok) m_.fail(key, why);
 }
 
+void ConfigSection::pixel_format(const char* key, dsp::PixelFormat& v, const char* comment) {
+  std::vector<std::string> names;
+  for (int f = 0; f <= static_cast<int>(dsp::PixelFormat::BayerGbrg16); ++f) names.emplace_back(dsp::format_name(static_cast<dsp::PixelFormat>(f)));
+  std::string text = dsp::format_name(v);
+  if (!comment) comment = "mono8, mono16, rgb8, yuyv, nv12, i420, bayer_rggb8 (bggr, grbg, gbrg; 8 or 16)";
+  if (choice_text(key, text, names, comment)) v = dsp::parse_format_name(text).value_or(v);
+}
+
 bool ConfigReader::choice_text(const char* key, std::string& text, const std::vector<std::string>& names, const char*) {
   if (!m_.has(key)) return void(m_.text(key, "")), false;
   text = m_.text(key, "");

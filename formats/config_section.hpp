@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "dsp/core/pixel_format.hpp"
 #include "formats/yaml_map.hpp"
 
 namespace rsd::formats {
@@ -44,6 +45,8 @@ class ConfigSection {
     for (const auto& [name, e] : names)
       if (text == name) v = e;
   }
+  // A key naming a pixel format (dsp/core/pixel_format.hpp: "mono8", "nv12", "bayer_rggb16", ...).
+  void pixel_format(const char* key, dsp::PixelFormat& v, const char* comment = nullptr);
   // A nested section; absent when reading leaves the values as they are.
   virtual void section(const char* key, const std::function<void(ConfigSection&)>& body, const char* comment = nullptr) = 0;
   // A comment line in the printed defaults (examples of optional keys, explanations).

@@ -7,6 +7,8 @@
 #include <memory>
 #include <stdexcept>
 
+#include "dsp/core/pixel_conversion.hpp"
+
 namespace rsd::formats {
 
 namespace {
@@ -102,6 +104,11 @@ dsp::Image read_png(const std::string& path) {
 }  // namespace
 
 void write_png(const std::string& path, const dsp::ImageView& img) {
+  if (img.format != dsp::PixelFormat::Mono8 && img.format != dsp::PixelFormat::Mono16 && img.format != dsp::PixelFormat::Rgb8) {
+    dsp::Image rgb(img.width, img.height, dsp::PixelFormat::Rgb8);  // YUV and mosaics: as they look
+    dsp::convert_to_rgb(img, rgb.view());
+    return write_png(path, rgb.view());
+  }
   png_image png{};
   png.version = PNG_IMAGE_VERSION;
   png.width = static_cast<png_uint_32>(img.width);

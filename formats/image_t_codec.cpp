@@ -1,13 +1,52 @@
 #include "formats/image_t_codec.hpp"
 
 #include <charconv>
-#include <cmath>
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <utility>
 
+#include "dsp/core/image_planes.hpp"
 
 namespace rsd::formats {
+
+namespace {
+
+using Img = bot_core::image_t;
+using PF = dsp::PixelFormat;
+
+constexpr std::pair<PF, int32_t> kFourcc[] = {
+    {PF::Mono8, Img::PIXEL_FORMAT_GRAY},
+    {PF::Mono16, Img::PIXEL_FORMAT_LE_GRAY16},
+    {PF::Rgb8, Img::PIXEL_FORMAT_RGB},
+    {PF::Yuyv, Img::PIXEL_FORMAT_YUYV},
+    {PF::Nv12, Img::PIXEL_FORMAT_NV12},
+    {PF::I420, Img::PIXEL_FORMAT_I420},
+    {PF::BayerRggb8, Img::PIXEL_FORMAT_BAYER_RGGB},
+    {PF::BayerBggr8, Img::PIXEL_FORMAT_BAYER_BGGR},
+    {PF::BayerGrbg8, Img::PIXEL_FORMAT_BAYER_GRBG},
+    {PF::BayerGbrg8, Img::PIXEL_FORMAT_BAYER_GBRG},
+    {PF::BayerRggb16, Img::PIXEL_FORMAT_LE_BAYER16_RGGB},
+    {PF::BayerBggr16, Img::PIXEL_FORMAT_LE_BAYER16_BGGR},
+    {PF::BayerGrbg16, Img::PIXEL_FORMAT_LE_BAYER16_GRBG},
+    {PF::BayerGbrg16, Img::PIXEL_FORMAT_LE_BAYER16_GBRG},
+};
+
+}  // namespace
+
+int32_t fourcc(dsp::PixelFormat f) {
+  for (const auto& [format, code] : kFourcc)
+    if (format == f) return code;
+  return Img::PIXEL_FORMAT_INVALID;
+}
+
+std::optional<dsp::PixelFormat> pixel_format(int32_t fourcc_code) {
+  if (fourcc_code == Img::PIXEL_FORMAT_YUV420) return PF::I420;  // the same layout, another name
+  for (const auto& [format, code] : kFourcc)
+    if (code == fourcc_code) return format;
+  return std::nullopt;
+}
 
 namespace {
 
@@ -173,11 +212,15 @@ bool parse_intrinsics(const bot_core::image_t& img, RecordedFrame& out, std::str
 
 bool parse_frame(const bot_core::image_t& img, RecordedFrame& out, std::string& why) {
   const auto fmt = pixel_format(img.pixelformat);
-  if (!fmt) return why = "pixel format " + std::to_string(img.pixelformat) + " is not mono8, mono16 or rgb8", false;
+  if (!fmt)
+    return why = "pixelformat " + std::to_string(img.pixelformat) + " is none of rsd's (" + dsp::format_names() + ")", false;
   if (img.width < 1 || img.height < 1 || img.width > 16384 || img.height > 16384)
     return why = "size " + std::to_string(img.width) + "x" + std::to_string(img.height), false;
-  const int64_t row = static_cast<int64_t>(img.width) * dsp::bytes_per_pixel(*fmt);
-  if (img.row_stride < row || static_cast<int64_t>(img.data.size()) < static_cast<int64_t>(img.row_stride) * (img.height - 1) + row)
+  if (std::string fit; !dsp::size_fits(*fmt, img.width, img.height, &fit)) return why = "width, height: " + fit, false;
+  const int64_t row = static_cast<int64_t>(dsp::row_bytes(*fmt, img.width));
+  if (*fmt == dsp::PixelFormat::I420 && img.row_stride % 2) return why = "row_stride " + std::to_string(img.row_stride) + " is odd (i420)", false;
+  if (img.row_stride < row ||
+      img.data.size() < dsp::buffer_bytes(*fmt, img.width, img.height, static_cast<size_t>(img.row_stride)))
     return why = "row stride " + std::to_string(img.row_stride) + " and " + std::to_string(img.data.size()) +
                  " bytes do not hold " + std::to_string(img.width) + "x" + std::to_string(img.height) + " pixels", false;
   out = {};
@@ -195,7 +238,7 @@ DecodeStatus decode_frame(const uint8_t* data, size_t n, bot_core::image_t& img,
 void preallocate(bot_core::image_t& img, const FrameFormat& fmt, std::initializer_list<const char*> keys, size_t capacity) {
   img.width = fmt.width;
   img.height = fmt.height;
-  img.row_stride = static_cast<int32_t>(fmt.width * dsp::bytes_per_pixel(fmt.format));
+  img.row_stride = static_cast<int32_t>(dsp::row_bytes(fmt.format, fmt.width));
   img.pixelformat = fourcc(fmt.format);
   img.size = static_cast<int32_t>(fmt.bytes());
   img.data.resize(fmt.bytes());
@@ -209,8 +252,7 @@ void preallocate(bot_core::image_t& img, const FrameFormat& fmt, std::initialize
 }
 
 void copy_pixels(const bot_core::image_t& img, const dsp::ImageView& dst) {
-  const size_t row = static_cast<size_t>(dst.width) * dsp::bytes_per_pixel(dst.format);
-  for (int y = 0; y < dst.height; ++y) std::memcpy(dst.row(y), img.data.data() + static_cast<size_t>(y) * img.row_stride, row);
+  dsp::copy_image({const_cast<uint8_t*>(img.data.data()), dst.width, dst.height, img.row_stride, dst.format}, dst);
 }
 
 dsp::RowTiming row_timing(const RecordedFrame& f, double fallback_fps) {
@@ -255,8 +297,7 @@ void RawFrameEncoder::set(size_t index, const char* text) {
 
 size_t RawFrameEncoder::encode(const dsp::ImageView& img, const FrameMeta& meta) {
   msg_.utime = (meta.wall_ns ? meta.wall_ns : meta.first_row_ns) / 1000;
-  const size_t row = static_cast<size_t>(img.width) * dsp::bytes_per_pixel(img.format);
-  for (int y = 0; y < img.height; ++y) std::memcpy(msg_.data.data() + y * row, img.row(y), row);
+  dsp::copy_image(img, {msg_.data.data(), img.width, img.height, msg_.row_stride, img.format});
   char text[64];
   std::snprintf(text, sizeof text, "%" PRId64, meta.first_row_ns / 1000);
   set(0, text);

@@ -36,23 +36,11 @@ namespace rsd::formats {
 using dsp::FrameFormat;
 using dsp::FrameMeta;
 
-// bot_core.image_t pixel formats of the frames rsd reads and writes.
-inline int32_t fourcc(dsp::PixelFormat f) {
-  switch (f) {
-    case dsp::PixelFormat::Mono8: return bot_core::image_t::PIXEL_FORMAT_GRAY;
-    case dsp::PixelFormat::Mono16: return bot_core::image_t::PIXEL_FORMAT_LE_GRAY16;
-    case dsp::PixelFormat::Rgb8: return bot_core::image_t::PIXEL_FORMAT_RGB;
-  }
-  return bot_core::image_t::PIXEL_FORMAT_INVALID;
-}
-
-inline std::optional<dsp::PixelFormat> pixel_format(int32_t fourcc_code) {
-  if (fourcc_code == bot_core::image_t::PIXEL_FORMAT_GRAY) return dsp::PixelFormat::Mono8;
-  if (fourcc_code == bot_core::image_t::PIXEL_FORMAT_LE_GRAY16) return dsp::PixelFormat::Mono16;
-  if (fourcc_code == bot_core::image_t::PIXEL_FORMAT_RGB) return dsp::PixelFormat::Rgb8;
-  return std::nullopt;
-}
-
+// bot_core.image_t pixel formats (libbot2's FourCC codes) of the frames rsd reads and writes:
+// GRAY, LE_GRAY16, RGB, YUYV, NV12, I420 (YUV420 is read as I420 too), BAYER_* and
+// LE_BAYER16_*.
+int32_t fourcc(dsp::PixelFormat f);
+std::optional<dsp::PixelFormat> pixel_format(int32_t fourcc_code);
 
 // What a raw frame's header and metadata say.
 struct RecordedFrame {

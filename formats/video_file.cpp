@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "dsp/core/pixel_conversion.hpp"
+
 namespace rsd::formats {
 
 struct VideoReader::Impl {
@@ -53,6 +55,7 @@ bool VideoReader::next(dsp::Image& out) {
 struct VideoWriter::Impl {
   cv::VideoWriter w;
   cv::Mat bgr;
+  dsp::Image converted;  // YUV and mosaic frames in RGB
   int width = 0, height = 0;
 };
 
@@ -75,6 +78,11 @@ VideoWriter::~VideoWriter() = default;
 void VideoWriter::write(const dsp::ImageView& img) {
   if (img.width != impl_->width || img.height != impl_->height)
     throw std::runtime_error(path_ + ": frame size differs from the video's");
+  if (img.format != dsp::PixelFormat::Mono8 && img.format != dsp::PixelFormat::Mono16 && img.format != dsp::PixelFormat::Rgb8) {
+    if (impl_->converted.width != img.width) impl_->converted = dsp::Image(img.width, img.height, dsp::PixelFormat::Rgb8);
+    dsp::convert_to_rgb(img, impl_->converted.view());  // YUV and mosaics: as they look
+    return write(impl_->converted.view());
+  }
   const int type = img.format == dsp::PixelFormat::Mono8 ? CV_8UC1 : img.format == dsp::PixelFormat::Rgb8 ? CV_8UC3 : CV_16UC1;
   const cv::Mat m(img.height, img.width, type, img.data, static_cast<size_t>(img.stride));
   if (type == CV_8UC1) cv::cvtColor(m, impl_->bgr, cv::COLOR_GRAY2BGR);

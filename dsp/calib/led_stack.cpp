@@ -22,15 +22,14 @@ std::string fmt(double x, int precision) {
   return o.str();
 }
 
-// Luminance of pixel x of a row: Rec. 601 weights for RGB (the LED's colour does not
-// matter: every channel carries the same temporal modulation).
+// Luminance of pixel x of a row: Rec. 601 weights for RGB, the luma of YUV, a mosaic's raw
+// site (the LED's colour does not matter: every channel carries the same temporal modulation;
+// the mosaic's row-parity gain is taken out below).
 double luminance(const ImageView& f, const std::uint8_t* row, int x) {
-  switch (f.format) {
-    case PixelFormat::Mono8: return row[x];
-    case PixelFormat::Mono16: return reinterpret_cast<const std::uint16_t*>(row)[x];
-    case PixelFormat::Rgb8: return 0.299 * row[3 * x] + 0.587 * row[3 * x + 1] + 0.114 * row[3 * x + 2];
-  }
-  return 0;
+  if (f.format == PixelFormat::Rgb8) return 0.299 * row[3 * x] + 0.587 * row[3 * x + 1] + 0.114 * row[3 * x + 2];
+  if (f.format == PixelFormat::Yuyv) return row[2 * x];
+  if (sample_bytes(f.format) == 2) return row[2 * x] | row[2 * x + 1] << 8;
+  return row[x];  // Mono8, the luma plane of NV12 and I420, 8-bit mosaics
 }
 
 // Sums the column blocks with weights into I(k, y). A 2x2 Bayer mosaic makes alternate

@@ -13,7 +13,7 @@ namespace rsd::dsp {
 struct FrameFormat {
   int width = 0, height = 0;
   PixelFormat format = PixelFormat::Mono8;
-  size_t bytes() const { return static_cast<size_t>(width) * height * bytes_per_pixel(format); }
+  size_t bytes() const { return frame_bytes(format, width, height); }
 };
 
 struct FrameMeta {

@@ -11,15 +11,24 @@ Samplers scalar_of() {
 
 }  // namespace
 
-Samplers scalar_samplers(PixelFormat f) {
-  switch (f) {
-    case PixelFormat::Mono8: return scalar_of<std::uint8_t, 1>();
-    case PixelFormat::Mono16: return scalar_of<std::uint16_t, 1>();
-    case PixelFormat::Rgb8: return scalar_of<std::uint8_t, 3>();
+SampleKind sample_kind(const SamplePlane& p) {
+  if (!p.packed()) return p.sample_bytes == 2 ? SampleKind::StridedU16 : SampleKind::StridedU8;
+  if (p.sample_bytes == 2) return SampleKind::U16;
+  return p.channels == 3 ? SampleKind::U8x3 : p.channels == 2 ? SampleKind::U8x2 : SampleKind::U8;
+}
+
+Samplers scalar_samplers(SampleKind k) {
+  switch (k) {
+    case SampleKind::U8: return scalar_of<std::uint8_t, 1>();
+    case SampleKind::U8x2: return scalar_of<std::uint8_t, 2>();
+    case SampleKind::U8x3: return scalar_of<std::uint8_t, 3>();
+    case SampleKind::U16: return scalar_of<std::uint16_t, 1>();
+    case SampleKind::StridedU8: return {sample_row_strided<std::uint8_t>, sample_affine_strided<std::uint8_t>};
+    case SampleKind::StridedU16: return {sample_row_strided<std::uint16_t>, sample_affine_strided<std::uint16_t>};
   }
   return {};
 }
 
-Samplers pick_samplers(PixelFormat f, bool simd) { return simd ? dispatched_samplers(f) : scalar_samplers(f); }
+Samplers pick_samplers(SampleKind k, bool simd) { return simd ? dispatched_samplers(k) : scalar_samplers(k); }
 
 }  // namespace rsd::dsp::rectify_detail

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "dsp/core/image.hpp"
+#include "dsp/core/image_planes.hpp"
 #include "dsp/rectify/rs_rectifier.hpp"
 
 namespace rsd::dsp::rectify_detail {
@@ -20,7 +20,13 @@ namespace rsd::dsp::rectify_detail {
 // out = (top (256 - fy) + bot fy + 128) >> 8: for 8-bit pixels every intermediate fits 16 bits,
 // which lets the SIMD kernels work on 16 pixels per instruction. The scalar code computes the
 // same integers, so both paths agree bit for bit; the result is within 1 grey level of exact
-// bilinear interpolation at the rounded position. A tap outside the image reads 0 (black).
+// bilinear interpolation at the rounded position. A tap outside the image reads the plane's
+// fill: 0 (black), or 128 for chroma (neutral, so that borders do not turn green).
+//
+// The kernels resample one sample plane (image_planes.hpp). Packed planes (Mono8, Mono16,
+// RGB24, I420's planes, NV12's interleaved U V) have SIMD kernels; the strided planes of YUYV
+// and of a Bayer mosaic's sites go through sample_pixel_strided, the same integers with the
+// plane's steps.
 
 struct Tap {
   int x0, y0;
@@ -52,13 +58,13 @@ inline void store(std::uint8_t* p, std::uint32_t v) {
 }
 
 template <class T, int C>
-inline std::uint32_t texel(const ImageView& src, int x, int y, int c) {
-  if (x < 0 || y < 0 || x >= src.width || y >= src.height) return 0;
+inline std::uint32_t texel(const SamplePlane& src, int x, int y, int c) {
+  if (x < 0 || y < 0 || x >= src.width || y >= src.height) return src.fill;
   return load<T>(src.row(y) + (C * x + c) * sizeof(T));
 }
 
 template <class T, int C>
-inline void sample_border(const ImageView& src, const Tap& t, std::uint8_t* out) {
+inline void sample_border(const SamplePlane& src, const Tap& t, std::uint8_t* out) {
   for (int c = 0; c < C; ++c) {
     const std::uint32_t v =
         blend(texel<T, C>(src, t.x0, t.y0, c), texel<T, C>(src, t.x0 + 1, t.y0, c),
@@ -68,7 +74,7 @@ inline void sample_border(const ImageView& src, const Tap& t, std::uint8_t* out)
 }
 
 template <class T, int C>
-inline void sample_pixel(const ImageView& src, std::int32_t xs, std::int32_t ys, std::uint8_t* out) {
+inline void sample_pixel(const SamplePlane& src, std::int32_t xs, std::int32_t ys, std::uint8_t* out) {
   const Tap t = tap(xs, ys);
   if (t.x0 < 0 || t.y0 < 0 || t.x0 >= src.width - 1 || t.y0 >= src.height - 1) {
     sample_border<T, C>(src, t, out);
@@ -85,16 +91,37 @@ inline void sample_pixel(const ImageView& src, std::int32_t xs, std::int32_t ys,
 }
 
 template <class T, int C>
-inline void sample_row_scalar(const ImageView& src, const std::int32_t* xs, const std::int32_t* ys,
+inline void sample_row_scalar(const SamplePlane& src, const std::int32_t* xs, const std::int32_t* ys,
                        std::uint8_t* out, int n) {
   for (int i = 0; i < n; ++i) sample_pixel<T, C>(src, xs[i], ys[i], out + i * C * sizeof(T));
+}
+
+// A plane of any layout: sample x of channel c at x step + c channel_step; the output has the
+// same layout (it is the same plane of the destination image).
+template <class T>
+inline void sample_pixel_strided(const SamplePlane& src, std::int32_t xs, std::int32_t ys, std::uint8_t* out) {
+  const Tap t = tap(xs, ys);
+  for (int c = 0; c < src.channels; ++c) {
+    const int o = c * src.channel_step;
+    auto at = [&](int x, int y) -> std::uint32_t {
+      if (x < 0 || y < 0 || x >= src.width || y >= src.height) return src.fill;
+      return load<T>(src.row(y) + x * src.step + o);
+    };
+    store<T>(out + o, blend(at(t.x0, t.y0), at(t.x0 + 1, t.y0), at(t.x0, t.y0 + 1), at(t.x0 + 1, t.y0 + 1), t.fx, t.fy));
+  }
+}
+
+template <class T>
+inline void sample_row_strided(const SamplePlane& src, const std::int32_t* xs, const std::int32_t* ys, std::uint8_t* out,
+                               int n) {
+  for (int i = 0; i < n; ++i) sample_pixel_strided<T>(src, xs[i], ys[i], out + i * src.step);
 }
 
 // Source positions along one cell of a row are affine in x: x_k = ax + k sx (16.16).
 using Affine = Rectifier::Affine;
 
 template <class T, int C>
-inline void sample_affine_scalar(const ImageView& src, const Affine& a, std::uint8_t* out, int n) {
+inline void sample_affine_scalar(const SamplePlane& src, const Affine& a, std::uint8_t* out, int n) {
   // Running sums in wrapping 32-bit arithmetic (the kernels' lanes wrap alike; a signed int
   // would be undefined where a far segment overflows).
   std::uint32_t x = static_cast<std::uint32_t>(a.ax), y = static_cast<std::uint32_t>(a.ay);
@@ -102,19 +129,32 @@ inline void sample_affine_scalar(const ImageView& src, const Affine& a, std::uin
     sample_pixel<T, C>(src, static_cast<std::int32_t>(x), static_cast<std::int32_t>(y), out + i * C * sizeof(T));
 }
 
-// Row samplers for one pixel format: positions given per pixel, or affine along a cell.
+template <class T>
+inline void sample_affine_strided(const SamplePlane& src, const Affine& a, std::uint8_t* out, int n) {
+  std::uint32_t x = static_cast<std::uint32_t>(a.ax), y = static_cast<std::uint32_t>(a.ay);
+  for (int i = 0; i < n; ++i, x += static_cast<std::uint32_t>(a.sx), y += static_cast<std::uint32_t>(a.sy))
+    sample_pixel_strided<T>(src, static_cast<std::int32_t>(x), static_cast<std::int32_t>(y), out + i * src.step);
+}
+
+// The kinds of plane the kernels know: packed 8-bit with 1, 2 or 3 channels, packed 16-bit,
+// and strided planes of 8 or 16-bit samples.
+enum class SampleKind { U8, U8x2, U8x3, U16, StridedU8, StridedU16 };
+SampleKind sample_kind(const SamplePlane& p);
+
+// Row samplers for one kind of plane: positions given per pixel, or affine along a cell.
 struct Samplers {
-  void (*row)(const ImageView&, const std::int32_t*, const std::int32_t*, std::uint8_t*, int);
-  void (*affine)(const ImageView&, const Affine&, std::uint8_t*, int);
+  void (*row)(const SamplePlane&, const std::int32_t*, const std::int32_t*, std::uint8_t*, int);
+  void (*affine)(const SamplePlane&, const Affine&, std::uint8_t*, int);
 };
 
 // The SIMD kernels of the best target this CPU runs when `simd`, else the scalar reference.
-Samplers pick_samplers(PixelFormat f, bool simd);
+Samplers pick_samplers(SampleKind k, bool simd);
 
 // The scalar reference's kernels.
-Samplers scalar_samplers(PixelFormat f);
-// The SIMD kernels (bilinear_sampling_simd.cpp, Google Highway's runtime dispatch).
-Samplers dispatched_samplers(PixelFormat f);
+Samplers scalar_samplers(SampleKind k);
+// The SIMD kernels (bilinear_sampling_simd.cpp, Google Highway's runtime dispatch); strided
+// kinds get the scalar ones.
+Samplers dispatched_samplers(SampleKind k);
 // The name of the instruction set the SIMD kernels run on here ("AVX2", "NEON", ...).
 std::string simd_target_name();
 // For tests: every target compiled in that this CPU runs (Highway's bits, best first), its

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 #include "dsp/rectify/bilinear_sampling.hpp"
 #include "dsp/rectify/fixed_point.hpp"
@@ -45,9 +46,11 @@ Rectifier::Rectifier(const CameraModel& cam, const RowTiming& timing, const Came
                      PixelFormat format, const RectifierConfig& cfg)
     : cam_(cam), out_(out_cam), timing_(timing), format_(format), cfg_(cfg) {
   if (cam.height != timing.height) throw std::invalid_argument("Rectifier: camera and row timing heights differ");
-  for (const CameraModel* c : {&cam_, &out_})
+  for (const CameraModel* c : {&cam_, &out_}) {
     if (c->width < 4 || c->height < 4 || c->width > 8000 || c->height > 8000)
       throw std::invalid_argument("Rectifier: image sizes must be 4..8000 px");
+    if (std::string why; !size_fits(format, c->width, c->height, &why)) throw std::invalid_argument("Rectifier: " + why);
+  }
   if (!is_power_of_two(cfg.initial_spacing) || !is_power_of_two(cfg.min_spacing) || cfg.min_spacing < 2 ||
       cfg.min_spacing > cfg.initial_spacing)
     throw std::invalid_argument("Rectifier: spacings must be powers of two, 2 <= min_spacing <= initial_spacing");
@@ -62,9 +65,10 @@ Rectifier::Rectifier(const CameraModel& cam, const RowTiming& timing, const Came
   table_v0_ = -0.5 * timing_.height;
   table_.resize(2 * static_cast<std::size_t>(timing_.height));
   simd_ = cfg_.use_simd;
-  const Samplers k = pick_samplers(format_, simd_);
-  sample_row_ = k.row;
-  sample_affine_ = k.affine;
+  for (int k = 0; k < kKinds; ++k) {
+    const Samplers f = pick_samplers(static_cast<SampleKind>(k), simd_);
+    sample_row_[k] = f.row, sample_affine_[k] = f.affine;
+  }
 }
 
 // Levels from the initial spacing down to the minimum; a level needs three nodes each way for
@@ -281,8 +285,7 @@ RectifyReport Rectifier::pass_through(const ImageView& src, const ImageView& dst
     rep.rectified = false;
     return rep;
   }
-  const std::size_t bytes = static_cast<std::size_t>(src.width) * bytes_per_pixel(format_);
-  for (int y = 0; y < src.height; ++y) std::memcpy(dst.row(y), src.row(y), bytes);
+  copy_image(src, dst);
   RectifyReport rep;
   rep.tolerance_px = cfg_.tolerance_px;
   return rep;

@@ -17,7 +17,7 @@
 
 #include "dsp/geometry/camera_model.hpp"
 #include "dsp/geometry/camera_motion.hpp"
-#include "dsp/core/image.hpp"
+#include "dsp/core/image_planes.hpp"
 #include "dsp/geometry/row_timing.hpp"
 #include "dsp/geometry/rs_backprojection.hpp"
 
@@ -139,11 +139,13 @@ class Rectifier {
   RectifyReport assess_level();
   double max_node_displacement() const;
   double cell_bound(const Branch& b, int i, int j) const;
-  int interpolate_row(int y, RowScratch& s) const;
+  int interpolate_row(double y, RowScratch& s) const;
   Affine cell_affine(int i, std::uint8_t mode, const RowScratch& s) const;
-  void generate_row(int y, RowScratch& s) const;
-  void kink_segment(int i, int x0, int count, RowScratch& s) const;
-  void remap_rows(const ImageView& src, const ImageView& dst, int y0, int y1, RowScratch& s) const;
+  void cell_columns(int i, const SamplePlane& g, int& c0, int& c1) const;
+  Affine plane_affine(int i, std::uint8_t mode, const SamplePlane& g, int c0, const RowScratch& s) const;
+  void generate_row(double y, const SamplePlane& g, RowScratch& s) const;
+  void kink_segment(int i, int c0, int c1, const SamplePlane& g, RowScratch& s) const;
+  void remap_rows(const SamplePlane& src, const SamplePlane& dst, int j0, int j1, RowScratch& s) const;
   void check_views(const ImageView& src, const ImageView& dst) const;
 
   CameraModel cam_, out_;
@@ -151,8 +153,10 @@ class Rectifier {
   PixelFormat format_;
   RectifierConfig cfg_;
   bool simd_ = false;
-  void (*sample_row_)(const ImageView&, const std::int32_t*, const std::int32_t*, std::uint8_t*, int) = nullptr;
-  void (*sample_affine_)(const ImageView&, const Affine&, std::uint8_t*, int) = nullptr;
+  // The kernels of each kind of sample plane (bilinear_sampling.hpp's SampleKind).
+  static constexpr int kKinds = 6;
+  void (*sample_row_[kKinds])(const SamplePlane&, const std::int32_t*, const std::int32_t*, std::uint8_t*, int) = {};
+  void (*sample_affine_[kKinds])(const SamplePlane&, const Affine&, std::uint8_t*, int) = {};
 
   std::vector<Level> levels_;
   std::size_t level_ = 0;

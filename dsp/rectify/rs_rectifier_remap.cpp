@@ -33,12 +33,12 @@ void linear_segment(const Affine& a, std::int32_t* xs, std::int32_t* ys, int cou
 
 }  // namespace
 
-// The node columns interpolated to row y (linear in y between two node rows); returns the
-// cell row.
-int Rectifier::interpolate_row(int y, RowScratch& s) const {
+// The node columns interpolated to image row y (linear in y between two node rows; y is
+// fractional for the rows of 4:2:0 chroma); returns the cell row.
+int Rectifier::interpolate_row(double y, RowScratch& s) const {
   const Level& L = levels_[level_];
-  const int j = std::min(y >> L.shift, L.ny - 2);
-  const double wy = static_cast<double>(y - j * L.spacing) / L.spacing;
+  const int j = std::min(static_cast<int>(y) >> L.shift, L.ny - 2);
+  const double wy = (y - j * L.spacing) / L.spacing;
   const std::size_t top = static_cast<std::size_t>(j) * L.nx, bot = top + L.nx;
   auto lerp = [wy](const std::vector<double>& v, std::size_t a, std::size_t b) { return v[a] + wy * (v[b] - v[a]); };
   for (int i = 0; i < L.nx; ++i) {
@@ -55,85 +55,136 @@ Rectifier::Affine Rectifier::cell_affine(int i, std::uint8_t mode, const RowScra
   return affine_between(X[i], Y[i], X[i + 1], Y[i + 1], levels_[level_].shift);
 }
 
-// Row y's source positions into s.xs, s.ys (16.16; kSentinel where the output is black).
-void Rectifier::generate_row(int y, RowScratch& s) const {
+// The samples [c0, c1) of plane g whose image positions lie in cell i (a cell spans an even
+// number of pixels, so every half-resolution plane has half of them in each).
+void Rectifier::cell_columns(int i, const SamplePlane& g, int& c0, int& c1) const {
+  const int sp = levels_[level_].spacing;
+  c0 = i * sp / g.scale_x, c1 = std::min((i + 1) * sp / g.scale_x, g.width);
+}
+
+// Cell i's affine segment at plane g's samples from c0 on, in the plane's own coordinates: the
+// image position of sample c is x = scale_x c + offset_x, e pixels into the segment at c0, and
+// a source position P in image pixels is sample (P - offset) / scale of the source plane.
+Rectifier::Affine Rectifier::plane_affine(int i, std::uint8_t mode, const SamplePlane& g, int c0, const RowScratch& s) const {
+  const Affine a = cell_affine(i, mode, s);
+  if (g.scale_x == 1 && g.scale_y == 1) return a;  // (unit planes have no offset)
+  const double e = g.scale_x * c0 + g.offset_x - i * levels_[level_].spacing;
+  auto fixed = [](double v) { return static_cast<std::int32_t>(std::lround(v)); };
+  return {fixed((a.ax + e * a.sx - g.offset_x * kFix) / g.scale_x), fixed((a.ay + e * a.sy - g.offset_y * kFix) / g.scale_y),
+          a.sx, fixed(static_cast<double>(a.sy) * g.scale_x / g.scale_y)};
+}
+
+// Source positions of plane g's samples on image row y into s.xs, s.ys (16.16 in the plane's
+// coordinates; kSentinel where the output is black).
+void Rectifier::generate_row(double y, const SamplePlane& g, RowScratch& s) const {
   const Level& L = levels_[level_];
   const std::uint8_t* modes = &cell_mode_[static_cast<std::size_t>(interpolate_row(y, s)) * (L.nx - 1)];
-  for (int i = 0; i + 1 < L.nx && i * L.spacing < out_.width; ++i) {
-    const int x0 = i * L.spacing, count = std::min(L.spacing, out_.width - x0);
+  for (int i = 0; i + 1 < L.nx; ++i) {
+    int c0, c1;
+    cell_columns(i, g, c0, c1);
+    if (c0 >= c1) break;
     if (modes[i] == kZero)
-      std::fill_n(&s.xs[x0], count, kSentinel), std::fill_n(&s.ys[x0], count, kSentinel);
+      std::fill(&s.xs[c0], &s.xs[c1], kSentinel), std::fill(&s.ys[c0], &s.ys[c1], kSentinel);
     else if (modes[i] == kKink)
-      kink_segment(i, x0, count, s);
+      kink_segment(i, c0, c1, g, s);
     else
-      linear_segment(cell_affine(i, modes[i], s), &s.xs[x0], &s.ys[x0], count);
+      linear_segment(plane_affine(i, modes[i], g, c0, s), &s.xs[c0], &s.ys[c0], c1 - c0);
   }
 }
 
 // A cell the horizon crosses: both branches are smooth there, so each is interpolated and the
 // sign of the (interpolated) inverse depth picks, per pixel, the one the depth model means.
-void Rectifier::kink_segment(int i, int x0, int count, RowScratch& s) const {
+void Rectifier::kink_segment(int i, int c0, int c1, const SamplePlane& g, RowScratch& s) const {
   const double sp = levels_[level_].spacing;
-  for (int k = 0; k < count; ++k) {
-    const double a = k / sp;
+  for (int c = c0; c < c1; ++c) {
+    const double a = (g.scale_x * c + g.offset_x - i * sp) / sp;
     const bool plane = s.rho[i] + a * (s.rho[i + 1] - s.rho[i]) > 0;
     const std::vector<double>& X = plane ? s.px : s.ix;
     const std::vector<double>& Y = plane ? s.py : s.iy;
-    s.xs[x0 + k] = to_fixed(X[i] + a * (X[i + 1] - X[i]));
-    s.ys[x0 + k] = to_fixed(Y[i] + a * (Y[i + 1] - Y[i]));
+    s.xs[c] = to_fixed((X[i] + a * (X[i + 1] - X[i]) - g.offset_x) / g.scale_x);
+    s.ys[c] = to_fixed((Y[i] + a * (Y[i + 1] - Y[i]) - g.offset_y) / g.scale_y);
   }
 }
 
-// Rows [y0, y1) with one band's scratch. Cells of 16 px and more are sampled straight from their
-// affine positions; narrower cells go through the row arrays, so that the kernels still see
-// runs of 16 pixels.
-void Rectifier::remap_rows(const ImageView& src, const ImageView& dst, int y0, int y1, RowScratch& s) const {
+namespace {
+
+// n samples of a plane set to its fill (black, or neutral chroma).
+void fill_samples(const SamplePlane& p, std::uint8_t* out, int n) {
+  if (p.packed() && (p.fill == 0 || p.sample_bytes == 1)) return static_cast<void>(std::memset(out, p.fill, static_cast<std::size_t>(n) * p.step));
+  for (int k = 0; k < n; ++k)
+    for (int c = 0; c < p.channels; ++c) {
+      std::uint8_t* q = out + k * p.step + c * p.channel_step;
+      q[0] = static_cast<std::uint8_t>(p.fill);
+      if (p.sample_bytes == 2) q[1] = static_cast<std::uint8_t>(p.fill >> 8);
+    }
+}
+
+}  // namespace
+
+// Sample rows [j0, j1) of one plane with one band's scratch. Cells of 16 px and more are sampled
+// straight from their affine positions; narrower cells go through the row arrays, so that the
+// kernels still see runs of 16 pixels.
+void Rectifier::remap_rows(const SamplePlane& src, const SamplePlane& dst, int j0, int j1, RowScratch& s) const {
   const Level& L = levels_[level_];
-  const int bpp = bytes_per_pixel(format_);
-  for (int y = y0; y < y1; ++y) {
-    std::uint8_t* out = dst.row(y);
+  const int kind = static_cast<int>(sample_kind(src));
+  const auto row = sample_row_[kind];
+  const auto affine = sample_affine_[kind];
+  for (int j = j0; j < j1; ++j) {
+    std::uint8_t* out = dst.row(j);
+    const double y = dst.scale_y * j + dst.offset_y;
     if (L.spacing < 16) {
-      generate_row(y, s);
-      sample_row_(src, s.xs.data(), s.ys.data(), out, out_.width);
+      generate_row(y, dst, s);
+      row(src, s.xs.data(), s.ys.data(), out, dst.width);
       continue;
     }
     const std::uint8_t* modes = &cell_mode_[static_cast<std::size_t>(interpolate_row(y, s)) * (L.nx - 1)];
-    for (int i = 0; i + 1 < L.nx && i * L.spacing < out_.width; ++i) {
-      const int x0 = i * L.spacing, count = std::min(L.spacing, out_.width - x0);
+    for (int i = 0; i + 1 < L.nx; ++i) {
+      int c0, c1;
+      cell_columns(i, dst, c0, c1);
+      if (c0 >= c1) break;
+      std::uint8_t* o = out + c0 * dst.step;
       if (modes[i] == kZero) {
-        std::memset(out + x0 * bpp, 0, static_cast<std::size_t>(count) * bpp);
+        fill_samples(dst, o, c1 - c0);
       } else if (modes[i] == kKink) {
-        kink_segment(i, x0, count, s);
-        sample_row_(src, &s.xs[x0], &s.ys[x0], out + x0 * bpp, count);
+        kink_segment(i, c0, c1, dst, s);
+        row(src, &s.xs[c0], &s.ys[c0], o, c1 - c0);
       } else {
-        sample_affine_(src, cell_affine(i, modes[i], s), out + x0 * bpp, count);
+        affine(src, plane_affine(i, modes[i], dst, c0, s), o, c1 - c0);
       }
     }
   }
 }
 
-// Bands of consecutive rows, one per thread of the executor (the rows cost about the same).
+// Every sample plane (image_planes.hpp) in bands of consecutive rows, one band per thread of
+// the executor (the rows cost about the same).
 void Rectifier::remap(const ImageView& src, const ImageView& dst) {
   if (!map_ready_) throw std::logic_error("Rectifier::remap: no map built");
   check_views(src, dst);
-  const int bands = executor_ ? std::clamp(executor_->concurrency(), 1, static_cast<int>(bands_.size())) : 1;
-  if (bands == 1) return remap_rows(src, dst, 0, out_.height, bands_[0]);
   struct Job {
     Rectifier* self;
-    const ImageView *src, *dst;
-    int bands;
-  } job{this, &src, &dst, bands};
-  executor_->run(bands, [](void* ctx, int band) {
+    SamplePlane src[4], dst[4];
+    int planes, bands;
+  } job{this, {}, {}, 0, 0};
+  job.planes = sample_planes(src, job.src);
+  sample_planes(dst, job.dst);
+  job.bands = executor_ ? std::clamp(executor_->concurrency(), 1, static_cast<int>(bands_.size())) : 1;
+  auto band = [](void* ctx, int b) {
     const Job& j = *static_cast<const Job*>(ctx);
-    const int h = j.self->out_.height;
-    j.self->remap_rows(*j.src, *j.dst, h * band / j.bands, h * (band + 1) / j.bands, j.self->bands_[band]);
-  }, &job);
+    for (int p = 0; p < j.planes; ++p) {
+      const int h = j.dst[p].height;
+      j.self->remap_rows(j.src[p], j.dst[p], h * b / j.bands, h * (b + 1) / j.bands, j.self->bands_[b]);
+    }
+  };
+  if (job.bands == 1) return band(&job, 0);
+  executor_->run(job.bands, band, &job);
 }
 
 void Rectifier::map_row(int y, double* sx, double* sy) {
   if (!map_ready_) throw std::logic_error("Rectifier::map_row: no map built");
   RowScratch& s = bands_[0];
-  generate_row(y, s);
+  SamplePlane unit;
+  unit.width = out_.width;
+  generate_row(y, unit, s);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (int x = 0; x < out_.width; ++x) {
     sx[x] = s.xs[x] == kSentinel ? nan : s.xs[x] / kFix;
@@ -146,6 +197,9 @@ void Rectifier::check_views(const ImageView& src, const ImageView& dst) const {
     throw std::invalid_argument("Rectifier: source view does not match the camera and format");
   if (dst.width != out_.width || dst.height != out_.height || dst.format != format_ || !dst.data)
     throw std::invalid_argument("Rectifier: destination view does not match the output camera and format");
+  for (const ImageView* v : {&src, &dst})
+    if (v->stride < static_cast<std::ptrdiff_t>(row_bytes(format_, v->width)) || (format_ == PixelFormat::I420 && v->stride % 2))
+      throw std::invalid_argument("Rectifier: a view's stride is shorter than its rows (or odd, for I420)");
 }
 
 }  // namespace rsd::dsp

@@ -61,7 +61,7 @@ Eigen::Vector3f NoiseTexture::colour(double s, double t) const {
 
 Eigen::Vector3f BitmapTexture::texel(int x, int y) const {
   if (x < 0 || y < 0 || x >= img_.width || y >= img_.height) return Eigen::Vector3f::Ones();
-  const std::uint8_t* p = img_.data.data() + static_cast<size_t>(y) * img_.stride() + x * bytes_per_pixel(img_.format);
+  const std::uint8_t* p = img_.data.data() + static_cast<size_t>(y) * img_.stride() + x * channels(img_.format) * sample_bytes(img_.format);
   if (img_.format == PixelFormat::Rgb8) return Eigen::Vector3f(p[0], p[1], p[2]) / 255.0f;
   const float g = img_.format == PixelFormat::Mono16 ? *reinterpret_cast<const std::uint16_t*>(p) / 65535.0f : p[0] / 255.0f;
   return Eigen::Vector3f::Constant(g);

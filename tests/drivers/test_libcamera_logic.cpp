@@ -36,18 +36,22 @@ TEST(LibcameraFormat, NamesFollowDrmSoRgb888IsBgrInMemory) {
   ASSERT_TRUE(v4l2::copy_frame(memory.data(), 3, 3, bgr888->layout, px.view()));
   EXPECT_EQ(px.data, memory);
   EXPECT_EQ(lc::format_info(formats::R8)->layout, v4l2::Layout::Grey8);
-  EXPECT_EQ(lc::format_info(formats::YUYV)->layout, v4l2::Layout::YuyvLuma);
-  EXPECT_EQ(lc::format_info(formats::NV12), nullptr);
+  EXPECT_EQ(lc::format_info(formats::YUYV)->layout, v4l2::native(dsp::PixelFormat::Yuyv));
+  EXPECT_EQ(lc::format_info(formats::NV12)->layout, v4l2::native(dsp::PixelFormat::Nv12));
+  EXPECT_EQ(lc::format_info(formats::SBGGR16)->layout, v4l2::native(dsp::PixelFormat::BayerBggr16));
+  EXPECT_EQ(lc::format_info(formats::SRGGB10_CSI2P), nullptr);  // packed 10-bit: not read
 }
 
 TEST(LibcameraFormat, ChoosesTheBestOfferedFormatForTheSlot) {
   using dsp::PixelFormat;
   EXPECT_EQ(lc::choose_format(PixelFormat::Mono8, {formats::YUYV, formats::R8})->format, formats::R8);
   EXPECT_EQ(lc::choose_format(PixelFormat::Mono8, {formats::NV12, formats::YUYV})->format, formats::YUYV);
+  EXPECT_EQ(lc::choose_format(PixelFormat::Nv12, {formats::YUYV, formats::NV12})->format, formats::NV12);
+  EXPECT_EQ(lc::choose_format(PixelFormat::BayerRggb8, {formats::R8, formats::SRGGB8})->format, formats::SRGGB8);
   EXPECT_EQ(lc::choose_format(PixelFormat::Rgb8, {formats::RGB888, formats::BGR888})->format, formats::BGR888);
   EXPECT_EQ(lc::choose_format(PixelFormat::Rgb8, {formats::NV12, formats::RGB888})->format, formats::RGB888);
   EXPECT_EQ(lc::choose_format(PixelFormat::Mono16, {formats::R8})->format, formats::R8);  // no 16-bit grey
-  EXPECT_FALSE(lc::choose_format(PixelFormat::Rgb8, {formats::YUYV, formats::NV12}).has_value());
+  EXPECT_EQ(lc::choose_format(PixelFormat::Rgb8, {formats::NV12, formats::YUYV})->format, formats::YUYV);  // natively
   EXPECT_FALSE(lc::choose_format(PixelFormat::Mono8, {formats::SRGGB10_CSI2P}).has_value());
 }
 

@@ -97,11 +97,28 @@ TEST(V4l2Copy, GreyRowsSkipThePaddingBetweenThem) {
   EXPECT_EQ(untouched.data, std::vector<std::uint8_t>(6, 0));
 }
 
-TEST(V4l2Copy, YuyvKeepsTheLumaOfEveryPixel) {
-  const auto src = yuyv_frame(3, 2, 8);  // 3 pixels = 6 bytes, bytesperline 8
-  dsp::Image img(3, 2, dsp::PixelFormat::Mono8);
-  ASSERT_TRUE(v4l2::copy_frame(src.data(), src.size(), 8, Layout::YuyvLuma, img.view()));
-  EXPECT_EQ(img.data, (std::vector<std::uint8_t>{0, 1, 2, 10, 11, 12}));
+TEST(V4l2Copy, YuvAndMosaicsPassThroughWithTheirPlanes) {
+  const auto src = yuyv_frame(4, 2, 10);  // 4 pixels = 8 bytes, bytesperline 10
+  dsp::Image img(4, 2, dsp::PixelFormat::Yuyv);
+  ASSERT_TRUE(v4l2::copy_frame(src.data(), src.size(), 10, v4l2::native(dsp::PixelFormat::Yuyv), img.view()));
+  EXPECT_EQ(std::vector<std::uint8_t>(img.data.begin(), img.data.begin() + 8), std::vector<std::uint8_t>(src.begin(), src.begin() + 8));
+  EXPECT_EQ(std::vector<std::uint8_t>(img.data.begin() + 8, img.data.end()), std::vector<std::uint8_t>(src.begin() + 10, src.begin() + 18));
+  // NV12 4x2 at bytesperline 6: two luma rows, then one row of U V pairs at the same stride.
+  std::vector<std::uint8_t> nv12(18);
+  for (std::size_t i = 0; i < nv12.size(); ++i) nv12[i] = static_cast<std::uint8_t>(i);
+  dsp::Image n(4, 2, dsp::PixelFormat::Nv12);
+  ASSERT_TRUE(v4l2::copy_frame(nv12.data(), 16, 6, v4l2::native(dsp::PixelFormat::Nv12), n.view()));
+  EXPECT_EQ(n.data, (std::vector<std::uint8_t>{0, 1, 2, 3, 6, 7, 8, 9, 12, 13, 14, 15}));
+  EXPECT_FALSE(v4l2::copy_frame(nv12.data(), 15, 6, v4l2::native(dsp::PixelFormat::Nv12), n.view())) << "chroma cut short";
+  // I420 4x2 at bytesperline 6: U and V rows at stride 3.
+  dsp::Image i420(4, 2, dsp::PixelFormat::I420);
+  ASSERT_TRUE(v4l2::copy_frame(nv12.data(), 17, 6, v4l2::native(dsp::PixelFormat::I420), i420.view()));
+  EXPECT_EQ(i420.data, (std::vector<std::uint8_t>{0, 1, 2, 3, 6, 7, 8, 9, 12, 13, 15, 16}));
+  EXPECT_FALSE(v4l2::copy_frame(nv12.data(), 18, 5, v4l2::native(dsp::PixelFormat::I420), i420.view())) << "odd stride";
+  EXPECT_EQ(v4l2::pixel_info(V4L2_PIX_FMT_SGRBG16)->layout, v4l2::native(dsp::PixelFormat::BayerGrbg16));
+  EXPECT_EQ(v4l2::pixel_info(V4L2_PIX_FMT_YUV420)->layout, v4l2::native(dsp::PixelFormat::I420));
+  EXPECT_EQ(v4l2::choose_pixel_format(V4L2_PIX_FMT_NV12, {V4L2_PIX_FMT_YUYV, V4L2_PIX_FMT_NV12}), V4L2_PIX_FMT_NV12);
+  EXPECT_EQ(v4l2::choose_pixel_format(V4L2_PIX_FMT_GREY, {V4L2_PIX_FMT_SRGGB8}), V4L2_PIX_FMT_SRGGB8);
 }
 
 TEST(V4l2Copy, SixteenBitIsLittleEndianAndBgrIsSwappedToRgb) {

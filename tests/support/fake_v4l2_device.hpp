@@ -85,8 +85,9 @@ class FakeDevice final : public V4l2Device {
     if (int e = failure("S_FMT")) return e;
     auto& p = f.fmt.pix;
     const auto* info = v4l2::pixel_info(p.pixelformat);
-    p.bytesperline = p.width * (info ? v4l2::source_bytes_per_pixel(info->layout) : 1) + s_->row_padding;
-    p.sizeimage = p.bytesperline * p.height;
+    const dsp::PixelFormat pf = info ? info->layout.format : dsp::PixelFormat::Mono8;
+    p.bytesperline = static_cast<std::uint32_t>(dsp::row_bytes(pf, static_cast<int>(p.width))) + s_->row_padding;
+    p.sizeimage = p.bytesperline * static_cast<std::uint32_t>(dsp::buffer_rows(pf, static_cast<int>(p.height)));
     p.field = V4L2_FIELD_NONE;
     s_->format = f;
     return 0;

@@ -6,7 +6,9 @@
 // source has no slack after its last row (the sanitizer tree catches any read beyond it).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -20,30 +22,36 @@ namespace {
 
 constexpr std::uint8_t kGuard = 0xAB;
 
+// The packed kinds of plane the SIMD kernels handle: Mono8 (and I420's planes), NV12's U V
+// pairs, RGB24, Mono16.
+struct Kind {
+  SampleKind kind;
+  int channels, bytes;
+  const char* name;
+  int pixel_bytes() const { return channels * bytes; }
+};
+constexpr Kind kPacked[] = {{SampleKind::U8, 1, 1, "Mono8"},
+                            {SampleKind::U8x2, 2, 1, "UV8"},
+                            {SampleKind::U8x3, 3, 1, "Rgb8"},
+                            {SampleKind::U16, 1, 2, "Mono16"}};
+
 struct Source {
   std::vector<std::uint8_t> bytes;
-  ImageView view;
+  SamplePlane view;
 };
 
-// A random image whose rows are `pad` bytes longer than its pixels; the buffer ends with the
-// last pixel.
-Source random_source(int w, int h, PixelFormat f, int pad, unsigned seed) {
+// A random plane whose rows are `pad` bytes longer than its pixels; the buffer ends with the
+// last pixel. fill: what lies outside (chroma's 128 for the U V pairs).
+Source random_source(int w, int h, const Kind& k, int pad, unsigned seed) {
   Source s;
-  const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(w) * bytes_per_pixel(f);
+  const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(w) * k.pixel_bytes();
   s.bytes.resize(static_cast<std::size_t>((row + pad) * (h - 1) + row));
   std::mt19937 rng(seed);
   for (auto& b : s.bytes) b = static_cast<std::uint8_t>(rng());
-  s.view = {s.bytes.data(), w, h, row + pad, f};
+  s.view.data = s.bytes.data(), s.view.width = w, s.view.height = h, s.view.stride = row + pad;
+  s.view.channels = k.channels, s.view.sample_bytes = k.bytes, s.view.step = k.pixel_bytes(), s.view.channel_step = k.bytes;
+  s.view.fill = k.channels == 2 ? 128 : 0;
   return s;
-}
-
-const char* name(PixelFormat f) {
-  switch (f) {
-    case PixelFormat::Mono8: return "Mono8";
-    case PixelFormat::Mono16: return "Mono16";
-    case PixelFormat::Rgb8: return "Rgb8";
-  }
-  return "?";
 }
 
 std::int32_t fixed(double px) { return static_cast<std::int32_t>(std::lround(px * 65536)); }
@@ -83,14 +91,14 @@ Positions random_positions(std::mt19937& rng, int n, int w, int h) {
   return p;
 }
 
-std::vector<std::uint8_t> guarded(int n, PixelFormat f) {
-  return std::vector<std::uint8_t>(static_cast<std::size_t>(n) * bytes_per_pixel(f) + 32, kGuard);
+std::vector<std::uint8_t> guarded(int n, const Kind& k) {
+  return std::vector<std::uint8_t>(static_cast<std::size_t>(n) * k.pixel_bytes() + 32, kGuard);
 }
 
 // Checks `got` against `want` and that the guard bytes after n pixels are intact.
-void expect_same(const std::vector<std::uint8_t>& got, const std::vector<std::uint8_t>& want, int n, PixelFormat f,
+void expect_same(const std::vector<std::uint8_t>& got, const std::vector<std::uint8_t>& want, int n, const Kind& k,
                  const std::string& what) {
-  const std::size_t used = static_cast<std::size_t>(n) * bytes_per_pixel(f);
+  const std::size_t used = static_cast<std::size_t>(n) * k.pixel_bytes();
   for (std::size_t i = 0; i < got.size(); ++i) {
     const std::uint8_t expected = i < used ? want[i] : kGuard;
     if (got[i] != expected) {
@@ -122,10 +130,10 @@ TEST(SimdTargets, TheBestCompiledTargetIsTheOneUsed) {
 TEST_F(EveryTarget, RowPositionsEqualTheScalarReference) {
   for (std::int64_t target : simd_targets()) {
     force_simd_target(target);
-    for (PixelFormat f : {PixelFormat::Mono8, PixelFormat::Mono16, PixelFormat::Rgb8})
+    for (const Kind& f : kPacked)
       for (int pad : {0, 5}) {
         const Source src = random_source(61, 23, f, pad, 3);
-        const Samplers simd = dispatched_samplers(f), ref = scalar_samplers(f);
+        const Samplers simd = dispatched_samplers(f.kind), ref = scalar_samplers(f.kind);
         std::mt19937 rng(17);
         for (int trial = 0; trial < 400; ++trial) {
           const int n = trial % 53;
@@ -133,7 +141,7 @@ TEST_F(EveryTarget, RowPositionsEqualTheScalarReference) {
           std::vector<std::uint8_t> a = guarded(n, f), b = guarded(n, f);
           simd.row(src.view, p.xs.data(), p.ys.data(), a.data(), n);
           ref.row(src.view, p.xs.data(), p.ys.data(), b.data(), n);
-          expect_same(a, b, n, f, target_name(target) + " " + name(f) + " row trial " + std::to_string(trial));
+          expect_same(a, b, n, f, target_name(target) + " " + f.name + " row trial " + std::to_string(trial));
         }
       }
   }
@@ -142,10 +150,10 @@ TEST_F(EveryTarget, RowPositionsEqualTheScalarReference) {
 TEST_F(EveryTarget, AffineSegmentsEqualTheScalarReference) {
   for (std::int64_t target : simd_targets()) {
     force_simd_target(target);
-    for (PixelFormat f : {PixelFormat::Mono8, PixelFormat::Mono16, PixelFormat::Rgb8})
+    for (const Kind& f : kPacked)
       for (int pad : {0, 3}) {
         const Source src = random_source(77, 31, f, pad, 5);
-        const Samplers simd = dispatched_samplers(f), ref = scalar_samplers(f);
+        const Samplers simd = dispatched_samplers(f.kind), ref = scalar_samplers(f.kind);
         std::mt19937 rng(23);
         for (int trial = 0; trial < 600; ++trial) {
           const int n = trial % 71;
@@ -153,7 +161,7 @@ TEST_F(EveryTarget, AffineSegmentsEqualTheScalarReference) {
           std::vector<std::uint8_t> got = guarded(n, f), want = guarded(n, f);
           simd.affine(src.view, a, got.data(), n);
           ref.affine(src.view, a, want.data(), n);
-          expect_same(got, want, n, f, target_name(target) + " " + name(f) + " affine trial " + std::to_string(trial));
+          expect_same(got, want, n, f, target_name(target) + " " + f.name + " affine trial " + std::to_string(trial));
         }
       }
   }
@@ -165,12 +173,77 @@ TEST_F(EveryTarget, ATranslationInsideTheImageIsTheBilinearBlend) {
   // (3x + 16 + 3x + 21 + 1) >> 1 = 3x + 19 (exact: 3x + 18.25; one rounding per direction).
   for (std::int64_t target : simd_targets()) {
     force_simd_target(target);
-    Source src = random_source(64, 16, PixelFormat::Mono8, 0, 1);
+    Source src = random_source(64, 16, kPacked[0], 0, 1);
     for (int y = 0; y < 16; ++y)
       for (int x = 0; x < 64; ++x) src.bytes[y * 64 + x] = static_cast<std::uint8_t>(3 * x + 5 * y);
-    const Samplers k = dispatched_samplers(PixelFormat::Mono8);
+    const Samplers k = dispatched_samplers(SampleKind::U8);
     std::vector<std::uint8_t> out(32);
     k.affine(src.view, {fixed(2.25), fixed(3.5), fixed(1), 0}, out.data(), 32);
     for (int i = 0; i < 32; ++i) EXPECT_EQ(out[i], 3 * (2 + i) + 19) << target_name(target) << " pixel " << i;
+  }
+}
+
+TEST_F(EveryTarget, ChromaOutsideThePlaneIsNeutralGrey) {
+  // U V pairs read 128 outside the plane (so that a border does not turn green): all four taps
+  // outside (the SIMD kernels' zero path), and half outside (blended with 128).
+  for (std::int64_t target : simd_targets()) {
+    force_simd_target(target);
+    Source src = random_source(40, 12, kPacked[1], 0, 9);
+    std::fill(src.bytes.begin(), src.bytes.end(), std::uint8_t{200});
+    const Samplers k = dispatched_samplers(SampleKind::U8x2);
+    std::vector<std::uint8_t> out(2 * 16);
+    k.affine(src.view, {fixed(-100), fixed(3), fixed(1), 0}, out.data(), 16);
+    for (int i = 0; i < 32; ++i) EXPECT_EQ(out[i], 128) << target_name(target) << " byte " << i;
+    k.affine(src.view, {fixed(-0.5), fixed(3), 0, 0}, out.data(), 16);  // halfway between fill and 200
+    for (int i = 0; i < 32; ++i) EXPECT_EQ(out[i], 164) << target_name(target) << " byte " << i;
+  }
+}
+
+// A strided plane (a Bayer site: every other sample of every other row; YUYV's U V: two
+// channels two bytes apart, four bytes per pair) gives the values the packed plane holding the
+// same samples gives, written at the strided places and nowhere else.
+TEST(StridedPlanes, SampleLikeThePackedPlaneOfTheirSamples) {
+  struct Case {
+    const Kind& packed;
+    int step, channel_step;
+    SampleKind strided;
+  };
+  const Case cases[] = {{kPacked[0], 2, 1, SampleKind::StridedU8},
+                        {kPacked[3], 4, 2, SampleKind::StridedU16},
+                        {kPacked[1], 4, 2, SampleKind::StridedU8}};
+  for (const Case& c : cases) {
+    const int w = 37, h = 15;
+    const Source packed = random_source(w, h, c.packed, 0, 11);
+    const int b = c.packed.bytes, ch = c.packed.channels;
+    std::vector<std::uint8_t> mosaic(static_cast<std::size_t>(2 * h) * w * c.step, 0x5A);
+    SamplePlane strided = packed.view;
+    strided.data = mosaic.data(), strided.stride = 2 * static_cast<std::ptrdiff_t>(w) * c.step;
+    strided.step = c.step, strided.channel_step = c.channel_step;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int k = 0; k < ch; ++k)
+          std::memcpy(strided.row(y) + x * c.step + k * c.channel_step, packed.view.row(y) + (x * ch + k) * b, b);
+    ASSERT_EQ(sample_kind(strided), c.strided);
+    const Samplers ref = scalar_samplers(c.packed.kind), str = scalar_samplers(c.strided);
+    std::mt19937 rng(29);
+    for (int trial = 0; trial < 200; ++trial) {
+      const int n = 1 + trial % 40;
+      const Affine a = random_affine(rng, w, h);
+      std::vector<std::uint8_t> want(static_cast<std::size_t>(n) * ch * b), got(static_cast<std::size_t>(n + 1) * c.step, kGuard);
+      ref.affine(packed.view, a, want.data(), n);
+      str.affine(strided, a, got.data(), n);
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < ch; ++k)
+          ASSERT_EQ(std::memcmp(got.data() + i * c.step + k * c.channel_step, want.data() + (i * ch + k) * b, b), 0)
+              << c.packed.name << " trial " << trial << " sample " << i;
+      for (std::size_t i = 0; i < got.size(); ++i) {  // bytes of the other planes untouched
+        const int in_sample = static_cast<int>(i % c.step);
+        bool ours = false;
+        for (int k = 0; k < ch; ++k) ours |= in_sample >= k * c.channel_step && in_sample < k * c.channel_step + b;
+        if (!ours || static_cast<int>(i) >= n * c.step) {
+          ASSERT_EQ(got[i], kGuard) << c.packed.name << " byte " << i;
+        }
+      }
+    }
   }
 }

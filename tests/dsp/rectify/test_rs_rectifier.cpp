@@ -1,5 +1,5 @@
 // The rectifier against independent ground truth:
-// - its interpolated map against the exact inverse at every pixel, computed another way: the
+// - its interpolated map against the exact inverse at every pixel (exact_map.hpp): the
 //   output pixel's ray meets the depth model in a Euclidean point, which the paper's bracketed
 //   root finder (project_trajectory, eq. (3)) projects with the exact screw motion;
 // - (its images against the renderer's global-shutter frame: test_rs_rectifier_render.cpp);
@@ -19,62 +19,15 @@
 #include "dsp/geometry/rs_projection.hpp"
 #include "dsp/rectify/bilinear_sampling.hpp"
 #include "dsp/rectify/rs_rectifier.hpp"
+#include "tests/dsp/rectify/exact_map.hpp"
 #include "tests/support/allocation_counter.hpp"  // every C++ allocation of this process, counted
 
 using namespace rsd::dsp;
+using namespace rsd::dsp::test;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
 namespace {
-
-struct Case {
-  const char* name;
-  CameraModel cam;
-  RowTiming timing;
-  Twist tw;
-  DepthModel depth;
-  double t_ref;
-};
-
-CameraModel camera(int w, int h, double hfov_deg) { return CameraModel::from_hfov(w, h, hfov_deg * M_PI / 180); }
-
-Twist twist(Vector3d v, Vector3d w) {
-  Twist t;
-  t.v = v, t.w = w;
-  return t;
-}
-
-// The motions of the map test: fast rotations, translation before a plane, the ground plane
-// with its horizon in view, and a distorted lens read bottom to top.
-std::vector<Case> cases() {
-  const CameraModel cam = camera(480, 360, 60);
-  const RowTiming tb = RowTiming::full_frame(360, 30);
-  const double mid = reference_time(tb, ReferenceRow::Middle);
-  CameraModel distorted = cam;
-  distorted.dist = {-0.2, 0.05, 0.0005, -0.0003, 0};
-  const RowTiming bt = RowTiming::full_frame(360, 30, Readout::BottomToTop);
-  return {
-      {"fast_pan", cam, tb, twist({0, 0, 0}, {0.3, 6.0, 0.2}), DepthModel::at_infinity(), mid},
-      {"fast_roll", cam, tb, twist({0, 0, 0}, {0.2, -0.4, 2 * M_PI}), DepthModel::at_infinity(), 0.0},
-      {"plane_translation", cam, tb, twist({2.0, 0.5, 1.0}, {0.2, -0.3, 0.1}), DepthModel::fronto_parallel(2.0), mid},
-      {"ground_plane", cam, tb, twist({0.3, 0, 15.0}, {0.05, 0.5, 0.1}), ground_plane(1.2), mid},
-      {"distorted_bottom_to_top", distorted, bt, twist({0.3, 0.1, 0}, {1.0, 2.0, 0.5}),
-       DepthModel::fronto_parallel(3.0), 0.0},
-  };
-}
-
-// Exact source position of output pixel p, the independent way (see the file comment).
-RsProjection exact_source(const Case& c, const CameraMotion& motion, const Vector2d& p) {
-  const Eigen::Affine3d g = motion.at(c.t_ref);
-  const Eigen::Matrix3d Rt = g.linear().transpose();
-  const Vector3d o = -(Rt * g.translation()), d = (Rt * c.cam.ray(p).value()).normalized();
-  Vector3d X = o + 1e9 * d;  // infinitely far: translation moves it by < 1e-8 px
-  if (!c.depth.infinite) {
-    const double lambda = (c.depth.distance - c.depth.normal.dot(o)) / c.depth.normal.dot(d);
-    if (lambda > 0) X = o + lambda * d;
-  }
-  return project_trajectory(c.cam, c.timing, motion, X);
-}
 
 struct MapCheck {
   double worst = 0;

@@ -1,0 +1,315 @@
+// The bilinear sampler's SIMD kernels, part 2: "wide steps" of one or two 128-bit blocks, and
+// the block kernels of Mono8 (8 pixels per block) and RGB24 (4 pixels per block) on 16-bit lanes.
+// Included by bilinear_sampling_simd.cpp once per Highway target, after bilinear_four-inl.h.
+#if defined(RSD_DSP_RECTIFY_BILINEAR_BLOCKS_INL_H_) == defined(HWY_TARGET_TOGGLE)
+#ifdef RSD_DSP_RECTIFY_BILINEAR_BLOCKS_INL_H_
+#undef RSD_DSP_RECTIFY_BILINEAR_BLOCKS_INL_H_
+#else
+#define RSD_DSP_RECTIFY_BILINEAR_BLOCKS_INL_H_
+#endif
+
+#include <algorithm>
+#include <cstring>
+
+#include "hwy/highway.h"
+#include "dsp/rectify/bilinear_sampling.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace rsd::dsp::rectify_detail {
+namespace HWY_NAMESPACE {
+#if HWY_TARGET != HWY_SCALAR
+namespace hn = hwy::HWY_NAMESPACE;
+
+// ---- Wide steps: as many 128-bit blocks as the target's vectors hold, up to two ---------------
+//
+// AVX2 and AVX-512 run two blocks per instruction (256-bit vectors), the others one (SVE: one
+// 128-bit block whatever its vector length, since windows are per block). A wide step is 8
+// pixels per block: positions X0 hold pixels 8b..8b+3 in block b, X1 pixels 8b+4..8b+7, so
+// that narrowing the two to 16 bits per block (packssdw on x86) puts each block's 8 pixels in
+// order in that block, with no lane crossing.
+#if HWY_HAVE_SCALABLE
+using DW16 = hn::Full128<std::int16_t>;
+#else
+using DW16 = hn::CappedTag<std::int16_t, 16>;
+#endif
+using DWU16 = hn::RebindToUnsigned<DW16>;
+using DW32 = hn::Repartition<std::int32_t, DW16>;
+using DW8 = hn::Repartition<std::uint8_t, DW16>;
+using VW32 = hn::Vec<DW32>;
+constexpr int kBlocks = static_cast<int>(hn::MaxLanes(DW16()) / 8);
+constexpr int kStep = 8 * kBlocks;
+static_assert(kBlocks == 1 || kBlocks == 2, "one or two 128-bit blocks per step");
+
+// 128-bit blocks in a vector of tag D (1 or 2). The helpers below are templates on the tag, so
+// that `if constexpr` discards the branch of the other width.
+template <class D>
+constexpr int blocks_of() {
+  return static_cast<int>(hn::MaxLanes(D()) * sizeof(hn::TFromD<D>) / 16);
+}
+
+// The four int32 lanes of block b.
+template <class D>
+HWY_INLINE V32 block(D, hn::Vec<D> v, int b) {
+  if constexpr (blocks_of<D>() == 1) {
+    return v;
+  } else {
+    const hn::Half<D> dh;
+    return b == 0 ? hn::LowerHalf(dh, v) : hn::UpperHalf(dh, v);
+  }
+}
+
+// The vector whose block b holds v[b] in every lane.
+template <class D>
+HWY_INLINE hn::Vec<D> per_block(D d, const int* v) {
+  if constexpr (blocks_of<D>() == 1)
+    return hn::Set(d, v[0]);
+  else
+    return hn::ConcatLowerLower(d, hn::Set(d, v[1]), hn::Set(d, v[0]));
+}
+
+// Block b loaded from p[b] (16 bytes each).
+template <class D>
+HWY_INLINE hn::Vec<D> load_windows(D d, const std::uint8_t* const* p) {
+  if constexpr (blocks_of<D>() == 1) {
+    return hn::LoadU(d, p[0]);
+  } else {
+    const hn::Half<D> dh;
+    return hn::Combine(d, hn::LoadU(dh, p[1]), hn::LoadU(dh, p[0]));
+  }
+}
+
+// 32 -> 16 bits, saturating, block b of the result = block b of lo then block b of hi.
+template <class D32x>
+HWY_INLINE hn::Vec<hn::Repartition<std::int16_t, D32x>> narrow_blocks(D32x, hn::Vec<D32x> lo, hn::Vec<D32x> hi) {
+#if HWY_HAVE_SCALABLE
+  return narrow(lo, hi);  // one block; SVE's ReorderDemote2To interleaves the two
+#else
+  return hn::ReorderDemote2To(hn::Repartition<std::int16_t, D32x>(), lo, hi);  // packssdw per block on x86
+#endif
+}
+
+// (p0 (256 - f) + p1 f + 128) >> 8 on 16-bit lanes: for 8-bit pixels every term fits.
+template <class V>
+HWY_INLINE V lerp16(V p0, V p1, V f) {
+  const hn::DFromV<V> d;
+  return hn::ShiftRight<8>(hn::Add(hn::Add(hn::Mul(p0, hn::Sub(hn::Set(d, 256), f)), hn::Mul(p1, f)), hn::Set(d, 128)));
+}
+
+// The horizontal blend of 16-bit lanes holding byte pairs (p0 low, p1 high).
+template <class V>
+HWY_INLINE V blend_pairs(V pairs, V f) {
+  const hn::DFromV<V> d;
+  return lerp16(hn::And(pairs, hn::Set(d, 0xFF)), hn::ShiftRight<8>(pairs), f);
+}
+
+// ---- RGB24, four pixels per block on 16-bit lanes --------------------------------------------
+//
+// One 16-byte window (5 px) per row and block from the block's first left tap, taken when its
+// four taps lie within 3 px right of it and one row below. A block's 12 output bytes are 12
+// 16-bit lanes (A: bytes 0-7, B: bytes 8-11 and four spare lanes): each lane looks up its own
+// byte pair (left and right tap of its colour) and is blended like Mono8. Per-pixel values reach
+// the lanes of their colours by byte lookups from one word per pixel, 3 i | fx << 8 | fy << 16 |
+// row << 24 (i: the pixel's tap column in the window).
+
+// Per output lane of A and B: its pixel's word byte (4 k) twice, and the colour's byte
+// offsets (c, c + 3) of the left and right taps.
+alignas(16) constexpr std::uint8_t kRgbPixelA[16] = {0, 0, 0, 0, 0, 0, 4, 4, 4, 4, 4, 4, 8, 8, 8, 8};
+alignas(16) constexpr std::uint8_t kRgbPixelB[16] = {8, 8, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12};
+alignas(16) constexpr std::uint8_t kRgbColourA[16] = {0, 3, 1, 4, 2, 5, 0, 3, 1, 4, 2, 5, 0, 3, 1, 4};
+alignas(16) constexpr std::uint8_t kRgbColourB[16] = {2, 5, 0, 3, 1, 4, 2, 5, 0, 3, 0, 3, 0, 3, 0, 3};
+
+// Byte `offset` of each lane's pixel word into the lane's low byte (high byte zero).
+template <class DB>
+HWY_INLINE hn::Vec<hn::Repartition<std::uint16_t, DB>> spread(DB d8, hn::Vec<DB> words, const std::uint8_t* pixel,
+                                                            int offset) {
+  const hn::Repartition<std::uint16_t, DB> du16;
+  const auto sel = hn::Add(hn::LoadDup128(d8, pixel), hn::BitCast(d8, hn::Set(du16, static_cast<std::uint16_t>(offset | 0x8000))));
+  return hn::BitCast(du16, hn::TableLookupBytesOr0(words, sel));
+}
+
+// The blend of A or B (by its lookup patterns) in every block.
+template <class DB>
+HWY_INLINE hn::Vec<hn::Repartition<std::uint16_t, DB>> rgb_half(DB d8, hn::Vec<DB> r0, hn::Vec<DB> r1, hn::Vec<DB> r2,
+                                                              bool straddle, hn::Vec<DB> words, const std::uint8_t* pixel,
+                                                              const std::uint8_t* colour) {
+  const hn::Repartition<std::uint16_t, DB> du16;
+  using VU = hn::Vec<decltype(du16)>;
+  const auto idx = hn::Add(hn::TableLookupBytes(words, hn::LoadDup128(d8, pixel)), hn::LoadDup128(d8, colour));
+  const VU fx = spread(d8, words, pixel, 1), fy = spread(d8, words, pixel, 2);
+  VU up = hn::BitCast(du16, hn::TableLookupBytes(r0, idx)), down = hn::BitCast(du16, hn::TableLookupBytes(r1, idx));
+  if (straddle) {
+    const auto m = hn::Eq(spread(d8, words, pixel, 3), hn::Set(du16, 1));
+    up = hn::IfThenElse(m, down, up);
+    down = hn::IfThenElse(m, hn::BitCast(du16, hn::TableLookupBytes(r2, idx)), down);
+  }
+  return lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
+}
+
+// Bytes [0, n) of each block's 16-bit lanes, narrowed, to out[b] + at (n: 4 or 8).
+template <class DU16x>
+HWY_INLINE void store_per_block(DU16x, hn::Vec<DU16x> v, std::uint8_t* const* out, int at, int n) {
+  const hn::Rebind<std::uint8_t, DU16x> d8n;
+  const auto bytes = hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<DU16x>(), v));
+  const hn::Full64<std::uint8_t> d64;
+  const hn::Full32<std::uint8_t> d32;
+  for (int b = 0; b < blocks_of<DU16x>(); ++b) {
+    hn::Vec<decltype(d64)> half;
+    if constexpr (blocks_of<DU16x>() == 1)
+      half = bytes;
+    else
+      half = b == 0 ? hn::LowerHalf(d64, bytes) : hn::UpperHalf(d64, bytes);
+    if (n == 8)
+      hn::StoreU(half, d64, out[b] + at);
+    else
+      hn::StoreU(hn::LowerHalf(d32, half), d32, out[b] + at);
+  }
+}
+
+// The windows of four pixels per block, pixels of kBytes bytes: each block's 16-byte window
+// starts at its first left tap (as tap() rounds it), p[b]; rx, ry are the positions relative to
+// it in 1/256 px. false when a window would leave the image or a right tap would lie kRight
+// pixels or more right of its start, or below the next row. straddle: some taps lie one row
+// lower (p[b] then needs a third row, which is checked to exist).
+template <int kBytes, int kRight, class D32x>
+HWY_INLINE bool block_windows(D32x d, const SamplePlane& src, hn::Vec<D32x> X, hn::Vec<D32x> Y, const std::uint8_t** p,
+                              hn::Vec<D32x>& rx, hn::Vec<D32x>& ry, bool& straddle) {
+  constexpr int kB = blocks_of<D32x>();
+  int bx[kB], by[kB], ya_max = 0;
+  for (int b = 0; b < kB; ++b) {
+    const V32 x = block(d, X, b), y = block(d, Y, b);
+    const int xa = (hn::GetLane(x) + 128) >> 16;
+    const int ya = (std::min(hn::GetLane(y), hn::ExtractLane(y, 3)) + 128) >> 16;
+    if (xa < 0 || kBytes * xa + 16 > kBytes * src.width || ya < 0 || ya > src.height - 2) return false;
+    bx[b] = 128 - xa * 65536, by[b] = 128 - ya * 65536, p[b] = src.row(ya) + kBytes * xa, ya_max = std::max(ya_max, ya);
+  }
+  rx = hn::ShiftRight<8>(hn::Add(X, per_block(d, bx)));
+  ry = hn::ShiftRight<8>(hn::Add(Y, per_block(d, by)));
+  const auto m1 = hn::Set(d, -1);
+  if (!hn::AllTrue(d, hn::And(hn::And(hn::Gt(rx, m1), hn::Lt(rx, hn::Set(d, kRight * 256))),
+                              hn::And(hn::Gt(ry, m1), hn::Lt(ry, hn::Set(d, 2 * 256))))))
+    return false;
+  straddle = !hn::AllTrue(d, hn::Lt(ry, hn::Set(d, 256)));
+  return !(straddle && ya_max > src.height - 3);
+}
+
+// Four pixels per block (positions X, Y) to out[b].
+template <class DB>
+HWY_INLINE bool rgb8_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
+                            hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
+  constexpr int kB = blocks_of<DB>();
+  const hn::Repartition<std::int32_t, DB> d;
+  const hn::Repartition<std::uint16_t, DB> du16;
+  const std::uint8_t* p[kB];
+  hn::Vec<decltype(d)> rx, ry;
+  bool straddle = false;
+  if (!block_windows<3, 4>(d, src, X, Y, p, rx, ry, straddle)) return false;
+  const auto i = hn::ShiftRight<8>(rx);
+  const auto words = hn::BitCast(d8, hn::Or(hn::Or(hn::Add(i, hn::Add(i, i)), hn::ShiftLeft<8>(hn::And(rx, hn::Set(d, 255)))),
+                                            hn::ShiftLeft<16>(ry)));
+  const auto r0 = load_windows(d8, p);
+  for (auto& q : p) q += src.stride;
+  const auto r1 = load_windows(d8, p);
+  auto r2 = r1;
+  if (straddle) {
+    for (auto& q : p) q += src.stride;
+    r2 = load_windows(d8, p);
+  }
+  store_per_block(du16, rgb_half(d8, r0, r1, r2, straddle, words, kRgbPixelA, kRgbColourA), out, 0, 8);
+  store_per_block(du16, rgb_half(d8, r0, r1, r2, straddle, words, kRgbPixelB, kRgbColourB), out, 8, 4);
+  return true;
+}
+
+// ---- U V pairs (NV12's chroma), four pixels per block on 16-bit lanes ------------------------
+//
+// One 16-byte window (8 pairs) per row and block from the block's first left tap, taken when its
+// four taps lie within 6 pairs right of it and one row below. Each pixel's 32-bit lane splits
+// into two 16-bit lanes, its U and its V: the lookup pattern 2i, 2i + 2, 2i + 1, 2i + 3 puts the
+// U taps in the low lane and the V taps in the high one, and the weights are doubled alike (no
+// narrowing: the lanes stay where the positions were).
+template <class DB>
+HWY_INLINE bool uv8_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
+                           hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
+  constexpr int kB = blocks_of<DB>();
+  const hn::Repartition<std::int32_t, DB> d;
+  const hn::Repartition<std::uint16_t, DB> du16;
+  const std::uint8_t* p[kB];
+  hn::Vec<decltype(d)> rx, ry;
+  bool straddle = false;
+  if (!block_windows<2, 7>(d, src, X, Y, p, rx, ry, straddle)) return false;
+  const auto twice = [&](hn::Vec<decltype(d)> v) { return hn::BitCast(du16, hn::Or(v, hn::ShiftLeft<16>(v))); };
+  const auto i2 = hn::Add(hn::ShiftRight<8>(rx), hn::ShiftRight<8>(rx));
+  const auto idx = hn::BitCast(d8, hn::Add(hn::Mul(i2, hn::Set(d, 0x01010101)), hn::Set(d, 0x03010200)));
+  const auto fx = twice(hn::And(rx, hn::Set(d, 255))), fy = twice(hn::And(ry, hn::Set(d, 255)));
+  const auto r0 = load_windows(d8, p);
+  for (auto& q : p) q += src.stride;
+  const auto r1 = load_windows(d8, p);
+  auto up = hn::BitCast(du16, hn::TableLookupBytes(r0, idx)), down = hn::BitCast(du16, hn::TableLookupBytes(r1, idx));
+  if (straddle) {  // pixels one row lower take rows ya + 1, ya + 2
+    for (auto& q : p) q += src.stride;
+    const auto m = hn::Eq(twice(hn::ShiftRight<8>(ry)), hn::Set(du16, 1));
+    up = hn::IfThenElse(m, down, up);
+    down = hn::IfThenElse(m, hn::BitCast(du16, hn::TableLookupBytes(load_windows(d8, p), idx)), down);
+  }
+  store_per_block(du16, lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy), out, 0, 8);
+  return true;
+}
+
+// ---- Mono8, eight pixels per block on 16-bit lanes ----------------------------------------
+//
+// One 16-byte window per row and block from the block's first left tap, taken when its eight
+// taps lie within 14 px right of it and one row below. Positions are rounded to 1/256 px relative
+// to the window (tap offset in the high byte, weight in the low byte of a 16-bit lane: inside a
+// window they are below 15 x 256, and the saturating narrowing keeps anything further out of
+// range); byte pairs (p0, p1) come out of the windows by lookup and blend on 16-bit lanes.
+template <class D16x>
+HWY_INLINE bool mono8_blocks(D16x d16, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, D16x>> X0,
+                             hn::Vec<hn::Repartition<std::int32_t, D16x>> Y0, hn::Vec<hn::Repartition<std::int32_t, D16x>> X1,
+                             hn::Vec<hn::Repartition<std::int32_t, D16x>> Y1, std::uint8_t* out) {
+  constexpr int kB = blocks_of<D16x>();
+  const hn::Repartition<std::int32_t, D16x> d32;
+  const hn::RebindToUnsigned<D16x> du16;
+  const hn::Repartition<std::uint8_t, D16x> d8;
+  using VU = hn::Vec<decltype(du16)>;
+  int bx[kB], by[kB], ya_max = 0;
+  const std::uint8_t* p[kB];
+  for (int b = 0; b < kB; ++b) {
+    const V32 x0 = block(d32, X0, b), y0 = block(d32, Y0, b), y1 = block(d32, Y1, b);
+    const int xa = (hn::GetLane(x0) + 128) >> 16;  // the block's first left tap, as tap() rounds
+    const int ya = (std::min(hn::GetLane(y0), hn::ExtractLane(y1, 3)) + 128) >> 16;
+    if (xa < 0 || xa > src.width - 16 || ya < 0 || ya > src.height - 2) return false;
+    bx[b] = 128 - xa * 65536, by[b] = 128 - ya * 65536, p[b] = src.row(ya) + xa, ya_max = std::max(ya_max, ya);
+  }
+  const auto ox = per_block(d32, bx), oy = per_block(d32, by);
+  const VU rx = hn::BitCast(du16, narrow_blocks(d32, hn::ShiftRight<8>(hn::Add(X0, ox)), hn::ShiftRight<8>(hn::Add(X1, ox))));
+  const VU ry = hn::BitCast(du16, narrow_blocks(d32, hn::ShiftRight<8>(hn::Add(Y0, oy)), hn::ShiftRight<8>(hn::Add(Y1, oy))));
+  const auto fits = hn::And(hn::Lt(hn::BitCast(d16, rx), hn::Set(d16, 15 * 256)),
+                            hn::Lt(hn::BitCast(d16, ry), hn::Set(d16, 2 * 256)));
+  const auto ahead = hn::And(hn::Gt(hn::BitCast(d16, rx), hn::Set(d16, -1)), hn::Gt(hn::BitCast(d16, ry), hn::Set(d16, -1)));
+  if (!hn::AllTrue(d16, hn::And(fits, ahead))) return false;
+  const VU i = hn::ShiftRight<8>(rx), lower = hn::ShiftRight<8>(ry);
+  const VU fx = hn::And(rx, hn::Set(du16, 0xFF)), fy = hn::And(ry, hn::Set(du16, 0xFF));
+  const bool straddle = !hn::AllTrue(du16, hn::Eq(lower, hn::Zero(du16)));
+  if (straddle && ya_max > src.height - 3) return false;
+  const auto idx = hn::BitCast(d8, hn::Or(i, hn::ShiftLeft<8>(hn::Add(i, hn::Set(du16, 1)))));
+  const auto r0 = load_windows(d8, p);
+  for (auto& q : p) q += src.stride;
+  const auto r1 = load_windows(d8, p);
+  VU up = hn::BitCast(du16, hn::TableLookupBytes(r0, idx)), down = hn::BitCast(du16, hn::TableLookupBytes(r1, idx));
+  if (straddle) {  // pixels one row lower take rows ya + 1, ya + 2
+    for (auto& q : p) q += src.stride;
+    const auto m = hn::Eq(lower, hn::Set(du16, 1));
+    up = hn::IfThenElse(m, down, up);
+    down = hn::IfThenElse(m, hn::BitCast(du16, hn::TableLookupBytes(load_windows(d8, p), idx)), down);
+  }
+  const VU v = lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
+  const hn::Rebind<std::uint8_t, D16x> d8n;
+  hn::StoreU(hn::DemoteTo(d8n, hn::BitCast(d16, v)), d8n, out);
+  return true;
+}
+
+#endif  // HWY_TARGET != HWY_SCALAR
+// NOLINTNEXTLINE(google-readability-namespace-comments)
+}  // namespace HWY_NAMESPACE
+}  // namespace rsd::dsp::rectify_detail
+HWY_AFTER_NAMESPACE();
+#endif  // RSD_DSP_RECTIFY_BILINEAR_BLOCKS_INL_H_
