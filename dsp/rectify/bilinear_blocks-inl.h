@@ -88,11 +88,16 @@ HWY_INLINE hn::Vec<hn::Repartition<std::int16_t, D32x>> narrow_blocks(D32x, hn::
 #endif
 }
 
-// (p0 (256 - f) + p1 f + 128) >> 8 on 16-bit lanes: for 8-bit pixels every term fits.
+// (p0 (256 - f) + p1 f + 128) >> 8 on 16-bit lanes, 8-bit pixels and weights. It equals
+// p0 + floor(((p1 - p0) f + 128) / 256) = p0 + floor(((p1 - p0) (f << 7) + 2^14) / 2^15): one
+// rounding multiply-high (pmulhrsw, vqrdmulh) of the signed difference, |p1 - p0| (f << 7) being
+// far from its one saturating case.
 template <class V>
 HWY_INLINE V lerp16(V p0, V p1, V f) {
   const hn::DFromV<V> d;
-  return hn::ShiftRight<8>(hn::Add(hn::Add(hn::Mul(p0, hn::Sub(hn::Set(d, 256), f)), hn::Mul(p1, f)), hn::Set(d, 128)));
+  const hn::RebindToSigned<decltype(d)> di;
+  const auto step = hn::MulFixedPoint15(hn::BitCast(di, hn::Sub(p1, p0)), hn::BitCast(di, hn::ShiftLeft<7>(f)));
+  return hn::Add(p0, hn::BitCast(d, step));
 }
 
 // The horizontal blend of 16-bit lanes holding byte pairs (p0 low, p1 high).
@@ -100,6 +105,24 @@ template <class V>
 HWY_INLINE V blend_pairs(V pairs, V f) {
   const hn::DFromV<V> d;
   return lerp16(hn::And(pairs, hn::Set(d, 0xFF)), hn::ShiftRight<8>(pairs), f);
+}
+
+// The tap pairs of every 16-bit lane on its two rows, up and down, looked up by idx (0x80: zero)
+// in the blocks' windows at p[b] (advanced past the rows read): rows ya and ya + 1, or, for the
+// lanes whose `lower` is 1 when the taps straddle a row boundary, ya + 1 and ya + 2.
+template <class DB, class VU>
+HWY_INLINE void tap_pairs(DB d8, const SamplePlane& src, const std::uint8_t** p, hn::Vec<DB> idx, bool straddle, VU lower,
+                          VU& up, VU& down) {
+  const hn::DFromV<VU> du16;
+  const auto r0 = load_windows(d8, p);
+  for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
+  up = hn::BitCast(du16, hn::TableLookupBytesOr0(r0, idx));
+  down = hn::BitCast(du16, hn::TableLookupBytesOr0(load_windows(d8, p), idx));
+  if (!straddle) return;
+  for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
+  const auto m = hn::Eq(lower, hn::Set(du16, 1));
+  up = hn::IfThenElse(m, down, up);
+  down = hn::IfThenElse(m, hn::BitCast(du16, hn::TableLookupBytesOr0(load_windows(d8, p), idx)), down);
 }
 
 // ---- RGB24, four pixels per block on 16-bit lanes --------------------------------------------
@@ -168,9 +191,10 @@ HWY_INLINE void store_per_block(DU16x, hn::Vec<DU16x> v, std::uint8_t* const* ou
 // The windows of four pixels per block, pixels of kBytes bytes: each block's 16-byte window
 // starts at its first left tap (as tap() rounds it), p[b]; rx, ry are the positions relative to
 // it in 1/256 px. false when a window would leave the image or a right tap would lie kRight
-// pixels or more right of its start, or below the next row. straddle: some taps lie one row
-// lower (p[b] then needs a third row, which is checked to exist).
-template <int kBytes, int kRight, class D32x>
+// pixels or more right of its start, or below the next row (kSlack: bytes the plane's rows have
+// fewer than kBytes a sample). straddle: some taps lie one row lower (p[b] then needs a third
+// row, which is checked to exist).
+template <int kBytes, int kRight, int kSlack = 0, class D32x>
 HWY_INLINE bool block_windows(D32x d, const SamplePlane& src, hn::Vec<D32x> X, hn::Vec<D32x> Y, const std::uint8_t** p,
                               hn::Vec<D32x>& rx, hn::Vec<D32x>& ry, bool& straddle) {
   constexpr int kB = blocks_of<D32x>();
@@ -179,7 +203,7 @@ HWY_INLINE bool block_windows(D32x d, const SamplePlane& src, hn::Vec<D32x> X, h
     const V32 x = block(d, X, b), y = block(d, Y, b);
     const int xa = (hn::GetLane(x) + 128) >> 16;
     const int ya = (std::min(hn::GetLane(y), hn::ExtractLane(y, 3)) + 128) >> 16;
-    if (xa < 0 || kBytes * xa + 16 > kBytes * src.width || ya < 0 || ya > src.height - 2) return false;
+    if (xa < 0 || kBytes * xa + 16 + kSlack > kBytes * src.width || ya < 0 || ya > src.height - 2) return false;
     bx[b] = 128 - xa * 65536, by[b] = 128 - ya * 65536, p[b] = src.row(ya) + kBytes * xa, ya_max = std::max(ya_max, ya);
   }
   rx = hn::ShiftRight<8>(hn::Add(X, per_block(d, bx)));
@@ -236,21 +260,53 @@ HWY_INLINE bool uv8_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartitio
   hn::Vec<decltype(d)> rx, ry;
   bool straddle = false;
   if (!block_windows<2, 7>(d, src, X, Y, p, rx, ry, straddle)) return false;
-  const auto twice = [&](hn::Vec<decltype(d)> v) { return hn::BitCast(du16, hn::Or(v, hn::ShiftLeft<16>(v))); };
-  const auto i2 = hn::Add(hn::ShiftRight<8>(rx), hn::ShiftRight<8>(rx));
-  const auto idx = hn::BitCast(d8, hn::Add(hn::Mul(i2, hn::Set(d, 0x01010101)), hn::Set(d, 0x03010200)));
-  const auto fx = twice(hn::And(rx, hn::Set(d, 255))), fy = twice(hn::And(ry, hn::Set(d, 255)));
-  const auto r0 = load_windows(d8, p);
-  for (auto& q : p) q += src.stride;
-  const auto r1 = load_windows(d8, p);
-  auto up = hn::BitCast(du16, hn::TableLookupBytes(r0, idx)), down = hn::BitCast(du16, hn::TableLookupBytes(r1, idx));
-  if (straddle) {  // pixels one row lower take rows ya + 1, ya + 2
-    for (auto& q : p) q += src.stride;
-    const auto m = hn::Eq(twice(hn::ShiftRight<8>(ry)), hn::Set(du16, 1));
-    up = hn::IfThenElse(m, down, up);
-    down = hn::IfThenElse(m, hn::BitCast(du16, hn::TableLookupBytes(load_windows(d8, p), idx)), down);
-  }
+  // Positions are below 2^16: copied into the high half, each pixel's U and V lanes hold them.
+  const auto x16 = hn::BitCast(du16, hn::Or(rx, hn::ShiftLeft<16>(rx))), y16 = hn::BitCast(du16, hn::Or(ry, hn::ShiftLeft<16>(ry)));
+  const auto i2 = hn::ShiftLeft<1>(hn::ShiftRight<8>(x16));  // the left tap's first byte, per lane
+  const auto uv = hn::BitCast(du16, hn::Set(d, 0x03010200));  // U: bytes 0, 2; V: bytes 1, 3
+  const auto idx = hn::BitCast(d8, hn::Add(hn::Or(i2, hn::ShiftLeft<8>(i2)), uv));
+  const auto fx = hn::And(x16, hn::Set(du16, 255)), fy = hn::And(y16, hn::Set(du16, 255));
+  hn::Vec<decltype(du16)> up, down;
+  tap_pairs(d8, src, p, idx, straddle, hn::ShiftRight<8>(y16), up, down);
   store_per_block(du16, lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy), out, 0, 8);
+  return true;
+}
+
+// ---- Strided 8-bit samples two bytes apart (YUYV's luma, an 8-bit mosaic's sites) -------------
+//
+// Four samples per block through one 16-byte window (8 samples) per row, like U V pairs but with
+// one channel: the low 16-bit half of each sample's lane looks up its taps, the high half reads
+// zeros. The four results land on every other byte of the output, merged with the bytes between
+// them, which belong to the image's other planes (the same rows of which the same thread
+// resamples: never at the same time). The window and the merged 8 bytes stay inside the row for
+// planes that start one byte into it (kSlack).
+template <class DB>
+HWY_INLINE bool s2_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
+                          hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
+  constexpr int kB = blocks_of<DB>();
+  const hn::Repartition<std::int32_t, DB> d;
+  const hn::Repartition<std::uint16_t, DB> du16;
+  const std::uint8_t* p[kB];
+  hn::Vec<decltype(d)> rx, ry;
+  bool straddle = false;
+  if (!block_windows<2, 7, 1>(d, src, X, Y, p, rx, ry, straddle)) return false;
+  const auto i2 = hn::ShiftLeft<1>(hn::ShiftRight<8>(rx));  // the left tap's byte; high halves zero
+  const auto idx = hn::BitCast(d8, hn::Or(hn::Add(hn::Or(i2, hn::ShiftLeft<8>(i2)), hn::Set(d, 0x0200)), hn::Set(d, 0x80800000)));
+  const auto fx = hn::BitCast(du16, hn::And(rx, hn::Set(d, 255))), fy = hn::BitCast(du16, hn::And(ry, hn::Set(d, 255)));
+  hn::Vec<decltype(du16)> up, down;
+  tap_pairs(d8, src, p, idx, straddle, hn::BitCast(du16, hn::ShiftRight<8>(ry)), up, down);
+  const hn::Rebind<std::uint8_t, decltype(du16)> d8n;
+  const auto bytes = hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<decltype(du16)>(), lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy)));
+  const hn::Full64<std::uint8_t> d64;
+  const auto others = hn::BitCast(d64, hn::Set(hn::Full64<std::uint16_t>(), 0xFF00));  // the odd bytes
+  for (int b = 0; b < kB; ++b) {
+    hn::Vec<decltype(d64)> ours;
+    if constexpr (kB == 1)
+      ours = bytes;
+    else
+      ours = b == 0 ? hn::LowerHalf(d64, bytes) : hn::UpperHalf(d64, bytes);
+    hn::StoreU(hn::Or(hn::And(hn::LoadU(d64, out[b]), others), ours), d64, out[b]);
+  }
   return true;
 }
 
@@ -291,16 +347,8 @@ HWY_INLINE bool mono8_blocks(D16x d16, const SamplePlane& src, hn::Vec<hn::Repar
   const bool straddle = !hn::AllTrue(du16, hn::Eq(lower, hn::Zero(du16)));
   if (straddle && ya_max > src.height - 3) return false;
   const auto idx = hn::BitCast(d8, hn::Or(i, hn::ShiftLeft<8>(hn::Add(i, hn::Set(du16, 1)))));
-  const auto r0 = load_windows(d8, p);
-  for (auto& q : p) q += src.stride;
-  const auto r1 = load_windows(d8, p);
-  VU up = hn::BitCast(du16, hn::TableLookupBytes(r0, idx)), down = hn::BitCast(du16, hn::TableLookupBytes(r1, idx));
-  if (straddle) {  // pixels one row lower take rows ya + 1, ya + 2
-    for (auto& q : p) q += src.stride;
-    const auto m = hn::Eq(lower, hn::Set(du16, 1));
-    up = hn::IfThenElse(m, down, up);
-    down = hn::IfThenElse(m, hn::BitCast(du16, hn::TableLookupBytes(load_windows(d8, p), idx)), down);
-  }
+  VU up, down;
+  tap_pairs(d8, src, p, idx, straddle, lower, up, down);
   const VU v = lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
   const hn::Rebind<std::uint8_t, D16x> d8n;
   hn::StoreU(hn::DemoteTo(d8n, hn::BitCast(d16, v)), d8n, out);

@@ -48,11 +48,25 @@ Samplers simd_samplers(SampleKind k) { return scalar_samplers(k); }
 #else
 namespace hn = hwy::HWY_NAMESPACE;
 
-// Eight pixels: positions X0, Y0 for pixels 0-3, X1, Y1 for 4-7.
+// Four samples of a strided 8-bit plane by the scalar code (the borders of s2_blocks).
+HWY_INLINE void strided_four(const SamplePlane& src, V32 X, V32 Y, std::uint8_t* out) {
+  alignas(16) std::int32_t xs[4], ys[4];
+  hn::Store(X, D32(), xs), hn::Store(Y, D32(), ys);
+  sample_row_strided<std::uint8_t>(src, xs, ys, out, 4);
+}
+
+// Eight pixels: positions X0, Y0 for pixels 0-3, X1, Y1 for 4-7; kOut bytes from one output
+// pixel to the next (C sizeof(T), or 2 for a strided 8-bit plane).
 // room: as blend_store's, after the eighth pixel.
-template <class T, int C>
+template <class T, int C, int kOut>
 HWY_INLINE void eight(const SamplePlane& src, V32 X0, V32 Y0, V32 X1, V32 Y1, std::uint8_t* out, bool room) {
-  if constexpr (C == 1 && sizeof(T) == 1) {
+  if constexpr (kOut != C * sizeof(T)) {
+    std::uint8_t* o0[1] = {out};
+    std::uint8_t* o1[1] = {out + 8};
+    if (!s2_blocks(D8(), src, X0, Y0, o0)) strided_four(src, X0, Y0, out);
+    if (!room || !s2_blocks(D8(), src, X1, Y1, o1)) strided_four(src, X1, Y1, out + 8);
+    return;
+  } else if constexpr (C == 1 && sizeof(T) == 1) {
     if (mono8_blocks(D16(), src, X0, Y0, X1, Y1, out)) return;
   } else if constexpr (C == 3) {
     std::uint8_t* o0[1] = {out};
@@ -72,9 +86,13 @@ HWY_INLINE void eight(const SamplePlane& src, V32 X0, V32 Y0, V32 X1, V32 Y1, st
 }
 
 // One wide step; room: as blend_store's, after the step's last pixel.
-template <class T, int C>
+template <class T, int C, int kOut>
 HWY_INLINE void wide(const SamplePlane& src, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1, std::uint8_t* out, bool room) {
-  if constexpr (C == 1 && sizeof(T) == 1) {
+  if constexpr (kOut != C * sizeof(T)) {  // samples 8b..8b+3 from X0, 8b+4..8b+7 from X1
+    std::uint8_t* o0[2] = {out, out + 16};
+    std::uint8_t* o1[2] = {out + 8, out + 24};
+    if (room && s2_blocks(DW8(), src, X0, Y0, o0) && s2_blocks(DW8(), src, X1, Y1, o1)) return;
+  } else if constexpr (C == 1 && sizeof(T) == 1) {
     if (mono8_blocks(DW16(), src, X0, Y0, X1, Y1, out)) return;
   } else if constexpr (C == 3) {  // pixels 8b..8b+3 from X0, 8b+4..8b+7 from X1
     std::uint8_t* o0[2] = {out, out + 24};
@@ -87,8 +105,8 @@ HWY_INLINE void wide(const SamplePlane& src, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1,
   }
   const DW32 dw;
   for (int b = 0; b < kBlocks; ++b)
-    eight<T, C>(src, block(dw, X0, b), block(dw, Y0, b), block(dw, X1, b), block(dw, Y1, b), out + 8 * b * C * sizeof(T),
-                room || b + 1 < kBlocks);
+    eight<T, C, kOut>(src, block(dw, X0, b), block(dw, Y0, b), block(dw, X1, b), block(dw, Y1, b), out + 8 * b * kOut,
+                      room || b + 1 < kBlocks);
 }
 
 // kStep positions from memory in the wide layout.
@@ -103,28 +121,37 @@ HWY_INLINE void load_wide(const std::int32_t* v, hn::Vec<D>& lo, hn::Vec<D>& hi)
   }
 }
 
+// The scalar reference for the last few pixels of a row.
+template <class T, int C, int kOut>
+void scalar_rest(const SamplePlane& src, const std::int32_t* xs, const std::int32_t* ys, std::uint8_t* out, int n) {
+  if constexpr (kOut != C * sizeof(T))
+    sample_row_strided<T>(src, xs, ys, out, n);
+  else
+    sample_row_scalar<T, C>(src, xs, ys, out, n);
+}
+
 // Positions from the row arrays (cells narrower than 16 px, cells the horizon crosses).
-template <class T, int C>
+template <class T, int C, int kOut>
 void sample_row_simd(const SamplePlane& src, const std::int32_t* xs, const std::int32_t* ys, std::uint8_t* out, int n) {
-  constexpr int kBytes = C * sizeof(T);
+  constexpr int kBytes = kOut;
   const D32 d;
   int i = 0;
   for (; i + kStep <= n; i += kStep) {
     VW32 X0, X1, Y0, Y1;
     load_wide(xs + i, X0, X1), load_wide(ys + i, Y0, Y1);
-    wide<T, C>(src, X0, Y0, X1, Y1, out + i * kBytes, i + kStep + 2 <= n);
+    wide<T, C, kOut>(src, X0, Y0, X1, Y1, out + i * kBytes, i + kStep + 2 <= n);
   }
   for (; i + 8 <= n; i += 8)
-    eight<T, C>(src, hn::LoadU(d, xs + i), hn::LoadU(d, ys + i), hn::LoadU(d, xs + i + 4), hn::LoadU(d, ys + i + 4),
+    eight<T, C, kOut>(src, hn::LoadU(d, xs + i), hn::LoadU(d, ys + i), hn::LoadU(d, xs + i + 4), hn::LoadU(d, ys + i + 4),
                 out + i * kBytes, i + 10 <= n);
-  sample_row_scalar<T, C>(src, xs + i, ys + i, out + i * kBytes, n - i);
+  scalar_rest<T, C, kOut>(src, xs + i, ys + i, out + i * kBytes, n - i);
 }
 
 // Positions generated in registers along an affine cell segment, x_k = ax + k sx: the same
 // integers as the scalar code's running sums (int32 arithmetic wraps alike).
-template <class T, int C>
+template <class T, int C, int kOut>
 void sample_affine_simd(const SamplePlane& src, const Affine& a, std::uint8_t* out, int n) {
-  constexpr int kBytes = C * sizeof(T);
+  constexpr int kBytes = kOut;
   const DW32 dw;
   const VW32 lanes = hn::Iota(dw, 0), order = hn::Add(lanes, hn::And(lanes, hn::Set(dw, ~3)));  // the wide layout
   const VW32 sx = hn::Set(dw, a.sx), sy = hn::Set(dw, a.sy);
@@ -133,7 +160,7 @@ void sample_affine_simd(const SamplePlane& src, const Affine& a, std::uint8_t* o
   const VW32 Xs = hn::Mul(hn::Set(dw, kStep), sx), Ys = hn::Mul(hn::Set(dw, kStep), sy);
   int i = 0;
   for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
-    wide<T, C>(src, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes, i + kStep + 2 <= n);
+    wide<T, C, kOut>(src, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes, i + kStep + 2 <= n);
   // The rest, fewer than kStep pixels, from pixel i on.
   alignas(64) std::int32_t xs[kStep], ys[kStep];
   const D32 d;
@@ -146,12 +173,12 @@ void sample_affine_simd(const SamplePlane& src, const Affine& a, std::uint8_t* o
     hn::Store(hn::Add(hn::Set(d, at(a.ax, a.sx, k)), hn::Mul(l4, hn::Set(d, a.sx))), d, xs + k);
     hn::Store(hn::Add(hn::Set(d, at(a.ay, a.sy, k)), hn::Mul(l4, hn::Set(d, a.sy))), d, ys + k);
   }
-  sample_row_simd<T, C>(src, xs, ys, out + i * kBytes, n - i);
+  sample_row_simd<T, C, kOut>(src, xs, ys, out + i * kBytes, n - i);
 }
 
-template <class T, int C>
+template <class T, int C, int kOut = C * sizeof(T)>
 Samplers samplers_of() {
-  return {sample_row_simd<T, C>, sample_affine_simd<T, C>};
+  return {sample_row_simd<T, C, kOut>, sample_affine_simd<T, C, kOut>};
 }
 
 Samplers simd_samplers(SampleKind k) {
@@ -160,6 +187,7 @@ Samplers simd_samplers(SampleKind k) {
     case SampleKind::U8x2: return samplers_of<std::uint8_t, 2>();
     case SampleKind::U8x3: return samplers_of<std::uint8_t, 3>();
     case SampleKind::U16: return samplers_of<std::uint16_t, 1>();
+    case SampleKind::StridedU8x2: return samplers_of<std::uint8_t, 1, 2>();
     case SampleKind::StridedU8:
     case SampleKind::StridedU16: break;
   }

@@ -101,8 +101,10 @@ void Rectifier::allocate_levels() {
   rho_.resize(most);
   cell_mode_.resize(most);
   v_start_.resize(widest);
-  for (RowScratch& b : bands_)
+  for (RowScratch& b : bands_) {
     for (auto* v : {&b.px, &b.py, &b.ix, &b.iy, &b.rho}) v->resize(widest);
+    for (auto* v : {&b.fpx, &b.fpy, &b.fix, &b.fiy}) v->resize(widest);
+  }
 }
 
 // ---- The exact map at one node ---------------------------------------------------------

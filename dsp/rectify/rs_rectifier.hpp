@@ -124,6 +124,7 @@ class Rectifier {
   };
   struct RowScratch {                    // one band's state: node values at the row, positions
     std::vector<double> px, py, ix, iy, rho;
+    std::vector<std::int32_t> fpx, fpy, fix, fiy;  // the same in 16.16, rounded once per node
     std::vector<std::int32_t> xs, ys;
     double gain = 0;                     // its node columns' largest table-error gain
   };
@@ -154,7 +155,7 @@ class Rectifier {
   RectifierConfig cfg_;
   bool simd_ = false;
   // The kernels of each kind of sample plane (bilinear_sampling.hpp's SampleKind).
-  static constexpr int kKinds = 6;
+  static constexpr int kKinds = 7;
   void (*sample_row_[kKinds])(const SamplePlane&, const std::int32_t*, const std::int32_t*, std::uint8_t*, int) = {};
   void (*sample_affine_[kKinds])(const SamplePlane&, const Affine&, std::uint8_t*, int) = {};
 

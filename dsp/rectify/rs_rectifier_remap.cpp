@@ -16,12 +16,11 @@ using namespace rectify_detail;
 
 namespace {
 
-// 16.16 start and per-pixel step of a cell segment from its two ends (one cell apart).
-Affine affine_between(double x_l, double y_l, double x_r, double y_r, int shift) {
-  const std::int32_t ax = to_fixed(x_l), ay = to_fixed(y_l);
+// 16.16 start and per-pixel step of a cell segment from its two ends (one cell apart, 16.16).
+Affine affine_between(std::int32_t ax, std::int32_t ay, std::int32_t bx, std::int32_t by, int shift) {
   const std::int64_t half = (std::int64_t{1} << shift) >> 1;
-  return {ax, ay, static_cast<std::int32_t>((std::int64_t{to_fixed(x_r)} - ax + half) >> shift),
-          static_cast<std::int32_t>((std::int64_t{to_fixed(y_r)} - ay + half) >> shift)};
+  return {ax, ay, static_cast<std::int32_t>((std::int64_t{bx} - ax + half) >> shift),
+          static_cast<std::int32_t>((std::int64_t{by} - ay + half) >> shift)};
 }
 
 void linear_segment(const Affine& a, std::int32_t* xs, std::int32_t* ys, int count) {
@@ -42,16 +41,22 @@ int Rectifier::interpolate_row(double y, RowScratch& s) const {
   const std::size_t top = static_cast<std::size_t>(j) * L.nx, bot = top + L.nx;
   auto lerp = [wy](const std::vector<double>& v, std::size_t a, std::size_t b) { return v[a] + wy * (v[b] - v[a]); };
   for (int i = 0; i < L.nx; ++i) {
-    if (plane_) s.px[i] = lerp(plane_b_.x, top + i, bot + i), s.py[i] = lerp(plane_b_.y, top + i, bot + i);
-    if (need_infinite_) s.ix[i] = lerp(inf_b_.x, top + i, bot + i), s.iy[i] = lerp(inf_b_.y, top + i, bot + i);
-    s.rho[i] = lerp(rho_, top + i, bot + i);
+    if (plane_) {
+      s.px[i] = lerp(plane_b_.x, top + i, bot + i), s.py[i] = lerp(plane_b_.y, top + i, bot + i);
+      s.fpx[i] = to_fixed(s.px[i]), s.fpy[i] = to_fixed(s.py[i]);
+    }
+    if (need_infinite_) {
+      s.ix[i] = lerp(inf_b_.x, top + i, bot + i), s.iy[i] = lerp(inf_b_.y, top + i, bot + i);
+      s.fix[i] = to_fixed(s.ix[i]), s.fiy[i] = to_fixed(s.iy[i]);
+    }
+    if (plane_ && need_infinite_) s.rho[i] = lerp(rho_, top + i, bot + i);  // picks the branch in kink cells only
   }
   return j;
 }
 
 Rectifier::Affine Rectifier::cell_affine(int i, std::uint8_t mode, const RowScratch& s) const {
-  const std::vector<double>& X = mode == kPlane ? s.px : s.ix;
-  const std::vector<double>& Y = mode == kPlane ? s.py : s.iy;
+  const std::vector<std::int32_t>& X = mode == kPlane ? s.fpx : s.fix;
+  const std::vector<std::int32_t>& Y = mode == kPlane ? s.fpy : s.fiy;
   return affine_between(X[i], Y[i], X[i + 1], Y[i + 1], levels_[level_].shift);
 }
 
@@ -59,19 +64,24 @@ Rectifier::Affine Rectifier::cell_affine(int i, std::uint8_t mode, const RowScra
 // number of pixels, so every half-resolution plane has half of them in each).
 void Rectifier::cell_columns(int i, const SamplePlane& g, int& c0, int& c1) const {
   const int sp = levels_[level_].spacing;
-  c0 = i * sp / g.scale_x, c1 = std::min((i + 1) * sp / g.scale_x, g.width);
+  const int shift = g.scale_x - 1;  // scale 1 or 2: a shift, not a division, per cell
+  c0 = (i * sp) >> shift, c1 = std::min(((i + 1) * sp) >> shift, g.width);
 }
 
 // Cell i's affine segment at plane g's samples from c0 on, in the plane's own coordinates: the
 // image position of sample c is x = scale_x c + offset_x, e pixels into the segment at c0, and
-// a source position P in image pixels is sample (P - offset) / scale of the source plane.
+// a source position P in image pixels is sample (P - offset) / scale of the source plane. In
+// integers (offsets are whole or half pixels, scales 1 or 2), rounded to nearest: this runs per
+// cell of every chroma or mosaic row.
 Rectifier::Affine Rectifier::plane_affine(int i, std::uint8_t mode, const SamplePlane& g, int c0, const RowScratch& s) const {
   const Affine a = cell_affine(i, mode, s);
   if (g.scale_x == 1 && g.scale_y == 1) return a;  // (unit planes have no offset)
-  const double e = g.scale_x * c0 + g.offset_x - i * levels_[level_].spacing;
-  auto fixed = [](double v) { return static_cast<std::int32_t>(std::lround(v)); };
-  return {fixed((a.ax + e * a.sx - g.offset_x * kFix) / g.scale_x), fixed((a.ay + e * a.sy - g.offset_y * kFix) / g.scale_y),
-          a.sx, fixed(static_cast<double>(a.sy) * g.scale_x / g.scale_y)};
+  const auto ox2 = static_cast<std::int64_t>(2 * g.offset_x), oy2 = static_cast<std::int64_t>(2 * g.offset_y);
+  const std::int64_t e2 = 2 * (static_cast<std::int64_t>(g.scale_x) * c0 - static_cast<std::int64_t>(i) * levels_[level_].spacing) + ox2;
+  // floor((num + d / 2) / d) for d = 2 scale, a power of two: an arithmetic shift.
+  auto divide = [](std::int64_t num, int scale) { return static_cast<std::int32_t>((num + scale) >> (scale == 1 ? 1 : 2)); };
+  return {divide(2 * std::int64_t{a.ax} + e2 * a.sx - ox2 * 65536, g.scale_x),
+          divide(2 * std::int64_t{a.ay} + e2 * a.sy - oy2 * 65536, g.scale_y), a.sx, a.sy * (g.scale_x / g.scale_y)};
 }
 
 // Source positions of plane g's samples on image row y into s.xs, s.ys (16.16 in the plane's

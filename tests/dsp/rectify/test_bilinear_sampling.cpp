@@ -199,49 +199,67 @@ TEST_F(EveryTarget, ChromaOutsideThePlaneIsNeutralGrey) {
   }
 }
 
-// A strided plane (a Bayer site: every other sample of every other row; YUYV's U V: two
-// channels two bytes apart, four bytes per pair) gives the values the packed plane holding the
-// same samples gives, written at the strided places and nowhere else.
-TEST(StridedPlanes, SampleLikeThePackedPlaneOfTheirSamples) {
+// A strided plane (a Bayer site: every other sample of every other row, starting at byte 0 or
+// 1 of its pair; YUYV's luma; YUYV's U V: two channels two bytes apart, four bytes per pair)
+// gives the values the packed plane holding the same samples gives, written at the strided
+// places and nowhere else, on every SIMD target. The source's last row ends with the plane's
+// last sample and the output with its last byte (the sanitizer tree catches any access beyond).
+TEST_F(EveryTarget, StridedPlanesSampleLikeThePackedPlaneOfTheirSamples) {
   struct Case {
     const Kind& packed;
-    int step, channel_step;
+    int step, channel_step, offset;
     SampleKind strided;
   };
-  const Case cases[] = {{kPacked[0], 2, 1, SampleKind::StridedU8},
-                        {kPacked[3], 4, 2, SampleKind::StridedU16},
-                        {kPacked[1], 4, 2, SampleKind::StridedU8}};
-  for (const Case& c : cases) {
-    const int w = 37, h = 15;
-    const Source packed = random_source(w, h, c.packed, 0, 11);
-    const int b = c.packed.bytes, ch = c.packed.channels;
-    std::vector<std::uint8_t> mosaic(static_cast<std::size_t>(2 * h) * w * c.step, 0x5A);
-    SamplePlane strided = packed.view;
-    strided.data = mosaic.data(), strided.stride = 2 * static_cast<std::ptrdiff_t>(w) * c.step;
-    strided.step = c.step, strided.channel_step = c.channel_step;
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x)
-        for (int k = 0; k < ch; ++k)
-          std::memcpy(strided.row(y) + x * c.step + k * c.channel_step, packed.view.row(y) + (x * ch + k) * b, b);
-    ASSERT_EQ(sample_kind(strided), c.strided);
-    const Samplers ref = scalar_samplers(c.packed.kind), str = scalar_samplers(c.strided);
-    std::mt19937 rng(29);
-    for (int trial = 0; trial < 200; ++trial) {
-      const int n = 1 + trial % 40;
-      const Affine a = random_affine(rng, w, h);
-      std::vector<std::uint8_t> want(static_cast<std::size_t>(n) * ch * b), got(static_cast<std::size_t>(n + 1) * c.step, kGuard);
-      ref.affine(packed.view, a, want.data(), n);
-      str.affine(strided, a, got.data(), n);
-      for (int i = 0; i < n; ++i)
-        for (int k = 0; k < ch; ++k)
-          ASSERT_EQ(std::memcmp(got.data() + i * c.step + k * c.channel_step, want.data() + (i * ch + k) * b, b), 0)
-              << c.packed.name << " trial " << trial << " sample " << i;
-      for (std::size_t i = 0; i < got.size(); ++i) {  // bytes of the other planes untouched
-        const int in_sample = static_cast<int>(i % c.step);
-        bool ours = false;
-        for (int k = 0; k < ch; ++k) ours |= in_sample >= k * c.channel_step && in_sample < k * c.channel_step + b;
-        if (!ours || static_cast<int>(i) >= n * c.step) {
-          ASSERT_EQ(got[i], kGuard) << c.packed.name << " byte " << i;
+  const Case cases[] = {{kPacked[0], 2, 1, 0, SampleKind::StridedU8x2},
+                        {kPacked[0], 2, 1, 1, SampleKind::StridedU8x2},
+                        {kPacked[3], 4, 2, 0, SampleKind::StridedU16},
+                        {kPacked[3], 4, 2, 2, SampleKind::StridedU16},
+                        {kPacked[1], 4, 2, 1, SampleKind::StridedU8}};
+  for (std::int64_t target : simd_targets()) {
+    force_simd_target(target);
+    for (const Case& c : cases) {
+      const int w = 37, h = 15, b = c.packed.bytes, ch = c.packed.channels;
+      const Source packed = random_source(w, h, c.packed, 0, 11);
+      const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(w) * c.step, stride = 2 * row;  // every other row
+      std::vector<std::uint8_t> mosaic(static_cast<std::size_t>(stride * (h - 1) + row - (c.step - c.offset - (ch - 1) * c.channel_step - b)), 0x5A);
+      SamplePlane strided = packed.view;
+      strided.data = mosaic.data() + c.offset, strided.stride = stride;
+      strided.step = c.step, strided.channel_step = c.channel_step;
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+          for (int k = 0; k < ch; ++k)
+            std::memcpy(strided.row(y) + x * c.step + k * c.channel_step, packed.view.row(y) + (x * ch + k) * b, b);
+      ASSERT_EQ(sample_kind(strided), c.strided);
+      const Samplers ref = scalar_samplers(c.packed.kind), simd = dispatched_samplers(c.strided);
+      const std::string what = target_name(target) + " " + c.packed.name + " step " + std::to_string(c.step) + " offset " +
+                               std::to_string(c.offset);
+      std::mt19937 rng(29);
+      for (int trial = 0; trial < 300; ++trial) {
+        const int n = 1 + trial % 40;
+        const bool per_pixel = trial % 2;
+        const Affine a = random_affine(rng, w, h);
+        const Positions q = random_positions(rng, n, w, h);
+        std::vector<std::uint8_t> want(static_cast<std::size_t>(n) * ch * b), got(static_cast<std::size_t>(n) * c.step, kGuard);
+        std::uint8_t* out = got.data() + c.offset;
+        if (per_pixel) {
+          ref.row(packed.view, q.xs.data(), q.ys.data(), want.data(), n);
+          simd.row(strided, q.xs.data(), q.ys.data(), out, n);
+        } else {
+          ref.affine(packed.view, a, want.data(), n);
+          simd.affine(strided, a, out, n);
+        }
+        for (int i = 0; i < n; ++i)
+          for (int k = 0; k < ch; ++k)
+            ASSERT_EQ(std::memcmp(out + i * c.step + k * c.channel_step, want.data() + (i * ch + k) * b, b), 0)
+                << what << " trial " << trial << " sample " << i;
+        for (std::size_t i = 0; i < got.size(); ++i) {  // bytes of the other planes untouched
+          const int in_sample = static_cast<int>((i + c.step - c.offset) % c.step);
+          bool ours = static_cast<int>(i) >= c.offset;
+          bool any = false;
+          for (int k = 0; k < ch; ++k) any |= in_sample >= k * c.channel_step && in_sample < k * c.channel_step + b;
+          if (!(ours && any)) {
+            ASSERT_EQ(got[i], kGuard) << what << " byte " << i;
+          }
         }
       }
     }
