@@ -46,12 +46,6 @@ std::string format_names() {
   return s;
 }
 
-bool is_bayer(PixelFormat f) { return f >= PixelFormat::BayerRggb8; }
-bool is_yuv(PixelFormat f) { return f == PixelFormat::Yuyv || subsampled_420(f); }
-int channels(PixelFormat f) { return f == PixelFormat::Rgb8 ? 3 : 1; }
-
-int sample_bytes(PixelFormat f) { return f == PixelFormat::Mono16 || f >= PixelFormat::BayerRggb16 ? 2 : 1; }
-
 std::size_t row_bytes(PixelFormat f, int width) {
   const std::size_t w = static_cast<std::size_t>(width);
   if (f == PixelFormat::Yuyv) return 2 * w;

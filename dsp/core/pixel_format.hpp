@@ -30,12 +30,13 @@ std::optional<PixelFormat> parse_format_name(std::string_view name);
 // Every format's name, comma separated (for error messages and --help).
 std::string format_names();
 
-bool is_bayer(PixelFormat f);
-bool is_yuv(PixelFormat f);
+// Inline: the renderer asks per texel.
+inline bool is_bayer(PixelFormat f) { return f >= PixelFormat::BayerRggb8; }
+inline bool is_yuv(PixelFormat f) { return f == PixelFormat::Yuyv || f == PixelFormat::Nv12 || f == PixelFormat::I420; }
 // Colour samples at a pixel of the first plane (3 for Rgb8, 1 otherwise).
-int channels(PixelFormat f);
+inline int channels(PixelFormat f) { return f == PixelFormat::Rgb8 ? 3 : 1; }
 // Bytes of one sample (2 for Mono16 and the 16-bit Bayer formats).
-int sample_bytes(PixelFormat f);
+inline int sample_bytes(PixelFormat f) { return f == PixelFormat::Mono16 || f >= PixelFormat::BayerRggb16 ? 2 : 1; }
 // Bytes of one row of the first plane, width pixels wide.
 std::size_t row_bytes(PixelFormat f, int width);
 // Rows of the buffer at stride `stride` (chroma planes included): h, or 3h/2 for 4:2:0.

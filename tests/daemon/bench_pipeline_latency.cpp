@@ -38,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include "dsp/core/image_planes.hpp"
 #include "daemon/frame_rectifier.hpp"
 #include "daemon/pipeline.hpp"
 #include "drivers/sim_source.hpp"
@@ -83,6 +84,7 @@ class ReplaySource final : public drivers::CameraSource {
       }
     const dsp::RowTiming t = sim_.timing();
     ready_after_ns_ = static_cast<int64_t>((t.frame_readout_s() + t.exposure_s) * 1e9);
+    velocity_period_ns_ = static_cast<int64_t>(1e9 / sim_.config().velocity_rate_hz + 0.5);
   }
   drivers::FrameFormat format() const override { return sim_.format(); }
   dsp::RowTiming timing() const override { return sim_.timing(); }
@@ -105,13 +107,13 @@ class ReplaySource final : public drivers::CameraSource {
     // A real camera does not wait for a late reader: frames completed meanwhile are lost.
     const uint64_t latest = static_cast<uint64_t>((now - t0_ns_ - ready_after_ns_) / period_ns_);
     if (latest > next_) skipped_.fetch_add(latest - next_, std::memory_order_relaxed), next_ = latest;
-    const dsp::Image& src = ring_[next_ % ring_.size()];
-    const size_t row_bytes = static_cast<size_t>(src.stride());
-    for (int y = 0; y < dst.height; ++y) std::memcpy(dst.row(y), src.data.data() + y * row_bytes, row_bytes);
+    dsp::copy_image(ring_[next_ % ring_.size()].view(), dst);  // every plane (NV12's chroma too)
     meta.first_row_ns = t0_ns_ + static_cast<int64_t>(next_) * period_ns_;
     meta.sequence = next_;
     meta.exposure_s = sim_.timing().exposure_s;
-    emit_velocity_until(meta.first_row_ns + ready_after_ns_);
+    // As the live simulator does: through the frame's last row and one sample beyond, so that
+    // the rectifier has the samples covering the frame without waiting (imu_wait_ms).
+    emit_velocity_until(meta.first_row_ns + ready_after_ns_ + velocity_period_ns_);
     ++next_;
     return drivers::CaptureStatus::Frame;
   }
@@ -138,7 +140,7 @@ class ReplaySource final : public drivers::CameraSource {
   std::vector<drivers::VelocitySample> velocity_;
   drivers::VelocitySink sink_;
   double render_ms_ = 0;
-  int64_t period_ns_ = 0, cycle_ns_ = 0, ready_after_ns_ = 0, t0_ns_ = 0;
+  int64_t period_ns_ = 0, cycle_ns_ = 0, ready_after_ns_ = 0, t0_ns_ = 0, velocity_period_ns_ = 0;
   uint64_t next_ = 0, lap_ = 0;
   size_t vel_i_ = 0;
   std::atomic<uint64_t> skipped_{0};
