@@ -28,19 +28,15 @@ void copy_image(const ImageView& src, const ImageView& dst) {
     for (int y = 0; y < s[p].rows; ++y) std::memcpy(d[p].data + y * d[p].stride, s[p].data + y * s[p].stride, s[p].row_bytes);
 }
 
-void fill_black(const ImageView& v) {
-  SamplePlane planes[4];
-  const int n = sample_planes(v, planes);
-  for (int p = 0; p < n; ++p) {
-    const SamplePlane& q = planes[p];
-    for (int y = 0; y < q.height; ++y)
-      for (int x = 0; x < q.width; ++x)
-        for (int c = 0; c < q.channels; ++c) {
-          std::uint8_t* s = q.row(y) + x * q.step + c * q.channel_step;
-          s[0] = static_cast<std::uint8_t>(q.fill);
-          if (q.sample_bytes == 2) s[1] = static_cast<std::uint8_t>(q.fill >> 8);
-        }
-  }
+void fill_samples(const SamplePlane& p, std::uint8_t* at, int n) {
+  if (p.packed() && (p.fill == 0 || p.sample_bytes == 1))
+    return static_cast<void>(std::memset(at, p.fill, static_cast<std::size_t>(n) * p.step));
+  for (int k = 0; k < n; ++k)
+    for (int c = 0; c < p.channels; ++c) {
+      std::uint8_t* q = at + k * p.step + c * p.channel_step;
+      q[0] = static_cast<std::uint8_t>(p.fill);
+      if (p.sample_bytes == 2) q[1] = static_cast<std::uint8_t>(p.fill >> 8);
+    }
 }
 
 namespace {

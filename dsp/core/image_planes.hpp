@@ -28,9 +28,6 @@ int memory_planes(const ImageView& v, MemoryPlane out[3]);
 // Copies every plane of src into dst (same size and format; strides may differ).
 void copy_image(const ImageView& src, const ImageView& dst);
 
-// Fills the image with black: zero luma, neutral (128) chroma.
-void fill_black(const ImageView& v);
-
 struct SamplePlane {
   std::uint8_t* data = nullptr;   // sample (0, 0)
   int width = 0, height = 0;      // in samples
@@ -52,5 +49,9 @@ struct SamplePlane {
 
 // At most four; returns how many.
 int sample_planes(const ImageView& v, SamplePlane out[4]);
+
+// n samples of plane p from `at` (a sample's first byte) set to the plane's fill: black, or
+// neutral chroma. The bytes between them (other planes') are left alone.
+void fill_samples(const SamplePlane& p, std::uint8_t* at, int n);
 
 }  // namespace rsd::dsp

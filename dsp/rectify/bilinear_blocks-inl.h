@@ -9,6 +9,7 @@
 #endif
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 
 #include "hwy/highway.h"
@@ -317,6 +318,46 @@ HWY_INLINE bool s2_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition
 // to the window (tap offset in the high byte, weight in the low byte of a 16-bit lane: inside a
 // window they are below 15 x 256, and the saturating narrowing keeps anything further out of
 // range); byte pairs (p0, p1) come out of the windows by lookup and blend on 16-bit lanes.
+
+// The positions relative to each block's window origin (xa[b], ya[b]), narrowed to 16 bits.
+template <class D16x>
+HWY_INLINE void mono8_relative(D16x d16, hn::Vec<hn::Repartition<std::int32_t, D16x>> X0,
+                               hn::Vec<hn::Repartition<std::int32_t, D16x>> Y0, hn::Vec<hn::Repartition<std::int32_t, D16x>> X1,
+                               hn::Vec<hn::Repartition<std::int32_t, D16x>> Y1, const int* xa, const int* ya,
+                               hn::Vec<hn::RebindToUnsigned<D16x>>& rx, hn::Vec<hn::RebindToUnsigned<D16x>>& ry) {
+  constexpr int kB = blocks_of<D16x>();
+  const hn::Repartition<std::int32_t, D16x> d32;
+  const hn::RebindToUnsigned<D16x> du16;
+  int bx[kB], by[kB];
+  for (int b = 0; b < kB; ++b) bx[b] = 128 - xa[b] * 65536, by[b] = 128 - ya[b] * 65536;
+  const auto ox = per_block(d32, bx), oy = per_block(d32, by);
+  (void)d16;
+  rx = hn::BitCast(du16, narrow_blocks(d32, hn::ShiftRight<8>(hn::Add(X0, ox)), hn::ShiftRight<8>(hn::Add(X1, ox))));
+  ry = hn::BitCast(du16, narrow_blocks(d32, hn::ShiftRight<8>(hn::Add(Y0, oy)), hn::ShiftRight<8>(hn::Add(Y1, oy))));
+}
+
+// The taps looked up in the windows at rows ya[b] (and the next one or two) and blended.
+template <class D16x>
+HWY_INLINE void mono8_blend(D16x d16, const SamplePlane& src, const int* xa, const int* ya,
+                            hn::Vec<hn::RebindToUnsigned<D16x>> rx, hn::Vec<hn::RebindToUnsigned<D16x>> ry, bool straddle,
+                            std::uint8_t* out) {
+  const hn::RebindToUnsigned<D16x> du16;
+  const hn::Repartition<std::uint8_t, D16x> d8;
+  using VU = hn::Vec<decltype(du16)>;
+  const std::uint8_t* p[blocks_of<D16x>()];
+  for (int b = 0; b < blocks_of<D16x>(); ++b) p[b] = src.row(ya[b]) + xa[b];
+  const VU i = hn::ShiftRight<8>(rx), lower = hn::ShiftRight<8>(ry);
+  const VU fx = hn::And(rx, hn::Set(du16, 0xFF)), fy = hn::And(ry, hn::Set(du16, 0xFF));
+  const auto idx = hn::BitCast(d8, hn::Or(i, hn::ShiftLeft<8>(hn::Add(i, hn::Set(du16, 1)))));
+  VU up, down;
+  tap_pairs(d8, src, p, idx, straddle, lower, up, down);
+  const VU v = lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
+  const hn::Rebind<std::uint8_t, D16x> d8n;
+  hn::StoreU(hn::DemoteTo(d8n, hn::BitCast(d16, v)), d8n, out);
+}
+
+// Any positions: each block's origin read from its lanes, every lane checked; false (nothing
+// written) when a block's taps do not fit its windows.
 template <class D16x>
 HWY_INLINE bool mono8_blocks(D16x d16, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, D16x>> X0,
                              hn::Vec<hn::Repartition<std::int32_t, D16x>> Y0, hn::Vec<hn::Repartition<std::int32_t, D16x>> X1,
@@ -324,35 +365,59 @@ HWY_INLINE bool mono8_blocks(D16x d16, const SamplePlane& src, hn::Vec<hn::Repar
   constexpr int kB = blocks_of<D16x>();
   const hn::Repartition<std::int32_t, D16x> d32;
   const hn::RebindToUnsigned<D16x> du16;
-  const hn::Repartition<std::uint8_t, D16x> d8;
-  using VU = hn::Vec<decltype(du16)>;
-  int bx[kB], by[kB], ya_max = 0;
-  const std::uint8_t* p[kB];
+  int xa[kB], ya[kB], ya_max = 0;
   for (int b = 0; b < kB; ++b) {
     const V32 x0 = block(d32, X0, b), y0 = block(d32, Y0, b), y1 = block(d32, Y1, b);
-    const int xa = (hn::GetLane(x0) + 128) >> 16;  // the block's first left tap, as tap() rounds
-    const int ya = (std::min(hn::GetLane(y0), hn::ExtractLane(y1, 3)) + 128) >> 16;
-    if (xa < 0 || xa > src.width - 16 || ya < 0 || ya > src.height - 2) return false;
-    bx[b] = 128 - xa * 65536, by[b] = 128 - ya * 65536, p[b] = src.row(ya) + xa, ya_max = std::max(ya_max, ya);
+    xa[b] = (hn::GetLane(x0) + 128) >> 16;  // the block's first left tap, as tap() rounds
+    ya[b] = (std::min(hn::GetLane(y0), hn::ExtractLane(y1, 3)) + 128) >> 16;
+    if (xa[b] < 0 || xa[b] > src.width - 16 || ya[b] < 0 || ya[b] > src.height - 2) return false;
+    ya_max = std::max(ya_max, ya[b]);
   }
-  const auto ox = per_block(d32, bx), oy = per_block(d32, by);
-  const VU rx = hn::BitCast(du16, narrow_blocks(d32, hn::ShiftRight<8>(hn::Add(X0, ox)), hn::ShiftRight<8>(hn::Add(X1, ox))));
-  const VU ry = hn::BitCast(du16, narrow_blocks(d32, hn::ShiftRight<8>(hn::Add(Y0, oy)), hn::ShiftRight<8>(hn::Add(Y1, oy))));
+  hn::Vec<decltype(du16)> rx, ry;
+  mono8_relative(d16, X0, Y0, X1, Y1, xa, ya, rx, ry);
   const auto fits = hn::And(hn::Lt(hn::BitCast(d16, rx), hn::Set(d16, 15 * 256)),
                             hn::Lt(hn::BitCast(d16, ry), hn::Set(d16, 2 * 256)));
   const auto ahead = hn::And(hn::Gt(hn::BitCast(d16, rx), hn::Set(d16, -1)), hn::Gt(hn::BitCast(d16, ry), hn::Set(d16, -1)));
   if (!hn::AllTrue(d16, hn::And(fits, ahead))) return false;
-  const VU i = hn::ShiftRight<8>(rx), lower = hn::ShiftRight<8>(ry);
-  const VU fx = hn::And(rx, hn::Set(du16, 0xFF)), fy = hn::And(ry, hn::Set(du16, 0xFF));
-  const bool straddle = !hn::AllTrue(du16, hn::Eq(lower, hn::Zero(du16)));
+  const bool straddle = !hn::AllTrue(du16, hn::Lt(ry, hn::Set(du16, 256)));
   if (straddle && ya_max > src.height - 3) return false;
-  const auto idx = hn::BitCast(d8, hn::Or(i, hn::ShiftLeft<8>(hn::Add(i, hn::Set(du16, 1)))));
-  VU up, down;
-  tap_pairs(d8, src, p, idx, straddle, lower, up, down);
-  const VU v = lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
-  const hn::Rebind<std::uint8_t, D16x> d8n;
-  hn::StoreU(hn::DemoteTo(d8n, hn::BitCast(d16, v)), d8n, out);
+  mono8_blend(d16, src, xa, ya, rx, ry, straddle, out);
   return true;
+}
+
+// An affine segment known to fit (affine_fits): each block's origin and whether its taps
+// straddle a row boundary come from the segment's positions in scalars, as tap() rounds them;
+// the same integers as mono8_blocks without its per-lane checks. k0: the step's first pixel.
+template <class D16x>
+HWY_INLINE void mono8_affine_blocks(D16x d16, const SamplePlane& src, const Affine& a, int k0,
+                                    hn::Vec<hn::Repartition<std::int32_t, D16x>> X0, hn::Vec<hn::Repartition<std::int32_t, D16x>> Y0,
+                                    hn::Vec<hn::Repartition<std::int32_t, D16x>> X1, hn::Vec<hn::Repartition<std::int32_t, D16x>> Y1,
+                                    std::uint8_t* out) {
+  constexpr int kB = blocks_of<D16x>();
+  const hn::RebindToUnsigned<D16x> du16;
+  int xa[kB], ya[kB];
+  bool straddle = false;
+  for (int b = 0; b < kB; ++b) {
+    const std::int64_t k = k0 + 8 * b, x = a.ax + k * a.sx, y0 = a.ay + k * a.sy, y7 = y0 + 7 * std::int64_t{a.sy};
+    xa[b] = static_cast<int>((x + 128) >> 16);
+    ya[b] = static_cast<int>((std::min(y0, y7) + 128) >> 16);
+    straddle |= ((std::max(y0, y7) + 128) >> 16) != ya[b];
+  }
+  hn::Vec<decltype(du16)> rx, ry;
+  mono8_relative(d16, X0, Y0, X1, Y1, xa, ya, rx, ry);
+  mono8_blend(d16, src, xa, ya, rx, ry, straddle, out);
+}
+
+// Whether every block of kStep-pixel steps over pixels [0, n) of segment a fits its windows
+// without checks: the taps move right by at most 1.75 px a pixel (a block's eight span at most
+// 13.25 px of a 16-byte window) and by less than 1/8 row a pixel (at most two rows), and every
+// tap of the segment lies at least 16 px from the right edge and 3 rows from the bottom.
+inline bool affine_fits(const SamplePlane& src, const Affine& a, int n) {
+  if (a.sx < 0 || a.sx > 7 * 65536 / 4 || std::abs(std::int64_t{a.sy}) * 8 >= 65536 || n < 1) return false;
+  const std::int64_t last = n - 1;
+  const std::int64_t x0 = a.ax, x1 = a.ax + last * a.sx, y0 = a.ay, y1 = a.ay + last * a.sy;
+  return ((x0 + 128) >> 16) >= 0 && ((x1 + 128) >> 16) <= src.width - 16 && ((std::min(y0, y1) + 128) >> 16) >= 0 &&
+         ((std::max(y0, y1) + 128) >> 16) <= src.height - 3;
 }
 
 #endif  // HWY_TARGET != HWY_SCALAR

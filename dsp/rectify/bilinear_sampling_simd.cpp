@@ -159,8 +159,14 @@ void sample_affine_simd(const SamplePlane& src, const Affine& a, std::uint8_t* o
   const VW32 X4 = hn::Mul(hn::Set(dw, 4), sx), Y4 = hn::Mul(hn::Set(dw, 4), sy);
   const VW32 Xs = hn::Mul(hn::Set(dw, kStep), sx), Ys = hn::Mul(hn::Set(dw, kStep), sy);
   int i = 0;
+  if constexpr (C == 1 && sizeof(T) == 1 && kOut == 1) {  // Mono8: most segments need no checks
+    if (n >= kStep && affine_fits(src, a, n / kStep * kStep))
+      for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
+        mono8_affine_blocks(DW16(), src, a, i, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i);
+  }
   for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
     wide<T, C, kOut>(src, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes, i + kStep + 2 <= n);
+  if (i == n) return;  // (cells are whole steps, as a rule)
   // The rest, fewer than kStep pixels, from pixel i on.
   alignas(64) std::int32_t xs[kStep], ys[kStep];
   const D32 d;

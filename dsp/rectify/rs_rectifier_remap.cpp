@@ -116,21 +116,6 @@ void Rectifier::kink_segment(int i, int c0, int c1, const SamplePlane& g, RowScr
   }
 }
 
-namespace {
-
-// n samples of a plane set to its fill (black, or neutral chroma).
-void fill_samples(const SamplePlane& p, std::uint8_t* out, int n) {
-  if (p.packed() && (p.fill == 0 || p.sample_bytes == 1)) return static_cast<void>(std::memset(out, p.fill, static_cast<std::size_t>(n) * p.step));
-  for (int k = 0; k < n; ++k)
-    for (int c = 0; c < p.channels; ++c) {
-      std::uint8_t* q = out + k * p.step + c * p.channel_step;
-      q[0] = static_cast<std::uint8_t>(p.fill);
-      if (p.sample_bytes == 2) q[1] = static_cast<std::uint8_t>(p.fill >> 8);
-    }
-}
-
-}  // namespace
-
 // Sample rows [j0, j1) of one plane with one band's scratch. Cells of 16 px and more are sampled
 // straight from their affine positions; narrower cells go through the row arrays, so that the
 // kernels still see runs of 16 pixels.
