@@ -244,69 +244,54 @@ HWY_INLINE bool rgb8_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartiti
   return true;
 }
 
-// ---- U V pairs (NV12's chroma), four pixels per block on 16-bit lanes ------------------------
+// ---- Two bytes a sample: U V pairs (NV12's chroma), or 8-bit samples two bytes apart (YUYV's
+// luma, an 8-bit mosaic's sites); four per block on 16-bit lanes ------------------------------
 //
-// One 16-byte window (8 pairs) per row and block from the block's first left tap, taken when its
-// four taps lie within 6 pairs right of it and one row below. Each pixel's 32-bit lane splits
-// into two 16-bit lanes, its U and its V: the lookup pattern 2i, 2i + 2, 2i + 1, 2i + 3 puts the
-// U taps in the low lane and the V taps in the high one, and the weights are doubled alike (no
-// narrowing: the lanes stay where the positions were).
-template <class DB>
-HWY_INLINE bool uv8_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
-                           hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
+// One 16-byte window (8 samples) per row and block from the block's first left tap, taken when
+// its four taps lie within 6 samples right of it and one row below. Each sample's 32-bit lane
+// splits into two 16-bit lanes:
+// - U V pairs (kPairs): its U and its V. Positions (below 2^16) are copied into the high half,
+//   and the lookup pattern 2i, 2i + 2, 2i + 1, 2i + 3 puts the U taps in the low lane and the V
+//   taps in the high one;
+// - one channel: the low lane looks up the taps 2i, 2i + 2, the high lane reads zeros, and the
+//   four results land on every other output byte, merged with the bytes between them, which
+//   belong to the image's other planes (the same rows of which the same thread resamples, never
+//   at the same time). The window and the merged 8 bytes stay inside the row for planes that
+//   start one byte into it (block_windows' slack).
+template <bool kPairs, class DB>
+HWY_INLINE bool two_byte_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
+                                hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
   constexpr int kB = blocks_of<DB>();
   const hn::Repartition<std::int32_t, DB> d;
   const hn::Repartition<std::uint16_t, DB> du16;
   const std::uint8_t* p[kB];
   hn::Vec<decltype(d)> rx, ry;
   bool straddle = false;
-  if (!block_windows<2, 7>(d, src, X, Y, p, rx, ry, straddle)) return false;
-  // Positions are below 2^16: copied into the high half, each pixel's U and V lanes hold them.
-  const auto x16 = hn::BitCast(du16, hn::Or(rx, hn::ShiftLeft<16>(rx))), y16 = hn::BitCast(du16, hn::Or(ry, hn::ShiftLeft<16>(ry)));
+  if (!block_windows<2, 7, kPairs ? 0 : 1>(d, src, X, Y, p, rx, ry, straddle)) return false;
+  if constexpr (kPairs) rx = hn::Or(rx, hn::ShiftLeft<16>(rx)), ry = hn::Or(ry, hn::ShiftLeft<16>(ry));
+  const auto x16 = hn::BitCast(du16, rx), y16 = hn::BitCast(du16, ry);
   const auto i2 = hn::ShiftLeft<1>(hn::ShiftRight<8>(x16));  // the left tap's first byte, per lane
-  const auto uv = hn::BitCast(du16, hn::Set(d, 0x03010200));  // U: bytes 0, 2; V: bytes 1, 3
-  const auto idx = hn::BitCast(d8, hn::Add(hn::Or(i2, hn::ShiftLeft<8>(i2)), uv));
+  const auto pattern = hn::BitCast(du16, hn::Set(d, kPairs ? 0x03010200 : static_cast<std::int32_t>(0x80800200u)));
+  const auto idx = hn::BitCast(d8, hn::Add(hn::Or(i2, hn::ShiftLeft<8>(i2)), pattern));
   const auto fx = hn::And(x16, hn::Set(du16, 255)), fy = hn::And(y16, hn::Set(du16, 255));
   hn::Vec<decltype(du16)> up, down;
   tap_pairs(d8, src, p, idx, straddle, hn::ShiftRight<8>(y16), up, down);
-  store_per_block(du16, lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy), out, 0, 8);
-  return true;
-}
-
-// ---- Strided 8-bit samples two bytes apart (YUYV's luma, an 8-bit mosaic's sites) -------------
-//
-// Four samples per block through one 16-byte window (8 samples) per row, like U V pairs but with
-// one channel: the low 16-bit half of each sample's lane looks up its taps, the high half reads
-// zeros. The four results land on every other byte of the output, merged with the bytes between
-// them, which belong to the image's other planes (the same rows of which the same thread
-// resamples: never at the same time). The window and the merged 8 bytes stay inside the row for
-// planes that start one byte into it (kSlack).
-template <class DB>
-HWY_INLINE bool s2_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
-                          hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
-  constexpr int kB = blocks_of<DB>();
-  const hn::Repartition<std::int32_t, DB> d;
-  const hn::Repartition<std::uint16_t, DB> du16;
-  const std::uint8_t* p[kB];
-  hn::Vec<decltype(d)> rx, ry;
-  bool straddle = false;
-  if (!block_windows<2, 7, 1>(d, src, X, Y, p, rx, ry, straddle)) return false;
-  const auto i2 = hn::ShiftLeft<1>(hn::ShiftRight<8>(rx));  // the left tap's byte; high halves zero
-  const auto idx = hn::BitCast(d8, hn::Or(hn::Add(hn::Or(i2, hn::ShiftLeft<8>(i2)), hn::Set(d, 0x0200)), hn::Set(d, 0x80800000)));
-  const auto fx = hn::BitCast(du16, hn::And(rx, hn::Set(d, 255))), fy = hn::BitCast(du16, hn::And(ry, hn::Set(d, 255)));
-  hn::Vec<decltype(du16)> up, down;
-  tap_pairs(d8, src, p, idx, straddle, hn::BitCast(du16, hn::ShiftRight<8>(ry)), up, down);
-  const hn::Rebind<std::uint8_t, decltype(du16)> d8n;
-  const auto bytes = hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<decltype(du16)>(), lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy)));
-  const hn::Full64<std::uint8_t> d64;
-  const auto others = hn::BitCast(d64, hn::Set(hn::Full64<std::uint16_t>(), 0xFF00));  // the odd bytes
-  for (int b = 0; b < kB; ++b) {
-    hn::Vec<decltype(d64)> ours;
-    if constexpr (kB == 1)
-      ours = bytes;
-    else
-      ours = b == 0 ? hn::LowerHalf(d64, bytes) : hn::UpperHalf(d64, bytes);
-    hn::StoreU(hn::Or(hn::And(hn::LoadU(d64, out[b]), others), ours), d64, out[b]);
+  const auto v = lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
+  if constexpr (kPairs) {
+    store_per_block(du16, v, out, 0, 8);
+  } else {
+    const hn::Rebind<std::uint8_t, decltype(du16)> d8n;
+    const auto bytes = hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<decltype(du16)>(), v));
+    const hn::Full64<std::uint8_t> d64;
+    const auto others = hn::BitCast(d64, hn::Set(hn::Full64<std::uint16_t>(), 0xFF00));  // the odd bytes
+    for (int b = 0; b < kB; ++b) {
+      hn::Vec<decltype(d64)> ours;
+      if constexpr (kB == 1)
+        ours = bytes;
+      else
+        ours = b == 0 ? hn::LowerHalf(d64, bytes) : hn::UpperHalf(d64, bytes);
+      hn::StoreU(hn::Or(hn::And(hn::LoadU(d64, out[b]), others), ours), d64, out[b]);
+    }
   }
   return true;
 }

@@ -13,7 +13,8 @@
 // - RGB24: 4 pixels through one 5-pixel window per row, each output byte a 16-bit lane that
 //   looks up its own colour's tap pair (rgb8_blocks);
 // - U V pairs (NV12's chroma): 4 pixels through one 8-pair window per row, U and V in the two
-//   16-bit halves of each pixel's lane (uv8_blocks);
+//   16-bit halves of each pixel's lane (two_byte_blocks<true>); 8-bit samples two bytes apart
+//   (YUYV's luma, 8-bit mosaic sites) alike, merged into every other byte (two_byte_blocks<false>);
 // - otherwise (Mono16, steps whose taps do not fit a window) 4 pixels on 32-bit lanes: windows
 //   where the taps fit, else a gather of the 32-bit word at each left tap (it holds the right tap
 //   too: bytes 0..1 for Mono8, both halves for Mono16 and U V; RGB24 gathers again at +3), only
@@ -48,7 +49,7 @@ Samplers simd_samplers(SampleKind k) { return scalar_samplers(k); }
 #else
 namespace hn = hwy::HWY_NAMESPACE;
 
-// Four samples of a strided 8-bit plane by the scalar code (the borders of s2_blocks).
+// Four samples of a strided 8-bit plane by the scalar code (where two_byte_blocks<false> does not fit).
 HWY_INLINE void strided_four(const SamplePlane& src, V32 X, V32 Y, std::uint8_t* out) {
   alignas(16) std::int32_t xs[4], ys[4];
   hn::Store(X, D32(), xs), hn::Store(Y, D32(), ys);
@@ -63,8 +64,8 @@ HWY_INLINE void eight(const SamplePlane& src, V32 X0, V32 Y0, V32 X1, V32 Y1, st
   if constexpr (kOut != C * sizeof(T)) {
     std::uint8_t* o0[1] = {out};
     std::uint8_t* o1[1] = {out + 8};
-    if (!s2_blocks(D8(), src, X0, Y0, o0)) strided_four(src, X0, Y0, out);
-    if (!room || !s2_blocks(D8(), src, X1, Y1, o1)) strided_four(src, X1, Y1, out + 8);
+    if (!two_byte_blocks<false>(D8(), src, X0, Y0, o0)) strided_four(src, X0, Y0, out);
+    if (!room || !two_byte_blocks<false>(D8(), src, X1, Y1, o1)) strided_four(src, X1, Y1, out + 8);
     return;
   } else if constexpr (C == 1 && sizeof(T) == 1) {
     if (mono8_blocks(D16(), src, X0, Y0, X1, Y1, out)) return;
@@ -77,8 +78,8 @@ HWY_INLINE void eight(const SamplePlane& src, V32 X0, V32 Y0, V32 X1, V32 Y1, st
   } else if constexpr (C == 2) {
     std::uint8_t* o0[1] = {out};
     std::uint8_t* o1[1] = {out + 8};
-    if (!uv8_blocks(D8(), src, X0, Y0, o0)) four<T, C>(src, X0, Y0, out, true);
-    if (!uv8_blocks(D8(), src, X1, Y1, o1)) four<T, C>(src, X1, Y1, out + 8, room);
+    if (!two_byte_blocks<true>(D8(), src, X0, Y0, o0)) four<T, C>(src, X0, Y0, out, true);
+    if (!two_byte_blocks<true>(D8(), src, X1, Y1, o1)) four<T, C>(src, X1, Y1, out + 8, room);
     return;
   }
   four<T, C>(src, X0, Y0, out, true);
@@ -91,7 +92,7 @@ HWY_INLINE void wide(const SamplePlane& src, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1,
   if constexpr (kOut != C * sizeof(T)) {  // samples 8b..8b+3 from X0, 8b+4..8b+7 from X1
     std::uint8_t* o0[2] = {out, out + 16};
     std::uint8_t* o1[2] = {out + 8, out + 24};
-    if (room && s2_blocks(DW8(), src, X0, Y0, o0) && s2_blocks(DW8(), src, X1, Y1, o1)) return;
+    if (room && two_byte_blocks<false>(DW8(), src, X0, Y0, o0) && two_byte_blocks<false>(DW8(), src, X1, Y1, o1)) return;
   } else if constexpr (C == 1 && sizeof(T) == 1) {
     if (mono8_blocks(DW16(), src, X0, Y0, X1, Y1, out)) return;
   } else if constexpr (C == 3) {  // pixels 8b..8b+3 from X0, 8b+4..8b+7 from X1
@@ -101,7 +102,7 @@ HWY_INLINE void wide(const SamplePlane& src, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1,
   } else if constexpr (C == 2) {
     std::uint8_t* o0[2] = {out, out + 16};
     std::uint8_t* o1[2] = {out + 8, out + 24};
-    if (uv8_blocks(DW8(), src, X0, Y0, o0) && uv8_blocks(DW8(), src, X1, Y1, o1)) return;
+    if (two_byte_blocks<true>(DW8(), src, X0, Y0, o0) && two_byte_blocks<true>(DW8(), src, X1, Y1, o1)) return;
   }
   const DW32 dw;
   for (int b = 0; b < kBlocks; ++b)
