@@ -358,7 +358,7 @@ void AravisSource::Impl::copy_image(ArvBuffer* b, const dsp::ImageView& dst) con
   gint pad_x = 0, pad_y = 0;
   arv_buffer_get_image_padding(b, &pad_x, &pad_y);
   const auto stride = static_cast<std::ptrdiff_t>(dsp::row_bytes(fmt.format, fmt.width) + pad_x);
-  dsp::copy_image({const_cast<uint8_t*>(src), fmt.width, fmt.height, stride, fmt.format}, dst);
+  dsp::copy_image(src, stride, dst);
 }
 
 void AravisSource::Impl::stamp(ArvBuffer* b, FrameMeta& meta) {

@@ -68,7 +68,7 @@ CaptureStatus ImagesSource::capture(const dsp::ImageView& dst, FrameMeta& meta, 
   if (f.width != format_.width || f.height != format_.height)
     throw std::runtime_error(what + ": frame is " + size_text(f) + ", the first was " + size_text(format_));
   if (f.format != format_.format) throw std::runtime_error(what + ": pixel format differs from the first frame's");
-  dsp::copy_image(const_cast<dsp::Image&>(img).view(), dst);
+  dsp::copy_image(img.data.data(), img.stride(), dst);
   meta = {};
   meta.sequence = cfg_.numbers.empty() ? next_ : cfg_.numbers.at(next_);
   if (!cfg_.stamps_s.empty()) meta.first_row_ns = std::llround(cfg_.stamps_s[next_] * 1e9);

@@ -35,10 +35,10 @@ bool copy_frame(const std::uint8_t* src, std::size_t src_len, std::size_t src_st
   if (src_stride < row_bytes) src_stride = row_bytes;  // a driver that reports 0 means packed
   if (l.format == dsp::PixelFormat::I420 && src_stride % 2) return false;  // chroma rows at stride / 2
   if (!src || src_len < dsp::buffer_bytes(l.format, dst.width, dst.height, src_stride)) return false;
-  const dsp::ImageView buffer{const_cast<std::uint8_t*>(src), dst.width, dst.height, static_cast<std::ptrdiff_t>(src_stride), l.format};
-  if (!l.bgr) return dsp::copy_image(buffer, dst), true;
+  const auto stride = static_cast<std::ptrdiff_t>(src_stride);
+  if (!l.bgr) return dsp::copy_image(src, stride, dst), true;
   for (int y = 0; y < dst.height; ++y) {
-    const std::uint8_t* s = buffer.row(y);
+    const std::uint8_t* s = src + y * stride;
     std::uint8_t* d = dst.row(y);
     for (int x = 0; x < dst.width; ++x, s += 3, d += 3) d[0] = s[2], d[1] = s[1], d[2] = s[0];
   }

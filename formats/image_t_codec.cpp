@@ -252,7 +252,7 @@ void preallocate(bot_core::image_t& img, const FrameFormat& fmt, std::initialize
 }
 
 void copy_pixels(const bot_core::image_t& img, const dsp::ImageView& dst) {
-  dsp::copy_image({const_cast<uint8_t*>(img.data.data()), dst.width, dst.height, img.row_stride, dst.format}, dst);
+  dsp::copy_image(img.data.data(), img.row_stride, dst);
 }
 
 dsp::RowTiming row_timing(const RecordedFrame& f, double fallback_fps) {

@@ -28,6 +28,11 @@ void copy_image(const ImageView& src, const ImageView& dst) {
     for (int y = 0; y < s[p].rows; ++y) std::memcpy(d[p].data + y * d[p].stride, s[p].data + y * s[p].stride, s[p].row_bytes);
 }
 
+void copy_image(const std::uint8_t* src, std::ptrdiff_t src_stride, const ImageView& dst) {
+  // A view is writable by type only: copy_image reads its source.
+  copy_image({const_cast<std::uint8_t*>(src), dst.width, dst.height, src_stride, dst.format}, dst);
+}
+
 void fill_samples(const SamplePlane& p, std::uint8_t* at, int n) {
   if (p.packed() && (p.fill == 0 || p.sample_bytes == 1))
     return static_cast<void>(std::memset(at, p.fill, static_cast<std::size_t>(n) * p.step));

@@ -27,6 +27,9 @@ int memory_planes(const ImageView& v, MemoryPlane out[3]);
 
 // Copies every plane of src into dst (same size and format; strides may differ).
 void copy_image(const ImageView& src, const ImageView& dst);
+// The same from a buffer laid out in dst's format with rows `src_stride` bytes apart (a
+// driver's buffer, a message's bytes): read only.
+void copy_image(const std::uint8_t* src, std::ptrdiff_t src_stride, const ImageView& dst);
 
 struct SamplePlane {
   std::uint8_t* data = nullptr;   // sample (0, 0)
