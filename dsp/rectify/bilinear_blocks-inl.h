@@ -21,9 +21,9 @@ namespace HWY_NAMESPACE {
 #if HWY_TARGET != HWY_SCALAR
 namespace hn = hwy::HWY_NAMESPACE;
 
-// ---- Wide steps: as many 128-bit blocks as the target's vectors hold, up to two ---------------
+// ---- Wide steps: as many 128-bit blocks as the target's vectors hold, up to four ----------------
 //
-// AVX2 and AVX-512 run two blocks per instruction (256-bit vectors), the others one (SVE: one
+// AVX2 runs two blocks per instruction (256-bit vectors), AVX-512 four, the others one (SVE: one
 // 128-bit block whatever its vector length, since windows are per block). A wide step is 8
 // pixels per block: positions X0 hold pixels 8b..8b+3 in block b, X1 pixels 8b+4..8b+7, so
 // that narrowing the two to 16 bits per block (packssdw on x86) puts each block's 8 pixels in
@@ -31,7 +31,7 @@ namespace hn = hwy::HWY_NAMESPACE;
 #if HWY_HAVE_SCALABLE
 using DW16 = hn::Full128<std::int16_t>;
 #else
-using DW16 = hn::CappedTag<std::int16_t, 16>;
+using DW16 = hn::CappedTag<std::int16_t, 32>;
 #endif
 using DWU16 = hn::RebindToUnsigned<DW16>;
 using DW32 = hn::Repartition<std::int32_t, DW16>;
@@ -39,33 +39,43 @@ using DW8 = hn::Repartition<std::uint8_t, DW16>;
 using VW32 = hn::Vec<DW32>;
 constexpr int kBlocks = static_cast<int>(hn::MaxLanes(DW16()) / 8);
 constexpr int kStep = 8 * kBlocks;
-static_assert(kBlocks == 1 || kBlocks == 2, "one or two 128-bit blocks per step");
+static_assert(kBlocks == 1 || kBlocks == 2 || kBlocks == 4, "one, two or four 128-bit blocks per step");
 
-// 128-bit blocks in a vector of tag D (1 or 2). The helpers below are templates on the tag, so
-// that `if constexpr` discards the branch of the other width.
+// The helpers below take a vector of 1, 2 or 4 blocks (tag D) and recurse on its halves; they
+// are templates on the tag, so that `if constexpr` discards the branches of other widths.
 template <class D>
 constexpr int blocks_of() {
   return static_cast<int>(hn::MaxLanes(D()) * sizeof(hn::TFromD<D>) / 16);
 }
 
-// The four int32 lanes of block b.
-template <class D>
-HWY_INLINE V32 block(D, hn::Vec<D> v, int b) {
-  if constexpr (blocks_of<D>() == 1) {
+// Part b of the n equal parts of v of tag D, the part's tag being P (n = lanes of D / lanes of P).
+template <class P, class D>
+HWY_INLINE hn::Vec<P> part(D d, hn::Vec<D> v, int b) {
+  if constexpr (hn::MaxLanes(D()) == hn::MaxLanes(P())) {
+    (void)d, (void)b;
     return v;
   } else {
     const hn::Half<D> dh;
-    return b == 0 ? hn::LowerHalf(dh, v) : hn::UpperHalf(dh, v);
+    constexpr int kHalf = static_cast<int>(hn::MaxLanes(D()) / hn::MaxLanes(P()) / 2);
+    return b < kHalf ? part<P>(dh, hn::LowerHalf(dh, v), b) : part<P>(dh, hn::UpperHalf(dh, v), b - kHalf);
   }
+}
+
+// The four int32 lanes of block b.
+template <class D>
+HWY_INLINE V32 block(D d, hn::Vec<D> v, int b) {
+  return part<D32>(d, v, b);
 }
 
 // The vector whose block b holds v[b] in every lane.
 template <class D>
 HWY_INLINE hn::Vec<D> per_block(D d, const int* v) {
-  if constexpr (blocks_of<D>() == 1)
+  if constexpr (blocks_of<D>() == 1) {
     return hn::Set(d, v[0]);
-  else
-    return hn::ConcatLowerLower(d, hn::Set(d, v[1]), hn::Set(d, v[0]));
+  } else {
+    const hn::Half<D> dh;
+    return hn::Combine(d, per_block(dh, v + blocks_of<D>() / 2), per_block(dh, v));
+  }
 }
 
 // Block b loaded from p[b] (16 bytes each).
@@ -75,7 +85,7 @@ HWY_INLINE hn::Vec<D> load_windows(D d, const std::uint8_t* const* p) {
     return hn::LoadU(d, p[0]);
   } else {
     const hn::Half<D> dh;
-    return hn::Combine(d, hn::LoadU(dh, p[1]), hn::LoadU(dh, p[0]));
+    return hn::Combine(d, load_windows(dh, p + blocks_of<D>() / 2), load_windows(dh, p));
   }
 }
 
@@ -177,11 +187,7 @@ HWY_INLINE void store_per_block(DU16x, hn::Vec<DU16x> v, std::uint8_t* const* ou
   const hn::Full64<std::uint8_t> d64;
   const hn::Full32<std::uint8_t> d32;
   for (int b = 0; b < blocks_of<DU16x>(); ++b) {
-    hn::Vec<decltype(d64)> half;
-    if constexpr (blocks_of<DU16x>() == 1)
-      half = bytes;
-    else
-      half = b == 0 ? hn::LowerHalf(d64, bytes) : hn::UpperHalf(d64, bytes);
+    const auto half = part<decltype(d64)>(d8n, bytes, b);
     if (n == 8)
       hn::StoreU(half, d64, out[b] + at);
     else
@@ -285,11 +291,7 @@ HWY_INLINE bool two_byte_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repar
     const hn::Full64<std::uint8_t> d64;
     const auto others = hn::BitCast(d64, hn::Set(hn::Full64<std::uint16_t>(), 0xFF00));  // the odd bytes
     for (int b = 0; b < kB; ++b) {
-      hn::Vec<decltype(d64)> ours;
-      if constexpr (kB == 1)
-        ours = bytes;
-      else
-        ours = b == 0 ? hn::LowerHalf(d64, bytes) : hn::UpperHalf(d64, bytes);
+      const auto ours = part<decltype(d64)>(d8n, bytes, b);
       hn::StoreU(hn::Or(hn::And(hn::LoadU(d64, out[b]), others), ours), d64, out[b]);
     }
   }

@@ -5,8 +5,8 @@
 // bit; tests/dsp/rectify/test_bilinear_sampling.cpp compares each target with it.
 //
 // The taps are fetched by byte lookups inside 16-byte windows of the source rows, which every
-// instruction set does per 128-bit block; so the kernels work in 128-bit blocks, two per vector
-// where the target has 256 bits or more at a fixed width (AVX2, AVX-512: "wide steps"), one
+// instruction set does per 128-bit block; so the kernels work in 128-bit blocks, as many per
+// vector as a fixed-width target holds (AVX2 two, AVX-512 four: "wide steps"), one
 // elsewhere (SSE, NEON, EMU128, and SVE whatever its vector length). Per block:
 // - Mono8: 8 pixels through one window per row (two rows, three where the taps straddle a row
 //   boundary), blended on 16-bit lanes (mono8_blocks);
@@ -86,23 +86,31 @@ HWY_INLINE void eight(const SamplePlane& src, V32 X0, V32 Y0, V32 X1, V32 Y1, st
   four<T, C>(src, X1, Y1, out + 4 * C * sizeof(T), room);
 }
 
+// Per block b of a wide step, the output of its pixels 8b (o0) and 8b + 4 (o1), whose positions
+// X0 and X1 hold, for a plane of kOut bytes a pixel.
+template <int kOut>
+struct WideOutputs {
+  std::uint8_t* o0[kBlocks];
+  std::uint8_t* o1[kBlocks];
+  explicit WideOutputs(std::uint8_t* out) {
+    for (int b = 0; b < kBlocks; ++b) o0[b] = out + 8 * b * kOut, o1[b] = out + (8 * b + 4) * kOut;
+  }
+};
+
 // One wide step; room: as blend_store's, after the step's last pixel.
 template <class T, int C, int kOut>
 HWY_INLINE void wide(const SamplePlane& src, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1, std::uint8_t* out, bool room) {
-  if constexpr (kOut != C * sizeof(T)) {  // samples 8b..8b+3 from X0, 8b+4..8b+7 from X1
-    std::uint8_t* o0[2] = {out, out + 16};
-    std::uint8_t* o1[2] = {out + 8, out + 24};
-    if (room && two_byte_blocks<false>(DW8(), src, X0, Y0, o0) && two_byte_blocks<false>(DW8(), src, X1, Y1, o1)) return;
+  if constexpr (kOut != C * sizeof(T)) {
+    const WideOutputs<kOut> o(out);
+    if (room && two_byte_blocks<false>(DW8(), src, X0, Y0, o.o0) && two_byte_blocks<false>(DW8(), src, X1, Y1, o.o1)) return;
   } else if constexpr (C == 1 && sizeof(T) == 1) {
     if (mono8_blocks(DW16(), src, X0, Y0, X1, Y1, out)) return;
-  } else if constexpr (C == 3) {  // pixels 8b..8b+3 from X0, 8b+4..8b+7 from X1
-    std::uint8_t* o0[2] = {out, out + 24};
-    std::uint8_t* o1[2] = {out + 12, out + 36};
-    if (rgb8_blocks(DW8(), src, X0, Y0, o0) && rgb8_blocks(DW8(), src, X1, Y1, o1)) return;
+  } else if constexpr (C == 3) {
+    const WideOutputs<kOut> o(out);
+    if (rgb8_blocks(DW8(), src, X0, Y0, o.o0) && rgb8_blocks(DW8(), src, X1, Y1, o.o1)) return;
   } else if constexpr (C == 2) {
-    std::uint8_t* o0[2] = {out, out + 16};
-    std::uint8_t* o1[2] = {out + 8, out + 24};
-    if (two_byte_blocks<true>(DW8(), src, X0, Y0, o0) && two_byte_blocks<true>(DW8(), src, X1, Y1, o1)) return;
+    const WideOutputs<kOut> o(out);
+    if (two_byte_blocks<true>(DW8(), src, X0, Y0, o.o0) && two_byte_blocks<true>(DW8(), src, X1, Y1, o.o1)) return;
   }
   const DW32 dw;
   for (int b = 0; b < kBlocks; ++b)
@@ -110,15 +118,20 @@ HWY_INLINE void wide(const SamplePlane& src, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1,
                       room || b + 1 < kBlocks);
 }
 
-// kStep positions from memory in the wide layout.
+// kStep positions from memory in the wide layout (block b of lo: 8b..8b+3, of hi: 8b+4..8b+7).
 template <class D = DW32>
 HWY_INLINE void load_wide(const std::int32_t* v, hn::Vec<D>& lo, hn::Vec<D>& hi) {
   const D d;
-  if constexpr (kBlocks == 1) {
+  if constexpr (blocks_of<D>() == 1) {
     lo = hn::LoadU(d, v), hi = hn::LoadU(d, v + 4);
-  } else {
+  } else if constexpr (blocks_of<D>() == 2) {
     const hn::Vec<D> a = hn::LoadU(d, v), b = hn::LoadU(d, v + 8);
     lo = hn::ConcatLowerLower(d, b, a), hi = hn::ConcatUpperUpper(d, b, a);
+  } else {
+    const hn::Half<D> dh;
+    hn::Vec<decltype(dh)> lo0, hi0, lo1, hi1;
+    load_wide<decltype(dh)>(v, lo0, hi0), load_wide<decltype(dh)>(v + 4 * blocks_of<D>(), lo1, hi1);
+    lo = hn::Combine(d, lo1, lo0), hi = hn::Combine(d, hi1, hi0);
   }
 }
 
