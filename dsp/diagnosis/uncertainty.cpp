@@ -27,9 +27,8 @@ struct FitInliers {
   std::vector<Eigen::Vector2d> r;
 };
 
-FitInliers fit_inliers(const DiagnosisModel& m, const ModelParams& fitted, const std::vector<int>& heldout,
-                       int heldout_every) {
-  // The fitting set: everything diagnose() did not hold out.
+// The fitting set: everything diagnose() did not hold out.
+std::vector<int> fitting_set(const DiagnosisModel& m, const std::vector<int>& heldout, int heldout_every) {
   std::vector<bool> held(m.size(), false);
   for (int i = 0; i < m.size(); ++i) held[i] = held_out(m, i, heldout_every);
   if (!heldout.empty()) {
@@ -39,6 +38,10 @@ FitInliers fit_inliers(const DiagnosisModel& m, const ModelParams& fitted, const
   std::vector<int> idx;
   for (int i = 0; i < m.size(); ++i)
     if (!held[i]) idx.push_back(i);
+  return idx;
+}
+
+FitInliers fit_inliers(const DiagnosisModel& m, const ModelParams& fitted, const std::vector<int>& idx) {
   const auto r0 = m.residuals(fitted, idx);
   const std::vector<bool> in = inliers(r0);
   FitInliers out;
@@ -96,6 +99,13 @@ std::optional<Eigen::VectorXd> variances(const DiagnosisModel& m, const Eigen::M
 
 }  // namespace
 
+std::optional<Eigen::VectorXd> parameter_variances(const DiagnosisModel& m, const ModelParams& fitted,
+                                                   const std::vector<Param>& free, const std::vector<int>& idx) {
+  if (free.empty()) return std::nullopt;
+  const FitInliers f = fit_inliers(m, fitted, idx);
+  return variances(m, jacobian(m, fitted, free, f.idx), f);
+}
+
 std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, const std::vector<NamedEffect>& effects,
                                                    const ModelParams& fitted, const std::vector<int>& heldout,
                                                    int heldout_every) {
@@ -106,11 +116,7 @@ std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, cons
       if (const auto k = param_by_name(p.name); k && p.text.empty() &&
                                                  std::find(free.begin(), free.end(), *k) == free.end())
         free.push_back(*k);
-  std::optional<Eigen::VectorXd> var;
-  if (!free.empty()) {
-    const FitInliers f = fit_inliers(m, fitted, heldout, heldout_every);
-    var = variances(m, jacobian(m, fitted, free, f.idx), f);
-  }
+  const std::optional<Eigen::VectorXd> var = parameter_variances(m, fitted, free, fitting_set(m, heldout, heldout_every));
   auto sigma_of = [&](Param p) -> std::optional<double> {
     const auto it = std::find(free.begin(), free.end(), p);
     if (!var || it == free.end()) return std::nullopt;

@@ -2,6 +2,7 @@
 // every named effect's parameters at the fit.
 #pragma once
 
+#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
@@ -36,6 +37,13 @@ bool held_out(const DiagnosisModel& m, int i, int heldout_every);
 std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, const std::vector<NamedEffect>& effects,
                                                    const ModelParams& fitted, const std::vector<int>& heldout,
                                                    int heldout_every);
+
+// The variances of the parameters `free` at `fitted` (in their own units, the order of
+// `free`), from the inliers among observations idx, as effect_uncertainties computes them:
+// the larger of the classic and the frame-clustered sandwich estimate. nullopt when the
+// parameters are not identifiable from these observations (singular information).
+std::optional<Eigen::VectorXd> parameter_variances(const DiagnosisModel& m, const ModelParams& fitted,
+                                                   const std::vector<Param>& free, const std::vector<int>& idx);
 
 // The ModelParams index of a spec parameter name ("line_delay_s", "k1", "x", ...), if the
 // diagnosis model has one by that name.

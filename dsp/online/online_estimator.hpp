@@ -1,0 +1,126 @@
+// Online self-calibration (docs/online-calibration.md): the camera-IMU time offset, the line
+// delay and the gyro bias, estimated while the camera runs from feature matches between
+// consecutive raw frames and the raw gyro stream, over a sliding window.
+//
+// Each update fits the window with the diagnosis's own model (dsp/diagnosis/model.hpp: a
+// frame_b pixel against the transfer of its frame_a pixel through the gyro's rotation between
+// the two rows' capture times, recording-v1's "Matches"), so that the estimate and an offline
+// rsd-diagnose of the same data mean the same numbers. The model needs rotation: without it
+// neither the offset nor the line delay changes any prediction, so a window whose measured
+// rate is too small (or whose matches are too few) is not fitted and the last estimate is held.
+// The fits of successive windows are combined by a Kalman filter per value, so the estimate
+// sharpens beyond what one window holds and follows slow drift; a fit far from it is a step.
+//
+// Thread contract: none of its own. One thread owns an estimator (the daemon's estimator
+// thread); it allocates, and is never on the hot path.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <deque>
+#include <string>
+#include <vector>
+
+#include "dsp/observation/recording.hpp"
+
+namespace rsd::dsp {
+
+// converging: fitted, not yet stable; converged: the last fits agree within their sigmas and
+// the sigmas are small; held: the window could not be fitted (too little rotation, too few
+// matches), the last estimate is kept; rejected: the fit was implausible, the last estimate kept.
+enum class OnlineState { Converging, Converged, Held, Rejected };
+const char* to_string(OnlineState s);
+
+// The calibration the estimator learns (or a 1-sigma of each of its values).
+struct OnlineCalibration {
+  double time_offset_s = 0;  // t_imu = t_camera + offset (calibration-v1's timeshift_cam_imu)
+  double line_delay_s = 0;   // between consecutive rows read
+  Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();  // rad/s, IMU axes: w = w_measured - bias
+};
+
+// What the window of the last update held.
+struct OnlineWindow {
+  double t_begin = 0, t_end = 0;  // camera clock, first and last frame
+  int frames = 0, matches = 0;    // matches: all in the window (the fit uses a spread subset)
+  int fitted = 0, inliers = 0;    // matches fitted, and inliers at the fit
+  int gyro_samples = 0;
+  double rate_rms_rad_s = 0;      // RMS of the measured rate less the bias, over the window
+  double residual_px = 0;         // robust per-coordinate sigma of the residuals at the fit
+};
+
+struct OnlineEstimate {
+  OnlineCalibration value, sigma;  // sigma: zero until a fit gave one
+  OnlineState state = OnlineState::Converging;
+  OnlineWindow window;
+  bool converged = false;          // the value is a converged one (also while held or rejected)
+  int updates = 0;                 // updates so far
+  std::string reason;              // why held or rejected ("" otherwise)
+};
+
+struct OnlineEstimatorOptions {
+  double window_s = 2;             // the sliding window (camera clock)
+  double min_rate_rad_s = 0.15;    // RMS angular rate below which the window is held
+  int min_matches = 150;
+  int fit_matches = 2500;          // at most this many matches in a fit, spread over the window
+  double search_s = 0.05;          // the offset's grid search (+-, 0.25 ms steps) until converged
+  // The fits are combined over time (a Kalman filter per value: the calibration a random walk
+  // of these rates, per square root of a second), so that the estimate gathers more data than
+  // one window holds; a fit further than `step_sigmas` combined sigmas from the estimate is a
+  // step (the clock jumped, the firmware changed): that value restarts from the fit.
+  double offset_walk_s = 2e-5;        // s/sqrt(s)
+  double line_delay_walk = 2e-4;      // relative, 1/sqrt(s)
+  double bias_walk_rad_s = 5e-5;      // rad/s/sqrt(s)
+  double step_sigmas = 5;
+  // Converged: the estimate's sigmas at most these (line delay: relative) over `settle`
+  // updates in a row without a step.
+  double converged_offset_sigma_s = 1.5e-4;
+  double converged_line_delay_sigma = 0.008;
+  double converged_bias_sigma = 7e-4;
+  int settle = 2;
+  double max_residual_px = 3;      // a robust residual sigma above this: rejected
+  double max_bias_rad_s = 0.3;     // |bias| per axis beyond this: rejected (no gyro is that bad)
+};
+
+class OnlineEstimator {
+ public:
+  // `nominal`: the camera, its nominal line delay and readout, the IMU's mount (imu_to_camera);
+  // its time offset and line delay are replaced by `start`'s. Throws std::invalid_argument for
+  // options out of range (naming the option).
+  OnlineEstimator(const NominalModel& nominal, const OnlineCalibration& start, const OnlineEstimatorOptions& opt = {});
+
+  // A raw gyro measurement (IMU clock and axes, before any bias correction); in time order.
+  void add_gyro(double t_imu, const Eigen::Vector3d& w_measured);
+  // Matches a[k] in the frame whose first row was read at t_a -> b[k] in the next one, read at
+  // t_b (camera clock); pixels of the raw (distorted) image, (0, 0) the top-left pixel's centre.
+  void add_matches(double t_a, double t_b, const std::vector<Eigen::Vector2d>& a, const std::vector<Eigen::Vector2d>& b);
+
+  // Drops what left the window, then fits it (or holds) and returns the new estimate.
+  const OnlineEstimate& update();
+  const OnlineEstimate& estimate() const { return est_; }
+
+ private:
+  struct Pair {
+    double ta, tb;
+    std::vector<Eigen::Vector2d> a, b;
+  };
+  void prune();
+  OnlineWindow window_contents() const;
+  Recording window_recording() const;
+  // Holds the estimate, saying why.
+  const OnlineEstimate& hold(OnlineState s, const std::string& why, const OnlineWindow& w);
+  // A window's fit (at the window's end, t) into the estimate.
+  void accept(const OnlineCalibration& fit, const OnlineCalibration& sigma, double t);
+
+  NominalModel nominal_;
+  OnlineEstimatorOptions opt_;
+  OnlineEstimate est_;
+  std::deque<Pair> pairs_;
+  std::deque<GyroSample> gyro_;
+  // The filter: per value (offset, line delay, bias x y z) the estimate and its variance.
+  std::array<double, 5> x_{}, var_{};
+  double t_fit_ = 0;  // the last fit's window end
+  int settled_ = 0;   // updates in a row with small sigmas and no step
+  bool have_fit_ = false;
+};
+
+}  // namespace rsd::dsp

@@ -1,0 +1,160 @@
+// The online estimator against the simulator's ground truth (issue goals, docs/online-calibration.md):
+// a VGA camera shaken by hand with a 200 Hz gyro, true time offset 15 ms, line delay 20% above
+// the nominal one, gyro bias 0.01 rad/s on each axis; the matches and the gyro are fed as a
+// running camera delivers them, one update a second.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <utility>
+
+#include "dsp/online/online_estimator.hpp"
+#include "dsp/sim/recording_simulation.hpp"
+#include "tests/dsp/diagnosis/diagnosis_configs.hpp"
+
+using namespace rsd::dsp;
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+namespace {
+
+constexpr double kNominalLineDelay = 5e-5;  // 24 ms of the 33 ms frame period
+
+SimConfig hand_held(unsigned seed, double duration_s) {
+  SimConfig c = rsd::test::simulation(ObservationKind::Matches, seed, duration_s, 0.3);
+  c.nominal.time.line_delay_s = kNominalLineDelay;
+  c.nominal.imu_to_camera << 0, -1, 0, -1, 0, 0, 0, 0, -1;
+  c.rotation_amplitude_rad = 0.2, c.motion_frequency_hz = 1.0;
+  c.matches_per_pair = 80;
+  c.outlier_fraction = 0.05;
+  c.gyro.noise_rad_s = 0.003;
+  c.effects.time_offset_s = 0.015;
+  c.effects.line_delay_s = 1.2 * kNominalLineDelay;
+  c.effects.gyro_bias = Vector3d::Constant(0.01);
+  return c;
+}
+
+OnlineCalibration nominal_start() { return {0.0, kNominalLineDelay, Vector3d::Zero()}; }
+
+// Feeds the recording frame by frame: the gyro up to each frame's end on the IMU clock (plus a
+// margin, as it arrives), the frame pair's matches, and an update after every `per_update`
+// frames; `seen` is called with each update's camera time and estimate.
+void stream(const Recording& rec, OnlineEstimator& e, int per_update,
+            const std::function<void(double, const OnlineEstimate&)>& seen) {
+  std::map<int, double> t;
+  for (const FrameStamp& f : rec.frames) t[f.frame] = f.t;
+  std::map<std::pair<int, int>, std::pair<std::vector<Vector2d>, std::vector<Vector2d>>> pairs;
+  for (const Match& m : rec.matches) {
+    auto& p = pairs[{m.frame_a, m.frame_b}];
+    p.first.push_back(m.a), p.second.push_back(m.b);
+  }
+  size_t g = 0;
+  int frames = 0;
+  for (const auto& [ab, p] : pairs) {
+    const double tb = t.at(ab.second);
+    for (; g < rec.gyro.size() && rec.gyro[g].t <= tb + 0.1; ++g) e.add_gyro(rec.gyro[g].t, rec.gyro[g].w);
+    e.add_matches(t.at(ab.first), tb, p.first, p.second);
+    if (++frames % per_update == 0) seen(tb, e.update());
+  }
+}
+
+// RSD_VERBOSE=1: each update's estimate, one line.
+void show(double t, const OnlineEstimate& est) {
+  if (!getenv("RSD_VERBOSE")) return;
+  std::printf("%6.2f %-10s off %8.3f ms (%.3f)  ld %.4f (%.4f)  bias %7.4f %7.4f %7.4f (%.4f)  in %d/%d  %.3f px rate %.2f %s\n",
+              t, to_string(est.state), est.value.time_offset_s * 1e3, est.sigma.time_offset_s * 1e3,
+              est.value.line_delay_s / kNominalLineDelay, est.sigma.line_delay_s / kNominalLineDelay, est.value.gyro_bias.x(),
+              est.value.gyro_bias.y(), est.value.gyro_bias.z(), est.sigma.gyro_bias.maxCoeff(), est.window.inliers,
+              est.window.fitted, est.window.residual_px, est.window.rate_rms_rad_s, est.reason.c_str());
+}
+
+}  // namespace
+
+TEST(OnlineEstimator, ConvergesWithinTenSecondsToTheIssueTolerances) {
+  const SimConfig c = hand_held(7, 12);
+  const SimulatedRecording sim = simulate_recording(c);
+  OnlineEstimator e(c.nominal, nominal_start());
+  double converged_at = -1;
+  stream(sim.rec, e, 30, [&](double t, const OnlineEstimate& est) {
+    show(t - c.start_time_s, est);
+    if (converged_at < 0 && est.state == OnlineState::Converged) converged_at = t - c.start_time_s;
+  });
+  const OnlineEstimate& est = e.estimate();
+  ASSERT_EQ(est.state, OnlineState::Converged) << est.reason;
+  EXPECT_GT(converged_at, 0);
+  EXPECT_LE(converged_at, 10.0);
+  EXPECT_NEAR(est.value.time_offset_s, 0.015, 0.5e-3);
+  EXPECT_NEAR(est.value.line_delay_s / (1.2 * kNominalLineDelay), 1.0, 0.03);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(est.value.gyro_bias[i], 0.01, 0.002) << "axis " << i;
+  // The sigmas are honest: the errors within 4 of them.
+  EXPECT_LE(std::abs(est.value.time_offset_s - 0.015), 4 * est.sigma.time_offset_s + 1e-5);
+  EXPECT_LE(std::abs(est.value.line_delay_s - 1.2 * kNominalLineDelay), 4 * est.sigma.line_delay_s + 1e-7);
+  EXPECT_GT(est.window.inliers, est.window.fitted * 8 / 10);
+}
+
+// Two recordings one after the other: the second's time offset 5 ms larger (its frames go on
+// where the first's end; its frame numbers and gyro follow the first's).
+Recording with_step(const SimulatedRecording& first, const SimulatedRecording& second) {
+  Recording r = first.rec;
+  const double t_join = second.rec.frames.front().t;
+  for (FrameStamp f : second.rec.frames) f.frame += 1000000, r.frames.push_back(f);
+  for (Match m : second.rec.matches) m.frame_a += 1000000, m.frame_b += 1000000, r.matches.push_back(m);
+  r.gyro.erase(std::remove_if(r.gyro.begin(), r.gyro.end(), [&](const GyroSample& g) { return g.t >= t_join; }), r.gyro.end());
+  for (const GyroSample& g : second.rec.gyro)
+    if (g.t >= t_join) r.gyro.push_back(g);
+  return r;
+}
+
+TEST(OnlineEstimator, FollowsAStepOfFiveMillisecondsWithinTenSeconds) {
+  SimConfig a = hand_held(9, 12), b = hand_held(10, 14);
+  b.start_time_s = a.start_time_s + 12 + 1 / a.nominal.frame_rate_hz;
+  b.effects.time_offset_s = 0.020;
+  const Recording rec = with_step(simulate_recording(a), simulate_recording(b));
+  OnlineEstimator e(a.nominal, nominal_start());
+  double before = 0, followed_at = -1;
+  stream(rec, e, 30, [&](double t, const OnlineEstimate& est) {
+    show(t - a.start_time_s, est);
+    if (t < b.start_time_s) before = est.value.time_offset_s;
+    else if (followed_at < 0 && std::abs(est.value.time_offset_s - 0.020) < 0.5e-3 && est.converged)
+      followed_at = t - b.start_time_s;
+  });
+  EXPECT_NEAR(before, 0.015, 0.5e-3);
+  EXPECT_GE(followed_at, 0) << "never followed the step";
+  EXPECT_LE(followed_at, 10.0);
+  EXPECT_NEAR(e.estimate().value.time_offset_s, 0.020, 0.5e-3);
+}
+
+TEST(OnlineEstimator, AStaticCameraHoldsTheEstimate) {
+  SimConfig c = hand_held(8, 30);
+  c.motion_source = MotionSource::Constant;  // at rest: zero velocity, zero rate
+  const SimulatedRecording sim = simulate_recording(c);
+  const OnlineCalibration start{0.012, 1.1 * kNominalLineDelay, Vector3d(0.02, -0.01, 0.005)};
+  OnlineEstimator e(c.nominal, start);
+  int updates = 0;
+  stream(sim.rec, e, 30, [&](double, const OnlineEstimate& est) {
+    ++updates;
+    EXPECT_EQ(est.state, OnlineState::Held);
+    EXPECT_EQ(est.value.time_offset_s, start.time_offset_s);
+    EXPECT_EQ(est.value.line_delay_s, start.line_delay_s);
+    EXPECT_EQ(est.value.gyro_bias, start.gyro_bias);
+  });
+  EXPECT_GE(updates, 29);
+  EXPECT_NE(e.estimate().reason.find("rotation"), std::string::npos) << e.estimate().reason;
+}
+
+TEST(OnlineEstimator, RefusesBadOptionsNamingThem) {
+  NominalModel n;
+  OnlineEstimatorOptions o;
+  o.window_s = 0;
+  try {
+    OnlineEstimator e(n, nominal_start(), o);
+    FAIL() << "accepted window_s = 0";
+  } catch (const std::invalid_argument& ex) {
+    EXPECT_NE(std::string(ex.what()).find("window_s"), std::string::npos);
+  }
+  EXPECT_THROW(OnlineEstimator(n, {0, 0, Vector3d::Zero()}), std::invalid_argument);
+}
