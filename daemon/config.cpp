@@ -124,6 +124,7 @@ void visit_config(formats::ConfigSection& c, Config& cfg) {
   c.section("velocity", [&](formats::ConfigSection& s) { visit_velocity(s, cfg); });
   c.section("lcm", [&](formats::ConfigSection& s) { visit_lcm(s, cfg); });
   c.section("health", [&](formats::ConfigSection& s) { visit_health(s, cfg.health); });
+  c.section("calibration", [&](formats::ConfigSection& s) { visit_online_calibration(s, cfg.online); });
   c.section("log", [&](formats::ConfigSection& s) { visit_log(s, cfg.log_level); });
 }
 

@@ -8,6 +8,7 @@
 
 #include "daemon/frame_rectifier.hpp"
 #include "daemon/lcm_publisher.hpp"
+#include "daemon/online_calibration.hpp"
 #include "daemon/pipeline.hpp"
 #include "daemon/source_watch.hpp"
 #include "daemon/velocity_buffer.hpp"
@@ -31,6 +32,7 @@ struct Config {
   // rsd --output-dir / --output-video (replays only): rectified frames to files as well.
   FrameFilesConfig output;
   HealthConfig health;                // the stall detector and the frame-rate warning
+  OnlineCalibrationConfig online;     // calibration: the online self-calibration
   std::string log_level = "info";     // log.level; rsd --log-level overrides it
 };
 

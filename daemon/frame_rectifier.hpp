@@ -60,6 +60,9 @@ class FrameRectifier {
   RectifyResult process(const dsp::ImageView& src, const dsp::ImageView& dst, const drivers::FrameMeta& meta,
                         const VelocityBuffer& velocity);
   const dsp::RowTiming& timing() const { return timing_; }
+  // Which calibration this rectifier was made with, for frame info: "configured" or "online".
+  const char* calibration() const { return calibration_; }
+  void set_calibration(const char* label) { calibration_ = label; }
 
  private:
   dsp::DepthModel depth_model() const;
@@ -74,6 +77,7 @@ class FrameRectifier {
   dsp::CameraModel cam_;
   dsp::RowTiming timing_;
   std::unique_ptr<dsp::Rectifier> rect_;
+  const char* calibration_ = "configured";
 };
 
 }  // namespace rsd::daemon

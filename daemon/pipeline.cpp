@@ -32,7 +32,7 @@ void Pipeline::start() {
   raw_.clear();
   out_.clear();
   for (size_t i = 0; i < cfg_.raw_slots; ++i) raw_.push_back({dsp::Image(f.width, f.height, f.format), {}, 0});
-  for (size_t i = 0; i < cfg_.out_slots; ++i) out_.push_back({dsp::Image(f.width, f.height, f.format), {}, 0, {}, {}, -1});
+  for (size_t i = 0; i < cfg_.out_slots; ++i) out_.push_back({dsp::Image(f.width, f.height, f.format), {}, 0, {}, {}, "configured", -1});
   while (raw_free_.get()) {}
   while (raw_free_late_.get()) {}
   while (out_free_.get()) {}
@@ -177,10 +177,15 @@ void Pipeline::rectify_loop() {
     take_up_next_rectifier();
     o.result = rectifier_->process(r.image.view(), o.image.view(), r.meta, velocity_);
     o.timing = rectifier_->timing();
+    o.calibration = rectifier_->calibration();
     (o.result.rectified ? stats_.rectified : stats_.unrectified).fetch_add(1, std::memory_order_relaxed);
     o.raw_slot = cfg_.publish_raw ? static_cast<int>(*in) : -1;
-    if (!cfg_.publish_raw) raw_free_.put(*in);  // else the publisher returns it
+    // The tap sees the raw frame after the frame has gone on (its copy adds nothing to the
+    // latency), or before, when the publisher will return the raw slot itself.
+    if (tap_ && cfg_.publish_raw) tap_->offer(r.image.view(), r.meta);
     spare = hand_over(to_publish_, *out_slot);
+    if (tap_ && !cfg_.publish_raw) tap_->offer(r.image.view(), r.meta);
+    if (!cfg_.publish_raw) raw_free_.put(*in);  // else the publisher returns it
     if (spare && out_[*spare].raw_slot >= 0) {  // its raw frame goes back too
       raw_free_.put(static_cast<uint32_t>(out_[*spare].raw_slot));
       out_[*spare].raw_slot = -1;
@@ -228,6 +233,7 @@ void Pipeline::publish_frame(Out& o, uint64_t seq) {
   info.max_correction_px = o.result.max_correction_px;
   info.pinhole_sufficient = o.result.pinhole_sufficient;
   info.drops_total = static_cast<int64_t>(stats_.drops.load(std::memory_order_relaxed));
+  info.calibration = o.calibration;  // a short literal: no allocation
   pub_.publish_info();
   if (files_ && !output_failed_.load()) {
     try {

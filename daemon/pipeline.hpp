@@ -22,6 +22,15 @@
 
 namespace rsd::daemon {
 
+// Background work that looks at the raw frames (the online calibration's estimator): offered
+// each frame on the rectify thread once the frame has been handed on for publishing. It must
+// neither wait nor allocate: it copies into a buffer of its own or lets the frame go.
+class FrameTap {
+ public:
+  virtual ~FrameTap() = default;
+  virtual void offer(const dsp::ImageView& raw, const drivers::FrameMeta& meta) = 0;
+};
+
 struct PipelineConfig {
   size_t raw_slots = 6;
   size_t out_slots = 4;
@@ -60,6 +69,8 @@ class Pipeline {
   // Rectified frames also to files (rsd --output-dir/--output-video), written by the publishing
   // thread; set before start(). A write that fails stops the output: output_error() says why.
   void set_frame_files(FrameFiles* files) { files_ = files; }
+  // Raw frames also to background work (the online calibration); set before start().
+  void set_frame_tap(FrameTap* tap) { tap_ = tap; }
   // A new rectifier (a calibration applied on SIGHUP): the rectify thread takes it up at the
   // start of its next frame, so no frame is dropped or mixes two calibrations. Any thread; one
   // at a time (false while an earlier one has not been taken up). The caller owns both and
@@ -82,6 +93,7 @@ class Pipeline {
     int64_t ready_ns = 0;
     RectifyResult result;
     dsp::RowTiming timing;  // the row timing the frame was rectified with (published with it)
+    const char* calibration = "configured";  // and the calibration (FrameRectifier::calibration)
     int raw_slot = -1;  // with publish_raw: the raw frame travelling with this one
   };
   void capture_loop();
@@ -112,6 +124,7 @@ class Pipeline {
   std::string camera_error_;  // written by the capture thread before camera_lost_ is set
   int64_t last_first_row_ns_ = INT64_MIN;  // capture thread; reset by start() (a reopened camera's clock may restart)
   FrameFiles* files_ = nullptr;
+  FrameTap* tap_ = nullptr;
   std::atomic<bool> output_failed_{false};
   std::string output_error_;  // written by the publishing thread before output_failed_ is set
   std::thread capture_, rectify_, publish_;

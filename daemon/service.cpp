@@ -11,6 +11,7 @@
 #include "daemon/source_watch.hpp"
 #include "daemon/systemd_notify.hpp"
 #include "daemon/velocity_input.hpp"
+#include "dsp/geometry/camera_motion.hpp"
 #include "drivers/tenfold_log.hpp"
 #include "drivers/message_source.hpp"
 #include "drivers/monotonic_clock.hpp"
@@ -50,6 +51,9 @@ struct Session {
   std::unique_ptr<drivers::CameraSource> source;
   std::unique_ptr<RecordingSource> recording;       // the source, recorded
   std::unique_ptr<LcmPublisher> pub;
+  // calibration.online: the estimator thread. After the publisher it uses, before the velocity
+  // input and the pipeline that feed it (destroyed in the reverse order: they stop first).
+  std::unique_ptr<OnlineCalibrator> online;
   VelocityBuffer velocity;
   std::unique_ptr<VelocityInput> velocity_in;
   std::unique_ptr<WorkerPool> workers;  // the rectifiers' helper threads (rectification.workers)
@@ -58,6 +62,10 @@ struct Session {
   int calibrations_applied = 0;
   std::unique_ptr<Pipeline> pipeline;
   std::unique_ptr<FrameFiles> files;  // rsd --output-dir / --output-video
+  // calibration.online apply: the estimate the rectifier and the velocity input use (its line
+  // delay replaces the configured one in geometry()).
+  std::optional<dsp::OnlineCalibration> online_applied;
+  Eigen::Matrix3d mount_base = Eigen::Matrix3d::Identity();  // the configured imu_to_camera the estimate's mount turns
   std::vector<uint8_t> pose_buf = std::vector<uint8_t>(512);
   std::unique_ptr<SourceWatch> watch;  // the source's state, afresh with every pipeline
   int reconnects = 0;
@@ -96,7 +104,12 @@ struct Session {
   void wire() {
     pub = std::make_unique<LcmPublisher>(cfg.lcm_url, cfg.channels, source->format());
     pub->set_recorder(recorder.get());
+    mount_base = cfg.velocity_input.imu_to_camera;
+    const std::optional<dsp::OnlineCalibration> state = load_online_state(cfg.online, mount_base);
+    if (state && cfg.online.mode == OnlineMode::Apply) use_online(cfg, *state);
     velocity_in = std::make_unique<VelocityInput>(pub->handle(), cfg.velocity_channel, velocity, cfg.velocity_input);
+    online = make_online(state);
+    velocity_in->set_gyro_tap(online.get());
     velocity_in->set_clock_check(!playback() && !messages());  // a live camera: messages share its clock
     // The source's own velocity goes into the buffer on the source's thread, before the frame
     // it precedes (see VelocityInput::deliver), and out on LCM (and into the recording).
@@ -136,15 +149,62 @@ struct Session {
     dsp::RowTiming timing = source->timing();
     if (const auto& cal = c.source.calibration; cal && cal->has_rsd_block && cal->line_delay_s > 0)
       timing.line_delay_s = cal->line_delay_s, timing.readout = cal->readout;
+    if (online_applied) timing.line_delay_s = online_applied->line_delay_s;
     return {cam, timing};
   }
 
+  // calibration.online apply: `e`'s clock offset and bias for the velocity input (its line delay
+  // goes through geometry()).
+  void use_online(Config& c, const dsp::OnlineCalibration& e) {
+    c.velocity_input.imu_time_offset_s = e.time_offset_s;
+    c.velocity_input.gyro_bias_rad_s = e.gyro_bias;
+    c.velocity_input.imu_to_camera = dsp::exp_so3(e.mount_rotation) * mount_base;
+    online_applied = e;
+  }
+  // The estimate the online calibration converged to, switched to between two frames; "" or
+  // why not yet.
+  std::string apply_online(const dsp::OnlineCalibration& e) {
+    Config next = cfg;
+    const std::optional<dsp::OnlineCalibration> before = online_applied;
+    use_online(next, e);
+    const std::string why = apply_calibration(next, "online");
+    if (!why.empty()) online_applied = before;
+    return why;
+  }
+
+  // The estimator, started from the calibration in use (or the state file's); nullptr when off
+  // or when the camera has no rolling shutter to learn.
+  std::unique_ptr<OnlineCalibrator> make_online(const std::optional<dsp::OnlineCalibration>& state) {
+    if (cfg.online.mode == OnlineMode::Off) return nullptr;
+    const auto [cam, timing] = geometry(cfg);
+    if (!(timing.line_delay_s > 0)) {
+      spdlog::warn("online calibration off: {} has no line delay (a global shutter)", source->name());
+      return nullptr;
+    }
+    OnlineSetup st;
+    st.nominal.cam = cam;
+    st.nominal.frame_rate_hz = timing.frame_rate_hz;
+    st.nominal.time.line_delay_s = timing.line_delay_s;
+    st.nominal.time.readout = timing.readout;
+    st.nominal.imu_to_camera = cfg.velocity_input.imu_to_camera;
+    st.start = state ? *state
+                     : dsp::OnlineCalibration{cfg.velocity_input.imu_time_offset_s, timing.line_delay_s, cfg.velocity_input.gyro_bias_rad_s};
+    st.gyro_scale = cfg.velocity_input.gyro_scale;
+    st.base = cfg.source.calibration ? *cfg.source.calibration : formats::calibration_of(st.nominal, "");
+    st.base.cam = cam, st.base.imu_to_camera = cfg.velocity_input.imu_to_camera, st.base.gyro_scale = st.gyro_scale;
+    st.base.readout = timing.readout;
+    auto o = std::make_unique<OnlineCalibrator>(cfg.online, st, *pub);
+    o->set_applied(online_applied.has_value());
+    return o;
+  }
+
   // SIGHUP: `next`'s calibration from the next frame on; "" or why it is refused.
-  std::string apply_calibration(const Config& next) {
+  std::string apply_calibration(const Config& next, const char* label = "configured") {
     if (next_rectifier) return "the previous calibration is still being taken up; send SIGHUP again";
     try {
       const auto [cam, timing] = geometry(next);
       next_rectifier = std::make_unique<FrameRectifier>(rectify_config(), cam, timing, source->format(), workers.get());
+      next_rectifier->set_calibration(label);
     } catch (const std::exception& e) {
       return e.what();
     }
@@ -156,6 +216,16 @@ struct Session {
     cfg.velocity_input = next.velocity_input;
     ++calibrations_applied;
     return "";
+  }
+  // calibration.online apply: a converged estimate the estimator decided to switch to.
+  void take_online() {
+    const std::optional<dsp::OnlineCalibration> c = online ? online->take_apply() : std::nullopt;
+    if (!c) return;
+    if (const std::string why = apply_online(*c); !why.empty()) return online->retry_apply(*c);  // next time round
+    online->set_applied(true);
+    spdlog::info("online calibration applied from the next frame: time offset {:.3f} ms, line delay {:.3f} us, gyro bias "
+                 "[{:.5f}, {:.5f}, {:.5f}] rad/s",
+                 c->time_offset_s * 1e3, c->line_delay_s * 1e6, c->gyro_bias.x(), c->gyro_bias.y(), c->gyro_bias.z());
   }
   // Frees the rectifier the pipeline stopped using once it has taken up the new one.
   void collect_retired() {
@@ -171,6 +241,7 @@ struct Session {
       workers = std::make_unique<WorkerPool>(cfg.rectify.workers);
     }
     rectifier = std::make_unique<FrameRectifier>(rectify_config(), cam, timing, source->format(), workers.get());
+    if (online_applied) rectifier->set_calibration("online");
     PipelineConfig pc = cfg.pipeline;
     if (playback() && playback()->fast()) pc.lossless = true;  // every frame, reproducibly
     const bool to_files = !cfg.output.dir.empty() || !cfg.output.video.empty();
@@ -185,6 +256,8 @@ struct Session {
     const bool paced = !playback() && !messages();
     watch = std::make_unique<SourceWatch>(cfg.health, source->name(), paced ? source->timing().frame_rate_hz : 0, paced);
     pipeline->set_frame_files(files.get());
+    pipeline->set_frame_tap(online.get());
+    if (online) online->start();
     active().start();
     pipeline->start();
   }
@@ -294,7 +367,12 @@ bool handle_reload(Session& s, StopFlags& flags, const Reloader& reloader, Syste
     flags.reload = true;
     return false;
   }
+  // A calibration the user gave replaces what the online calibration had applied.
+  const std::optional<dsp::OnlineCalibration> online = s.online_applied;
+  if (r.kind == Reload::Calibration) s.online_applied.reset(), s.mount_base = r.cfg.velocity_input.imu_to_camera;
   const std::string why = r.kind == Reload::Refused ? r.why : s.apply_calibration(r.cfg);
+  if (!why.empty()) s.online_applied = online;
+  else if (s.online) s.online->set_applied(s.online_applied.has_value());
   if (!why.empty()) spdlog::error("reload refused, keeping the running calibration: {}", why);
   else spdlog::info("calibration reloaded: applied from the next frame");
   sd.ready();
@@ -329,6 +407,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     sd.watchdog();
     s.collect_retired();
+    s.take_online();
     const auto now = Clock::now();
     if (limits.max_frames && s.frames_out() >= limits.max_frames) break;
     if (s.pipeline->finished()) break;  // a replay has played its log to the end
@@ -360,6 +439,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
     }
     if (now - t_health >= std::chrono::seconds(1)) {
       report_health(s, nullptr, std::chrono::duration<double>(now - t_health).count(), last_in, last_out, line, sd);
+      if (s.online) s.online->publish();
       t_health = now;
     }
   }
@@ -369,6 +449,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   s.pipeline->stop();  // flushes what is in flight
   s.active().stop();
   s.velocity_in->stop();
+  if (s.online) s.online->stop();
   const double seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
   if (progress) print_progress(*s.playback(), seconds);
   report_health(s, "stopping", std::max(1e-3, std::chrono::duration<double>(Clock::now() - t_health).count()), last_in,
@@ -379,6 +460,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   out.reconnects = s.reconnects;
   out.seconds = seconds;
   out.calibrations_applied = s.calibrations_applied;
+  if (s.online) out.online = s.online->latest(), out.online_applied = s.online_applied;
   if (const drivers::Playback* p = s.playback()) {
     out.replayed = p->frames();
     if (const drivers::ReplaySource* r = s.replay(); r && r->reader()) {

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "daemon/config.hpp"
@@ -32,6 +33,9 @@ struct RunSummary {
   std::string skips;
   double seconds = 0;
   int calibrations_applied = 0;  // SIGHUP calibrations taken up between two frames
+  // calibration.online: the last estimate, and the one the rectifier used at the end (apply).
+  std::optional<dsp::OnlineEstimate> online;
+  std::optional<dsp::OnlineCalibration> online_applied;
 };
 
 // Makes the camera source; the default builds the configured driver. Tests substitute one.

@@ -82,6 +82,7 @@ void VelocityInput::at_camera_origin(const double* w, const double* v, double* o
 
 void VelocityInput::push_imu(int64_t utime_imu, const double* w_measured, const double* v, bool has_linear, bool live) {
   if (!stamp_in_range(utime_imu)) return buffer_.reject();
+  if (gyro_tap_) gyro_tap_->gyro(utime_imu, w_measured);
   double w[3], vc[3];
   for (int i = 0; i < 3; ++i) w[i] = cfg_.gyro_scale[i] * (w_measured[i] - cfg_.gyro_bias_rad_s[i]);
   at_camera_origin(w, v, vc);

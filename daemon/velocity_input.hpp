@@ -25,6 +25,15 @@
 
 namespace rsd::daemon {
 
+// Raw IMU measurements also to background work (the online calibration): each FRAME_IMU sample
+// as measured, on the IMU's clock and axes, before the calibration corrects it. Called with the
+// velocity input's writer lock held (one caller at a time); it must neither wait nor allocate.
+class GyroTap {
+ public:
+  virtual ~GyroTap() = default;
+  virtual void gyro(int64_t utime_imu, const double* w_measured) = 0;
+};
+
 struct VelocityInputConfig {
   std::string pose_channel;  // bot_core.pose_t; empty: not subscribed
   // Rotations (row-major in the config), v_camera = R v_sensor.
@@ -90,6 +99,8 @@ class VelocityInput {
   // rsd --record: velocity and pose messages received over LCM (an IMU, a localiser) are
   // written to the recording as they arrive, unless they are a source's echo.
   void set_recorder(formats::LcmLogWriter* log) { record_ = log; }
+  // The raw IMU measurements to `tap` too; before start().
+  void set_gyro_tap(GyroTap* tap) { gyro_tap_ = tap; }
 
  private:
   static void on_velocity(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
@@ -117,6 +128,7 @@ class VelocityInput {
   std::atomic<bool> clock_check_{false};
   std::optional<int64_t> t0_us_;  // camera time of the first sample (the drift's reference)
   formats::LcmLogWriter* record_ = nullptr;
+  GyroTap* gyro_tap_ = nullptr;
   // The source's thread and the LCM thread (pose_t) both push, and set_calibration() changes
   // cfg_'s calibration: every entry point holds this while it converts and pushes.
   std::mutex writer_;

@@ -6,11 +6,7 @@
 namespace rsd::drivers {
 
 void visit_replay_path(formats::ConfigSection& c, const char* key, std::string& path, const char* comment) {
-  std::string p = path;
-  c.value(key, p, comment);
-  if (!p.empty() && std::filesystem::path(p).is_relative() && !c.file().empty())
-    p = (std::filesystem::path(c.file()).parent_path() / p).string();
-  path = p;
+  c.path(key, path, comment);
 }
 
 void visit_replay_speed(formats::ConfigSection& c, double& speed) {

@@ -32,7 +32,7 @@ struct ReplayConfig {
   std::string channel = "RSD_RAW";
   std::string velocity_channel = "RSD_VELOCITY";
   // Channels rsd itself records (outputs): skipped without counting them as unknown.
-  std::vector<std::string> ignore = {"RSD_RECT", "RSD_FRAME_INFO", "RSD_HEALTH"};
+  std::vector<std::string> ignore = {"RSD_RECT", "RSD_FRAME_INFO", "RSD_HEALTH", "RSD_CALIBRATION"};
   double fallback_fps = 30;  // frame rate when the log does not say and has one frame only
   bool quiet_skips = false;  // count skips without printing them
 };

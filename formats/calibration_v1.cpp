@@ -3,7 +3,10 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/LU>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <stdexcept>
 
@@ -131,10 +134,24 @@ void write_calibration(const std::string& file, const Calibration& c) {
   cam["rsd"] = rsd;
   YAML::Node root;
   root["cam0"] = cam;
-  std::ofstream out(file);
-  out << "# " << kFormat << " (docs/formats/calibration-v1.md): a Kalibr camchain-imucam file with rsd's additions\n"
-      << YAML::Dump(root) << "\n";
-  if (!out) throw std::runtime_error(file + ": cannot write the calibration");
+  // Written beside the file and renamed over it: a reader (a restarting daemon loading its
+  // state file) sees the old file or the new one, never half of one.
+  const std::string tmp = file + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << "# " << kFormat << " (docs/formats/calibration-v1.md): a Kalibr camchain-imucam file with rsd's additions\n"
+        << YAML::Dump(root) << "\n";
+    out.flush();
+    if (!out) {
+      std::remove(tmp.c_str());
+      throw std::runtime_error(file + ": cannot write the calibration");
+    }
+  }
+  if (std::rename(tmp.c_str(), file.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(tmp.c_str());
+    throw std::runtime_error(file + ": cannot write the calibration (" + why + ")");
+  }
 }
 
 Calibration calibration_of(const dsp::NominalModel& n, const std::string& source) {

@@ -54,8 +54,8 @@ Calibration read_calibration(const std::string& file);
 void require_resolution(const Calibration& c, int width, int height);
 
 // Writes the file (Kalibr's keys, then cam0.rsd with format rsd-calibration/1; every number
-// shortest-exact, so it reads back to the same doubles). Throws std::runtime_error naming the
-// file if it cannot be written.
+// shortest-exact, so it reads back to the same doubles), atomically (a temporary file renamed
+// over it). Throws std::runtime_error naming the file if it cannot be written.
 void write_calibration(const std::string& file, const Calibration& c);
 
 }  // namespace rsd::formats

@@ -1,5 +1,7 @@
 #include "formats/config_section.hpp"
 
+#include <filesystem>
+
 #include <charconv>
 
 namespace rsd::formats {
@@ -41,6 +43,14 @@ void ConfigReader::section(const char* key, const std::function<void(ConfigSecti
 
 void ConfigReader::check(bool ok, const char* key, const std::string& why) {
   if (!ok) m_.fail(key, why);
+}
+
+void ConfigSection::path(const char* key, std::string& v, const char* comment) {
+  std::string p = v;
+  value(key, p, comment);
+  if (!p.empty() && std::filesystem::path(p).is_relative() && !file().empty())
+    p = (std::filesystem::path(file()).parent_path() / p).string();
+  v = p;
 }
 
 void ConfigSection::pixel_format(const char* key, dsp::PixelFormat& v, const char* comment) {

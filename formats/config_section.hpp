@@ -47,6 +47,8 @@ class ConfigSection {
   }
   // A key naming a pixel format (dsp/core/pixel_format.hpp: "mono8", "nv12", "bayer_rggb16", ...).
   void pixel_format(const char* key, dsp::PixelFormat& v, const char* comment = nullptr);
+  // A key naming a file: a relative path is taken from the configuration file's directory.
+  void path(const char* key, std::string& v, const char* comment = nullptr);
   // A nested section; absent when reading leaves the values as they are.
   virtual void section(const char* key, const std::function<void(ConfigSection&)>& body, const char* comment = nullptr) = 0;
   // A comment line in the printed defaults (examples of optional keys, explanations).

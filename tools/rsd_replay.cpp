@@ -13,6 +13,7 @@
 #include <rsd/frame_info_t.hpp>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -98,13 +99,14 @@ int play(const Options& o) {
   formats::RecordedFrame frame;
   std::string why;
   uint64_t frames = 0, velocities = 0, ignored = 0;
+  const std::vector<std::string> kOutputs = rsd::drivers::ReplayConfig{}.ignore;  // rsd's own recorded outputs
   const int64_t start = monotonic_ns();
   int64_t last_progress = start;
   while (!g_stop && reader.next(ev)) {
     const bool is_frame = ev.channel == o.channel, is_velocity = ev.channel == o.velocity_channel;
     const bool is_pose = !o.pose_channel.empty() && ev.channel == o.pose_channel;
     if (!is_frame && !is_velocity && !is_pose) {
-      if (ev.channel == "RSD_RECT" || ev.channel == "RSD_FRAME_INFO" || ev.channel == "RSD_HEALTH") ++ignored;
+      if (std::find(kOutputs.begin(), kOutputs.end(), ev.channel) != kOutputs.end()) ++ignored;
       else reader.skip(formats::LogSkip::UnknownChannel, ev.offset, "channel '" + ev.channel + "'");
       continue;
     }

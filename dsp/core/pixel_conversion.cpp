@@ -146,4 +146,42 @@ void convert_to_rgb(const ImageView& src, const ImageView& rgb) {
     }
 }
 
+namespace {
+
+// (R + 2 G + B) / 4 of the 2x2 mosaic cell whose top-left site is (x, y), 8-bit.
+std::uint8_t cell_luma(const ImageView& src, int x, int y, int bytes) {
+  int sum = 0;  // one red, two green and one blue site
+  for (int dy = 0; dy < 2; ++dy)
+    for (int dx = 0; dx < 2; ++dx) sum += load_sample(src.row(y + dy) + bytes * (x + dx), bytes);
+  return static_cast<std::uint8_t>((sum + 2) >> 2);
+}
+
+}  // namespace
+
+void convert_to_luma(const ImageView& src, const ImageView& mono8) {
+  if (mono8.format != PixelFormat::Mono8 || mono8.width != src.width || mono8.height != src.height)
+    throw std::invalid_argument("pixel conversion: luma needs a mono8 image of the source's size");
+  const int w = src.width, bytes = sample_bytes(src.format);
+  for (int y = 0; y < src.height; ++y) {
+    const std::uint8_t* in = src.row(y);
+    std::uint8_t* out = mono8.row(y);
+    switch (src.format) {
+      case PixelFormat::Mono8:
+      case PixelFormat::Nv12:
+      case PixelFormat::I420: std::memcpy(out, in, static_cast<size_t>(w)); break;  // Y is the first plane
+      case PixelFormat::Mono16:
+        for (int x = 0; x < w; ++x) out[x] = in[2 * x + 1];
+        break;
+      case PixelFormat::Yuyv:
+        for (int x = 0; x < w; ++x) out[x] = in[2 * x];
+        break;
+      case PixelFormat::Rgb8:
+        for (int x = 0; x < w; ++x) out[x] = static_cast<std::uint8_t>((77 * in[3 * x] + 150 * in[3 * x + 1] + 29 * in[3 * x + 2] + 128) >> 8);
+        break;
+      default:  // a mosaic: even sizes (size_fits), so every cell is whole
+        for (int x = 0; x < w; x += 2) out[x] = out[x + 1] = cell_luma(src, x, y & ~1, bytes);
+    }
+  }
+}
+
 }  // namespace rsd::dsp

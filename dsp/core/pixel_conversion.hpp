@@ -19,6 +19,12 @@ void convert_from_rgb(const ImageView& rgb, const ImageView& dst);
 // nearest sites).
 void convert_to_rgb(const ImageView& src, const ImageView& rgb);
 
+// The luma of any format into a Mono8 view of the same size, for feature tracking (the online
+// calibration's): Y itself for YUV (no chroma read), the high byte of 16-bit samples, BT.601
+// integer luma for RGB, and for a mosaic (R + 2 G + B) / 4 of the 2x2 cell holding the pixel (a
+// half-resolution picture without the sites' checkerboard). No allocation.
+void convert_to_luma(const ImageView& src, const ImageView& mono8);
+
 // The colour (0 R, 1 G, 2 B) of mosaic site (x, y) in a Bayer format.
 int bayer_colour(PixelFormat f, int x, int y);
 

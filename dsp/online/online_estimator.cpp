@@ -1,12 +1,15 @@
 #include "dsp/online/online_estimator.hpp"
 
 #include <algorithm>
+#include <Eigen/Eigenvalues>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 
 #include "dsp/diagnosis/fit.hpp"
 #include "dsp/diagnosis/model.hpp"
+#include "dsp/diagnosis/parallax.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/uncertainty.hpp"
 
@@ -24,33 +27,43 @@ const char* to_string(OnlineState s) {
 
 namespace {
 
-// The parameters the estimator frees, in the order of its variances.
-const std::vector<Param> kFree = {Param::TimeOffset, Param::LineDelay, Param::BiasX, Param::BiasY, Param::BiasZ};
+// The parameters the estimator frees, in the order of its values and variances.
+const std::vector<Param> kFree = {Param::TimeOffset, Param::LineDelay, Param::BiasX,  Param::BiasY,
+                                  Param::BiasZ,      Param::MountX,    Param::MountY, Param::MountZ};
+constexpr int kBias = 2, kMount = 5;  // the first bias and mount values
 
 void require(bool ok, const char* option, const char* rule) {
   if (!ok) throw std::invalid_argument(std::string("online calibration: ") + option + " must be " + rule);
 }
 
+using Values = std::array<double, kOnlineValues>;
+
+Values values(const OnlineCalibration& c) {
+  return {c.time_offset_s,  c.line_delay_s,        c.gyro_bias.x(),       c.gyro_bias.y(),
+          c.gyro_bias.z(),  c.mount_rotation.x(),  c.mount_rotation.y(),  c.mount_rotation.z()};
+}
+
+OnlineCalibration calibration(const Values& v) {
+  return {v[0], v[1], {v[2], v[3], v[4]}, {v[5], v[6], v[7]}};
+}
+
 OnlineCalibration from_params(const ModelParams& p) {
-  return {p[Param::TimeOffset], p[Param::LineDelay], {p[Param::BiasX], p[Param::BiasY], p[Param::BiasZ]}};
+  Values v{};
+  for (int i = 0; i < kOnlineValues; ++i) v[i] = p[kFree[i]];
+  return calibration(v);
 }
 
-OnlineCalibration from_variances(const Eigen::VectorXd& v) {
-  const Eigen::VectorXd s = v.cwiseMax(0).cwiseSqrt();
-  return {s[0], s[1], {s[2], s[3], s[4]}};
+OnlineCalibration from_variances(const Eigen::VectorXd& var) {
+  Values v{};
+  for (int i = 0; i < kOnlineValues; ++i) v[i] = std::sqrt(std::max(var[i], 0.0));
+  return calibration(v);
 }
-
-std::array<double, 5> values(const OnlineCalibration& c) {
-  return {c.time_offset_s, c.line_delay_s, c.gyro_bias.x(), c.gyro_bias.y(), c.gyro_bias.z()};
-}
-
-OnlineCalibration calibration(const std::array<double, 5>& v) { return {v[0], v[1], {v[2], v[3], v[4]}}; }
 
 }  // namespace
 
 OnlineEstimator::OnlineEstimator(const NominalModel& nominal, const OnlineCalibration& start,
-                                 const OnlineEstimatorOptions& opt)
-    : nominal_(nominal), opt_(opt) {
+                                 const OnlineEstimatorOptions& opt, const Eigen::Vector3d& gyro_scale)
+    : nominal_(nominal), opt_(opt), gyro_scale_(gyro_scale) {
   require(opt.window_s > 0, "window_s", "positive");
   require(opt.min_rate_rad_s >= 0, "min_rate_rad_s", "zero or positive");
   require(opt.min_matches >= 10, "min_matches", "at least 10");
@@ -60,8 +73,6 @@ OnlineEstimator::OnlineEstimator(const NominalModel& nominal, const OnlineCalibr
   require(opt.step_sigmas > 0, "step_sigmas", "positive");
   require(opt.offset_walk_s >= 0 && opt.line_delay_walk >= 0 && opt.bias_walk_rad_s >= 0, "the random walks", "zero or positive");
   require(start.line_delay_s > 0, "the starting line delay", "positive");
-  nominal_.time.time_offset_s = start.time_offset_s;
-  nominal_.time.line_delay_s = start.line_delay_s;
   est_.value = start;
 }
 
@@ -97,10 +108,21 @@ OnlineWindow OnlineEstimator::window_contents() const {
     w.matches += static_cast<int>(p.a.size());
   }
   const double off = est_.value.time_offset_s;
-  double sum2 = 0;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d sum2 = Eigen::Matrix3d::Zero();
   for (const GyroSample& g : gyro_)
-    if (g.t >= w.t_begin + off && g.t <= w.t_end + off) ++w.gyro_samples, sum2 += (g.w - est_.value.gyro_bias).squaredNorm();
-  w.rate_rms_rad_s = w.gyro_samples ? std::sqrt(sum2 / w.gyro_samples) : 0;
+    if (g.t >= w.t_begin + off && g.t <= w.t_end + off) {
+      const Eigen::Vector3d r = g.w - est_.value.gyro_bias;
+      ++w.gyro_samples, sum += r, sum2 += r * r.transpose();
+    }
+  if (w.gyro_samples == 0) return w;
+  const double n = w.gyro_samples;
+  const Eigen::Vector3d mean = sum / n;
+  w.rate_rms_rad_s = std::sqrt(sum2.trace() / n);
+  w.rate_mean_rad_s = mean.norm();
+  // The rate's variation about its mean: the second largest of its principal spreads.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(sum2 / n - mean * mean.transpose());
+  w.rate_spread_rad_s = std::sqrt(std::max(eig.eigenvalues()[1], 0.0));  // ascending order
   return w;
 }
 
@@ -135,39 +157,103 @@ const OnlineEstimate& OnlineEstimator::hold(OnlineState s, const std::string& wh
 }
 
 void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibration& sigma, double t) {
-  const std::array<double, 5> z = values(fit), s = values(sigma);
+  const Values z = values(fit), s = values(sigma), start = values(est_.value);
   const double ld = have_fit_ ? x_[1] : fit.line_delay_s;
-  const std::array<double, 5> walk = {opt_.offset_walk_s, opt_.line_delay_walk * ld, opt_.bias_walk_rad_s,
-                                      opt_.bias_walk_rad_s, opt_.bias_walk_rad_s};
+  // Per value: its random walk per square root of a second, and the sigma it converges to.
+  const double b = opt_.bias_walk_rad_s, m = opt_.mount_walk_rad;
+  const Values walk = {opt_.offset_walk_s, opt_.line_delay_walk * ld, b, b, b, m, m, m};
+  const double sb = opt_.converged_bias_sigma, sm = opt_.converged_mount_sigma_rad;
+  const Values small = {opt_.converged_offset_sigma_s, opt_.converged_line_delay_sigma * ld, sb, sb, sb, sm, sm, sm};
   const double dt = have_fit_ ? std::max(t - t_fit_, 1e-3) : 0;
   // Successive windows overlap: a fit shares most of its data with the one before, so it
   // carries the information of only the new part of its window.
   const double overlap = have_fit_ ? std::max(1.0, opt_.window_s / dt) : 1.0;
-  const bool first = !have_fit_;
-  bool stepped = false;
-  for (int i = 0; i < 5; ++i) {
+  bool stepped = false, unseen_bias = false;
+  for (int i = 0; i < kOnlineValues; ++i) {
     const double prior = var_[i] + walk[i] * walk[i] * dt, r = s[i] * s[i], nu = z[i] - x_[i];
-    // A value whose fit lies beyond step_sigmas of the estimate stepped: it restarts from the fit.
-    if (first || nu * nu > opt_.step_sigmas * opt_.step_sigmas * (prior + r)) {
+    if (s[i] > opt_.unobservable * small[i]) {  // this window says next to nothing of it: held
+      const double known = opt_.unobservable * small[i];  // what a start is taken to be good to
+      if (!have_fit_) x_[i] = start[i], var_[i] = std::min(r, known * known);
+      else var_[i] = prior;
+      unseen_bias = unseen_bias || (i >= kBias && i < kMount);
+    } else if (!have_fit_ || nu * nu > opt_.step_sigmas * opt_.step_sigmas * (prior + r)) {
+      // The first fit, or a value whose fit lies beyond step_sigmas of the estimate (a step):
+      // it restarts from the fit.
+      stepped = stepped || have_fit_;
       x_[i] = z[i], var_[i] = r;
-      stepped = stepped || !first;
     } else {
       const double k = prior / (prior + r * overlap);
       x_[i] += k * nu, var_[i] = (1 - k) * prior;
     }
   }
   have_fit_ = true, t_fit_ = t;
-  est_.value = calibration(x_);
-  std::array<double, 5> sd{};
-  for (int i = 0; i < 5; ++i) sd[i] = std::sqrt(var_[i]);
-  est_.sigma = calibration(sd);
-  const bool small = est_.sigma.time_offset_s <= opt_.converged_offset_sigma_s &&
-                     est_.sigma.line_delay_s <= opt_.converged_line_delay_sigma * est_.value.line_delay_s &&
-                     est_.sigma.gyro_bias.maxCoeff() <= opt_.converged_bias_sigma;
-  settled_ = small && !stepped ? settled_ + 1 : 0;
+  Values sd{};
+  for (int i = 0; i < kOnlineValues; ++i) sd[i] = std::sqrt(var_[i]);
+  est_.value = calibration(x_), est_.sigma = calibration(sd);
+  // Converged: the offset, the line delay and the bias known to their thresholds; a bias the
+  // motion does not show (the camera translates) is held and does not keep the others from
+  // converging. The mount rotation refines when the motion shows it (rotation about several
+  // axes) and never holds the rest back.
+  bool settled = true;
+  for (int i = 0; i < kMount; ++i) settled = settled && (sd[i] <= small[i] || (i >= kBias && unseen_bias));
+  est_.mount_known = sd[kMount] <= sm && sd[kMount + 1] <= sm && sd[kMount + 2] <= sm;
+  settled_ = settled && !stepped ? settled_ + 1 : 0;
   est_.state = settled_ >= opt_.settle ? OnlineState::Converged : OnlineState::Converging;
   est_.converged = est_.state == OnlineState::Converged;
-  est_.reason = stepped ? "a step: restarted from this window's fit" : "";
+  est_.reason = stepped ? "a step: restarted from this window's fit" : unseen_bias ? "gyro bias held: this window does not show it" : "";
+}
+
+namespace {
+
+// One window's fit: the parameters, their variances (nullopt: not identifiable), the residual
+// statistics, and whether a translation of the camera had to be taken out.
+struct WindowFit {
+  ModelParams params;
+  std::optional<Eigen::VectorXd> var;
+  RobustStats stats;
+  double parallax_share = 0;  // 0: no parallax
+};
+
+// Fits the window's matches from p: a grid search of the offset first when asked, then the
+// robust fit of the values (the mount rotation's only `with_mount`). A camera that also translates past a near scene moves the
+// matches by a flow the rotation-only model reads as rotation; where the residuals show that
+// parallax (dsp/diagnosis/parallax.hpp), each frame pair's translation flow is taken out and
+// the fit repeated. `parallax_share`: the share of the residual energy the translation explains.
+WindowFit fit_window(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p0, double search_s,
+                     bool with_mount) {
+  ModelParams p = p0;
+  if (search_s > 0) {
+    const std::vector<int> sub = subsample(idx, 300);
+    const double guess = std::clamp(robust_stats(m.residuals(p, sub)).scale_px, 0.2, 5.0);
+    p[Param::TimeOffset] = refine_time_offset(m, sub, p, guess, search_s);
+  }
+  const double sigma_px = std::clamp(robust_stats(m.residuals(p, idx)).scale_px, 0.05, 10.0);
+  const std::vector<Param> fitted(kFree.begin(), kFree.begin() + (with_mount ? kOnlineValues : kMount));
+  ParamMask free;
+  for (Param q : fitted) free.set(static_cast<int>(q));
+  WindowFit w;
+  w.params = fit_params(m, idx, p, free, sigma_px);
+  if (const Parallax px = parallax_signal(m, w.params, idx); px.clear()) {
+    w.parallax_share = px.share;
+    w.params.translation_nuisance = true;
+    w.params = fit_params(m, idx, w.params, free, sigma_px);
+  }
+  w.stats = robust_stats(m.residuals(w.params, idx));
+  if (const auto v = parameter_variances(m, w.params, fitted, idx)) {
+    w.var = Eigen::VectorXd::Constant(kOnlineValues, std::numeric_limits<double>::infinity());  // not fitted: unknown
+    w.var->head(v->size()) = *v;
+  }
+  return w;
+}
+
+}  // namespace
+
+ModelParams OnlineEstimator::start_params(const NominalModel& n) const {
+  ModelParams p = nominal_params(n);
+  const Values v = values(est_.value);
+  for (int i = 0; i < kOnlineValues; ++i) p[kFree[i]] = v[i];
+  p[Param::ScaleX] = gyro_scale_.x(), p[Param::ScaleY] = gyro_scale_.y(), p[Param::ScaleZ] = gyro_scale_.z();
+  return p;
 }
 
 const OnlineEstimate& OnlineEstimator::update() {
@@ -176,6 +262,7 @@ const OnlineEstimate& OnlineEstimator::update() {
   OnlineWindow w = window_contents();
   if (w.matches < opt_.min_matches)
     return hold(OnlineState::Held, "too few matches (" + std::to_string(w.matches) + ")", w);
+  if (w.gyro_samples == 0) return hold(OnlineState::Held, "no gyro measurements in the window", w);
   if (w.rate_rms_rad_s < opt_.min_rate_rad_s)
     return hold(OnlineState::Held, "too little rotation (" + std::to_string(w.rate_rms_rad_s) + " rad/s RMS)", w);
   try {
@@ -183,31 +270,29 @@ const OnlineEstimate& OnlineEstimator::update() {
     const DiagnosisModel m(rec);
     std::vector<int> idx(m.size());
     for (int i = 0; i < m.size(); ++i) idx[i] = i;
-    ModelParams p = nominal_params(rec.nominal);
-    p[Param::BiasX] = est_.value.gyro_bias.x(), p[Param::BiasY] = est_.value.gyro_bias.y(),
-    p[Param::BiasZ] = est_.value.gyro_bias.z();
-    if (est_.state != OnlineState::Converged && opt_.search_s > 0) {
-      // Until converged the offset may be far off (a new rig, a step): a grid search first.
-      const std::vector<int> sub = subsample(idx, 300);
-      const double guess = std::clamp(robust_stats(m.residuals(p, sub)).scale_px, 0.2, 5.0);
-      p[Param::TimeOffset] = refine_time_offset(m, sub, p, guess, opt_.search_s);
-    }
-    const double sigma_px = std::clamp(robust_stats(m.residuals(p, idx)).scale_px, 0.05, 10.0);
-    ParamMask free;
-    for (Param q : kFree) free.set(static_cast<int>(q));
-    const ModelParams f = fit_params(m, idx, p, free, sigma_px);
-    const RobustStats rs = robust_stats(m.residuals(f, idx));
-    w.fitted = rs.observations, w.inliers = rs.observations - rs.outliers, w.residual_px = rs.scale_px;
-    const OnlineCalibration v = from_params(f);
-    if (rs.scale_px > opt_.max_residual_px)
-      return hold(OnlineState::Rejected, "residuals too large (" + std::to_string(rs.scale_px) + " px)", w);
+    // Until converged the offset may be far off (a new rig, a step): a grid search first.
+    const double search = est_.converged ? 0.0 : opt_.search_s;
+    // The mount rotation turns the measured rate: a constant rate's turn is a constant offset,
+    // the same as a bias. Only a rate that varies about two axes or more, by more than its mean,
+    // tells them apart; otherwise the mount is held as it is.
+    const bool with_mount = w.rate_spread_rad_s >= opt_.mount_min_spread_rad_s && w.rate_spread_rad_s >= 0.5 * w.rate_mean_rad_s;
+    const WindowFit f = fit_window(m, idx, start_params(rec.nominal), search, with_mount);
+    w.fitted = f.stats.observations, w.inliers = f.stats.observations - f.stats.outliers;
+    w.residual_px = f.stats.scale_px, w.parallax_share = f.parallax_share;
+    const OnlineCalibration v = from_params(f.params);
+    // Over a near scene a translation's flow and the rotation's are nearly the same field: when
+    // it dominates, the rotation-only model would bend the calibration to explain it.
+    if (f.parallax_share > opt_.max_parallax_share)
+      return hold(OnlineState::Held, "the camera translates past a near scene (parallax, " +
+                                         std::to_string(static_cast<int>(100 * f.parallax_share)) + "% of the residual)", w);
+    if (f.stats.scale_px > opt_.max_residual_px)
+      return hold(OnlineState::Rejected, "residuals too large (" + std::to_string(f.stats.scale_px) + " px)", w);
     if (2 * w.inliers < w.fitted) return hold(OnlineState::Rejected, "fewer than half the matches fit", w);
     if (!(v.line_delay_s > 0) || v.gyro_bias.cwiseAbs().maxCoeff() > opt_.max_bias_rad_s)
       return hold(OnlineState::Rejected, "implausible fit (line delay or gyro bias)", w);
-    const auto var = parameter_variances(m, f, kFree, idx);
-    if (!var) return hold(OnlineState::Rejected, "parameters not identifiable from this window", w);
+    if (!f.var) return hold(OnlineState::Rejected, "parameters not identifiable from this window", w);
     est_.window = w;
-    accept(v, from_variances(*var), w.t_end);
+    accept(v, from_variances(*f.var), w.t_end);
     return est_;
   } catch (const std::exception& e) {
     return hold(OnlineState::Rejected, e.what(), w);

@@ -1,6 +1,7 @@
 // Online self-calibration (docs/online-calibration.md): the camera-IMU time offset, the line
-// delay and the gyro bias, estimated while the camera runs from feature matches between
-// consecutive raw frames and the raw gyro stream, over a sliding window.
+// delay and the gyro bias (and, when the motion shows it, the IMU's mount rotation), estimated
+// while the camera runs from feature matches between consecutive raw frames and the raw gyro
+// stream, over a sliding window.
 //
 // Each update fits the window with the diagnosis's own model (dsp/diagnosis/model.hpp: a
 // frame_b pixel against the transfer of its frame_a pixel through the gyro's rotation between
@@ -21,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "dsp/diagnosis/model.hpp"
 #include "dsp/observation/recording.hpp"
 
 namespace rsd::dsp {
@@ -36,7 +38,11 @@ struct OnlineCalibration {
   double time_offset_s = 0;  // t_imu = t_camera + offset (calibration-v1's timeshift_cam_imu)
   double line_delay_s = 0;   // between consecutive rows read
   Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();  // rad/s, IMU axes: w = w_measured - bias
+  // The IMU's mount beyond the nominal's: imu_to_camera = Exp(r) R_nominal (recording-v1's
+  // mount_rotation), rad.
+  Eigen::Vector3d mount_rotation = Eigen::Vector3d::Zero();
 };
+inline constexpr int kOnlineValues = 8;  // offset, line delay, bias x y z, mount x y z
 
 // What the window of the last update held.
 struct OnlineWindow {
@@ -45,7 +51,10 @@ struct OnlineWindow {
   int fitted = 0, inliers = 0;    // matches fitted, and inliers at the fit
   int gyro_samples = 0;
   double rate_rms_rad_s = 0;      // RMS of the measured rate less the bias, over the window
+  double rate_mean_rad_s = 0;     // |mean rate|
+  double rate_spread_rad_s = 0;   // the rate's variation about its mean, second principal axis
   double residual_px = 0;         // robust per-coordinate sigma of the residuals at the fit
+  double parallax_share = 0;      // residual share a translation explained (then taken out; 0: none)
 };
 
 struct OnlineEstimate {
@@ -53,6 +62,7 @@ struct OnlineEstimate {
   OnlineState state = OnlineState::Converging;
   OnlineWindow window;
   bool converged = false;          // the value is a converged one (also while held or rejected)
+  bool mount_known = false;        // the mount rotation's sigmas are small (the motion showed it)
   int updates = 0;                 // updates so far
   std::string reason;              // why held or rejected ("" otherwise)
 };
@@ -70,14 +80,21 @@ struct OnlineEstimatorOptions {
   double offset_walk_s = 2e-5;        // s/sqrt(s)
   double line_delay_walk = 2e-4;      // relative, 1/sqrt(s)
   double bias_walk_rad_s = 5e-5;      // rad/s/sqrt(s)
+  double mount_walk_rad = 1e-5;       // rad/sqrt(s)
   double step_sigmas = 5;
   // Converged: the estimate's sigmas at most these (line delay: relative) over `settle`
   // updates in a row without a step.
   double converged_offset_sigma_s = 1.5e-4;
   double converged_line_delay_sigma = 0.008;
   double converged_bias_sigma = 7e-4;
+  double converged_mount_sigma_rad = 1e-3;  // the mount rotation is known below this
+  double mount_min_spread_rad_s = 0.3;       // rate variation about two axes needed to fit the mount
   int settle = 2;
+  // A window whose fit sigma of a value exceeds this many times its converged sigma does not
+  // move it (the motion does not show it: a bias while the camera translates past a near scene).
+  double unobservable = 10;
   double max_residual_px = 3;      // a robust residual sigma above this: rejected
+  double max_parallax_share = 0.5; // a translation explaining more of the residual: held
   double max_bias_rad_s = 0.3;     // |bias| per axis beyond this: rejected (no gyro is that bad)
 };
 
@@ -86,7 +103,9 @@ class OnlineEstimator {
   // `nominal`: the camera, its nominal line delay and readout, the IMU's mount (imu_to_camera);
   // its time offset and line delay are replaced by `start`'s. Throws std::invalid_argument for
   // options out of range (naming the option).
-  OnlineEstimator(const NominalModel& nominal, const OnlineCalibration& start, const OnlineEstimatorOptions& opt = {});
+  // `gyro_scale`: the gyro's known scale (w = diag(scale) (w_measured - bias)), held.
+  OnlineEstimator(const NominalModel& nominal, const OnlineCalibration& start, const OnlineEstimatorOptions& opt = {},
+                  const Eigen::Vector3d& gyro_scale = Eigen::Vector3d::Ones());
 
   // A raw gyro measurement (IMU clock and axes, before any bias correction); in time order.
   void add_gyro(double t_imu, const Eigen::Vector3d& w_measured);
@@ -106,6 +125,8 @@ class OnlineEstimator {
   void prune();
   OnlineWindow window_contents() const;
   Recording window_recording() const;
+  // The diagnosis model's parameters at the estimate (its bias, the known gyro scale).
+  ModelParams start_params(const NominalModel& n) const;
   // Holds the estimate, saying why.
   const OnlineEstimate& hold(OnlineState s, const std::string& why, const OnlineWindow& w);
   // A window's fit (at the window's end, t) into the estimate.
@@ -113,11 +134,12 @@ class OnlineEstimator {
 
   NominalModel nominal_;
   OnlineEstimatorOptions opt_;
+  Eigen::Vector3d gyro_scale_;
   OnlineEstimate est_;
   std::deque<Pair> pairs_;
   std::deque<GyroSample> gyro_;
-  // The filter: per value (offset, line delay, bias x y z) the estimate and its variance.
-  std::array<double, 5> x_{}, var_{};
+  // The filter: per value (offset, line delay, bias x y z, mount x y z) the estimate and its variance.
+  std::array<double, kOnlineValues> x_{}, var_{};
   double t_fit_ = 0;  // the last fit's window end
   int settled_ = 0;   // updates in a row with small sigmas and no step
   bool have_fit_ = false;

@@ -48,23 +48,25 @@ constexpr int blocks_of() {
   return static_cast<int>(hn::MaxLanes(D()) * sizeof(hn::TFromD<D>) / 16);
 }
 
-// Part b of the n equal parts of v of tag D, the part's tag being P (n = lanes of D / lanes of P).
-template <class P, class D>
+// Part b of the kParts equal parts of v (tag D), each of tag P. kParts comes from a tag whose
+// lane count is fixed (on SVE a half-width tag's MaxLanes is not simply half its parent's; there
+// every vector type of a lane type is the same sizeless type, so one part is v itself).
+template <int kParts, class P, class D>
 HWY_INLINE hn::Vec<P> part(D d, hn::Vec<D> v, int b) {
-  if constexpr (hn::MaxLanes(D()) == hn::MaxLanes(P())) {
+  if constexpr (kParts == 1) {
     (void)d, (void)b;
     return v;
   } else {
     const hn::Half<D> dh;
-    constexpr int kHalf = static_cast<int>(hn::MaxLanes(D()) / hn::MaxLanes(P()) / 2);
-    return b < kHalf ? part<P>(dh, hn::LowerHalf(dh, v), b) : part<P>(dh, hn::UpperHalf(dh, v), b - kHalf);
+    constexpr int kHalf = kParts / 2;
+    return b < kHalf ? part<kHalf, P>(dh, hn::LowerHalf(dh, v), b) : part<kHalf, P>(dh, hn::UpperHalf(dh, v), b - kHalf);
   }
 }
 
 // The four int32 lanes of block b.
 template <class D>
 HWY_INLINE V32 block(D d, hn::Vec<D> v, int b) {
-  return part<D32>(d, v, b);
+  return part<blocks_of<D>(), D32>(d, v, b);
 }
 
 // The vector whose block b holds v[b] in every lane.
@@ -187,7 +189,7 @@ HWY_INLINE void store_per_block(DU16x, hn::Vec<DU16x> v, std::uint8_t* const* ou
   const hn::Full64<std::uint8_t> d64;
   const hn::Full32<std::uint8_t> d32;
   for (int b = 0; b < blocks_of<DU16x>(); ++b) {
-    const auto half = part<decltype(d64)>(d8n, bytes, b);
+    const auto half = part<blocks_of<DU16x>(), decltype(d64)>(d8n, bytes, b);
     if (n == 8)
       hn::StoreU(half, d64, out[b] + at);
     else
@@ -291,7 +293,7 @@ HWY_INLINE bool two_byte_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repar
     const hn::Full64<std::uint8_t> d64;
     const auto others = hn::BitCast(d64, hn::Set(hn::Full64<std::uint16_t>(), 0xFF00));  // the odd bytes
     for (int b = 0; b < kB; ++b) {
-      const auto ours = part<decltype(d64)>(d8n, bytes, b);
+      const auto ours = part<kB, decltype(d64)>(d8n, bytes, b);
       hn::StoreU(hn::Or(hn::And(hn::LoadU(d64, out[b]), others), ours), d64, out[b]);
     }
   }

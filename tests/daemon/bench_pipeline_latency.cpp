@@ -22,6 +22,11 @@
 //            (--rgb: rgb8) --depth plane
 //            --source auto|sim|replay --ring 32 --cpu N (pin the process to core N; default 0,
 //            -1: not pinned)
+//            --online: the online calibration's estimator on (observe), fed by the pipeline's
+//            frame tap and the camera's gyro, a hand-held camera (no translation, turning about
+//            changing axes: every value fitted, the mount rotation too); its thread's
+//            share of a core is reported, its allocations (thread rsd-online) are not counted
+//            (docs/online-calibration.md)
 #include <lcm/lcm.h>
 #include <sched.h>
 #include <sys/resource.h>
@@ -40,6 +45,7 @@
 
 #include "dsp/core/image_planes.hpp"
 #include "daemon/frame_rectifier.hpp"
+#include "daemon/online_calibration.hpp"
 #include "daemon/pipeline.hpp"
 #include "drivers/sim_source.hpp"
 #include "drivers/monotonic_clock.hpp"
@@ -187,7 +193,7 @@ int usage(const char* arg) {
 int main(int argc, char** argv) {
   double seconds = 10, warmup = 2, fps = 120;
   int width = 640, height = 480, ring = 32, cpu = 0;
-  bool plane = false;
+  bool plane = false, online = false;
   dsp::PixelFormat format = dsp::PixelFormat::Mono8;
   std::string source_mode = "auto";
   for (int i = 1; i < argc; ++i) {
@@ -207,6 +213,7 @@ int main(int argc, char** argv) {
     else if (a == "--ring" && has) ring = std::atoi(argv[++i]);
     else if (a == "--cpu" && has) cpu = std::atoi(argv[++i]);
     else if (a == "--source" && has) source_mode = argv[++i];
+    else if (a == "--online") online = true;
     else if (a == "--depth" && has) {
       const std::string d = argv[++i];
       if (d != "plane" && d != "infinite") return usage(argv[i]);
@@ -232,6 +239,11 @@ int main(int argc, char** argv) {
   sc.fps = fps;
   sc.format = format;
   sc.realtime = true;
+  if (online) {  // hand-held, turning about changing axes: the estimator fits every value, mount too
+    sc.velocity = sc.angular_rate = Eigen::Vector3d::Zero();
+    sc.wobble_rad_s = 0.8, sc.wobble_hz = 0.9;
+    sc.wobble_axes = {1, 0.8, 0.5}, sc.wobble_axes_hz = {1, 1.37, 0.71};
+  }
   drivers::SimSourceConfig render_cfg = sc;
   render_cfg.realtime = false;
 
@@ -250,9 +262,21 @@ int main(int argc, char** argv) {
   }
 
   daemon::VelocityBuffer velocity;
-  source->set_velocity_sink([&velocity](const drivers::VelocitySample& s) { velocity.push(s); });
   const drivers::FrameFormat fmt = source->format();
   daemon::LcmPublisher pub("memq://", {}, fmt);
+  std::unique_ptr<daemon::OnlineCalibrator> estimator;
+  if (online) {
+    daemon::OnlineSetup st;
+    st.nominal.cam = sc.camera;
+    st.nominal.frame_rate_hz = fps;
+    st.nominal.time.line_delay_s = source->timing().line_delay_s;
+    st.start = {0, st.nominal.time.line_delay_s, Eigen::Vector3d::Zero()};
+    estimator = std::make_unique<daemon::OnlineCalibrator>(daemon::OnlineCalibrationConfig{}, st, pub);
+  }
+  source->set_velocity_sink([&velocity, &estimator](const drivers::VelocitySample& s) {
+    velocity.push(s);
+    if (estimator) estimator->gyro(s.t_ns / 1000, s.w);  // the camera's rates as an IMU would give them
+  });
   daemon::RectifyConfig rc;  // the daemon's defaults
   if (plane) rc.depth = daemon::DepthKind::Plane, rc.depth_m = sc.scene_depth_m;
   daemon::FrameRectifier rectifier(rc, sc.camera, source->timing(), fmt);
@@ -278,17 +302,22 @@ int main(int argc, char** argv) {
     while (drivers::monotonic_ns() < until_ns) lcm_handle_timeout(pub.handle(), 5);
   };
 
+  if (estimator) pipeline.set_frame_tap(estimator.get()), estimator->start();
   source->start();
   pipeline.start();
   serve(drivers::monotonic_ns() + static_cast<int64_t>(warmup * 1e9));
   const Snapshot a = snap();
+  if (estimator) estimator->cpu_share();  // from here
   pipeline.latency().reset();
   serve(a.wall_ns + static_cast<int64_t>(seconds * 1e9));
   const Snapshot b = snap();
   const double p50 = pipeline.latency().quantile(0.5), p99 = pipeline.latency().quantile(0.99),
                pmax = pipeline.latency().max_ms();
+  const double estimator_share = estimator ? estimator->cpu_share() : 0;
+  const dsp::OnlineEstimate estimate = estimator ? estimator->latest() : dsp::OnlineEstimate{};
   pipeline.stop();
   source->stop();
+  if (estimator) estimator->stop();
   while (lcm_handle_timeout(pub.handle(), 0) > 0) {}
 
   const double wall_s = static_cast<double>(b.wall_ns - a.wall_ns) * 1e-9;
@@ -320,5 +349,8 @@ int main(int argc, char** argv) {
   std::printf("%-38s %12.1f %10s %6s\n", "CPU (% of one core)", 100.0 * cpu_s / wall_s, "-", "");
   std::printf("%-38s %12.3f %10s %6s\n", "allocations per frame (operator new)", allocs_per_frame, "0",
               verdict(b.allocs == a.allocs));
+  if (estimator)
+    std::printf("%-38s %12.1f %10s %6s\n%-38s %12s %10s %6s\n", "online estimator (% of one core)", 100 * estimator_share,
+                "<= 25", verdict(estimator_share <= 0.25), "online estimate", dsp::to_string(estimate.state), "-", "");
   return 0;
 }

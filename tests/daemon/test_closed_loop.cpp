@@ -10,11 +10,7 @@
 // of 0.3 px with the learned one, and stays within 0.15 px of the true calibration's (the best
 // this rotation-only rectifier can do on the same frames).
 #include <gtest/gtest.h>
-#include <lcm/lcm.h>
 #include <unistd.h>
-
-#include <opencv2/imgproc.hpp>
-#include <opencv2/video/tracking.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -24,28 +20,20 @@
 #include <iterator>
 
 #include "daemon/config.hpp"
-#include "daemon/frame_rectifier.hpp"
-#include "daemon/velocity_input.hpp"
-#include "drivers/recording_replay_source.hpp"
 #include "drivers/replay_source.hpp"
 #include "drivers/sim_source.hpp"
-#include "dsp/diagnosis/diagnosis.hpp"
 #include "formats/calibration_v1.hpp"
-#include "formats/image_file.hpp"
 #include "formats/image_t_codec.hpp"
 #include "formats/lcm_log.hpp"
-#include "tools/common/picture_observations.hpp"
-#include "tools/report/diagnosis_calibration.hpp"
 #include "tools/sim/scenario_frames.hpp"
-#include "tests/daemon/closed_loop_figure.hpp"
+#include "tests/daemon/closed_loop_support.hpp"
 #include "tests/support/sanitizer.hpp"
 
 using namespace rsd;
+using namespace rsd::test;
 namespace fs = std::filesystem;
 
 namespace {
-
-constexpr int kW = 640, kH = 480;
 
 // The camera swings back and forth (a wobble of the rate on every axis) while it turns slowly:
 // the textured wall stays in view for the whole recording.
@@ -57,14 +45,8 @@ struct Scenario {
   int frames;
 };
 
-// The camera as it is (the simulator's) and as the daemon is told it is (the nominal).
-struct Rig {
-  drivers::SimSourceConfig truth;
-  dsp::NominalModel nominal;
-};
-
-Rig rig(const Scenario& s) {
-  Rig r;
+SimRig rig(const Scenario& s) {
+  SimRig r;
   drivers::SimSourceConfig& t = r.truth;
   t.camera = dsp::CameraModel::from_hfov(kW, kH, 60.0 * M_PI / 180.0 * 1.0);
   t.camera.fx *= 1.03, t.camera.fy *= 1.03;  // the true focal length is 3% longer
@@ -88,132 +70,6 @@ Rig rig(const Scenario& s) {
   return r;
 }
 
-// Captures the simulated camera into an images recording in `dir`; returns the simulator's time
-// zero on the camera clock. As on a rig, the gyro runs before the first frame kept and after the
-// last one (the frames of the first and last 10 are left out), so that any clock offset within
-// a few frame periods keeps every frame's motion inside the data.
-int64_t record(const Rig& r, int frames, const fs::path& dir) {
-  constexpr int kMargin = 10;
-  drivers::SimSource sim(r.truth);
-  formats::ImagesRecording rec;
-  rec.rec.kind = dsp::ObservationKind::Matches;
-  rec.rec.motion = dsp::MotionKind::Gyro;
-  rec.rec.nominal = r.nominal;
-  sim.set_velocity_sink([&](const drivers::VelocitySample& s) {
-    rec.rec.gyro.push_back({s.t_ns * 1e-9, {s.w[0], s.w[1], s.w[2]}});
-  });
-  sim.open();
-  sim.start();
-  fs::create_directories(dir / "frames");
-  dsp::Image img(kW, kH, dsp::PixelFormat::Mono8);
-  int64_t t0 = 0;
-  for (int k = 0; k < frames + 2 * kMargin; ++k) {
-    drivers::FrameMeta meta;
-    EXPECT_EQ(sim.capture(img.view(), meta, std::chrono::milliseconds(1000)), drivers::CaptureStatus::Frame);
-    if (k == 0) t0 = meta.first_row_ns;
-    if (k < kMargin || k >= frames + kMargin) continue;
-    const std::string file = (dir / "frames" / (std::to_string(k) + ".png")).string();
-    formats::write_png(file, img.view());
-    rec.rec.frames.push_back({k, meta.first_row_ns * 1e-9});
-    rec.files.push_back(file);
-  }
-  formats::write_images_recording(dir.string(), rec);
-  return t0;
-}
-
-// Displacements of features found in `ref` and tracked into `img`, well inside the image; a
-// track that does not come back to its start when tracked back (a tracking failure, not a
-// displacement) is left out.
-void add_shifts(const cv::Mat& ref, const cv::Mat& img, double& sum, int& n) {
-  std::vector<cv::Point2f> p0, p1, back;
-  cv::goodFeaturesToTrack(ref, p0, 200, 0.01, 6, cv::noArray(), 7);
-  if (p0.empty()) return;
-  std::vector<uchar> ok, ok_back;
-  std::vector<float> err;
-  cv::calcOpticalFlowPyrLK(ref, img, p0, p1, ok, err, cv::Size(21, 21), 3);
-  cv::calcOpticalFlowPyrLK(img, ref, p1, back, ok_back, err, cv::Size(21, 21), 3);
-  for (size_t i = 0; i < p0.size(); ++i) {
-    if (!ok[i] || !ok_back[i] || std::hypot(back[i].x - p0[i].x, back[i].y - p0[i].y) > 0.1) continue;
-    if (p0[i].x < 30 || p0[i].y < 30 || p0[i].x > ref.cols - 30 || p0[i].y > ref.rows - 30) continue;
-    const double dx = p1[i].x - p0[i].x, dy = p1[i].y - p0[i].y;
-    sum += dx * dx + dy * dy, ++n;
-  }
-}
-
-using test::Measured;
-
-// Renders the global-shutter truth at a time on the camera clock (s).
-using TruthRender = std::function<void(double t_camera_s, const dsp::ImageView&)>;
-
-// Plays the recording through the daemon's replay source, velocity input and rectifier with
-// `cal`, and measures every frame (but the first two) against the truth at its reference time.
-Measured rectified_rms(daemon::Config cfg, const formats::Calibration& cal, const TruthRender& render_truth) {
-  daemon::apply_calibration(cfg, cal);
-  auto src = daemon::make_source(cfg.source);
-  lcm_t* lcm = lcm_create("memq://");
-  daemon::VelocityBuffer buf;
-  double sum = 0;
-  int n = 0;
-  Measured out;
-  {
-    daemon::VelocityInput in(lcm, "RSD_VELOCITY_TEST", buf, cfg.velocity_input);
-    auto* m = dynamic_cast<drivers::MessageSource*>(src.get());  // an LCM log: velocity and pose messages
-    if (m && !cfg.velocity_input.pose_channel.empty())
-      m->set_pose_message_sink(cfg.velocity_input.pose_channel, [&](const bot_core::pose_t& p) { in.deliver(p); });
-    if (m) m->set_velocity_message_sink([&](const rsd::velocity_t& msg) { in.deliver(msg); });
-    else src->set_velocity_sink([&](const drivers::VelocitySample& s) { in.deliver(s); });
-    src->open();
-    daemon::FrameRectifier rect(cfg.rectify, daemon::camera_model(cfg.source, src->format()), src->timing(), src->format());
-    dsp::Image raw(kW, kH, dsp::PixelFormat::Mono8), rectified = raw, truth = raw;
-    src->start();
-    drivers::FrameMeta meta;
-    for (int k = 0; src->capture(raw.view(), meta, std::chrono::milliseconds(100)) == drivers::CaptureStatus::Frame; ++k) {
-      const daemon::RectifyResult res = rect.process(raw.view(), rectified.view(), meta, buf);
-      if (k < 2 || !res.rectified) continue;
-      render_truth(meta.first_row_ns * 1e-9 + res.reference_time_s, truth.view());
-      double frame_sum = 0;
-      int frame_n = 0;
-      add_shifts(cv::Mat(kH, kW, CV_8UC1, truth.data.data()), cv::Mat(kH, kW, CV_8UC1, rectified.data.data()), frame_sum, frame_n);
-      sum += frame_sum, n += frame_n;
-      if (frame_n) out.t.push_back(meta.first_row_ns * 1e-9), out.frame_rms.push_back(std::sqrt(frame_sum / frame_n));
-    }
-  }
-  lcm_destroy(lcm);
-  EXPECT_GT(n, 500);
-  out.rms = n ? std::sqrt(sum / n) : INFINITY;
-  return out;
-}
-
-// An images recording played as the daemon plays it (rsd --replay DIR --speed fast).
-daemon::Config replay_of(const fs::path& dir) {
-  daemon::Config cfg;
-  cfg.source.driver = "recording";
-  cfg.source.settings_of<drivers::RecordingReplayConfig>("recording").dir = dir.string();
-  cfg.source.settings_of<drivers::RecordingReplayConfig>("recording").speed = 0;
-  return cfg;
-}
-
-// The diagnosis, from the pictures on disk, and the calibration file it writes, read back.
-formats::Calibration learn(const fs::path& dir, const char* name) {
-  const formats::ImagesRecording images = formats::read_images_recording(dir.string());
-  const dsp::Recording obs = tools::observations_from_pictures(images, dsp::TrackOptions{});
-  const dsp::Diagnosis d = dsp::diagnose(obs);
-  const std::string cal_file = (dir / "cal.yaml").string();
-  formats::write_calibration(cal_file, tools::calibration_from(obs, d, "closed-loop test"));
-  const formats::Calibration learned = formats::read_calibration(cal_file);
-  std::printf("[%s] %zu matches, baseline %.3f px, sigma %.3f, final %.3f px; named:", name, obs.matches.size(),
-              d.baseline.rms_px, d.sigma_px, d.final_rms_px);
-  for (const auto& e : d.effects) {
-    std::printf(" %s(", e.name.c_str());
-    for (const auto& q : e.params) std::printf("%s=%.4g ", q.name.c_str(), q.value);
-    std::printf(")");
-  }
-  std::printf("\n  learned: f %.2f, line delay %.4g, offset %.5f, bias (%.4f %.4f %.4f)\n", learned.cam.fx,
-              learned.line_delay_s, learned.timeshift_cam_imu_s, learned.gyro_bias_rad_s.x(), learned.gyro_bias_rad_s.y(),
-              learned.gyro_bias_rad_s.z());
-  return learned;
-}
-
 // Runs one of rsd's binaries; its output (in dir/out.txt) is shown when it fails.
 void run_command(const std::string& cmd, const std::string& dir) {
   const int rc = std::system((cmd + " > " + dir + "/out.txt 2>&1").c_str());
@@ -222,16 +78,7 @@ void run_command(const std::string& cmd, const std::string& dir) {
   EXPECT_EQ(rc, 0) << cmd << "\n" << out;
 }
 
-// What the simulated camera hid, as a calibration file would say it.
-formats::Calibration true_calibration(const drivers::SimSourceConfig& t, const dsp::NominalModel& nominal) {
-  formats::Calibration c = formats::calibration_of(nominal, "truth");
-  c.cam = t.camera;
-  c.line_delay_s = t.line_delay_s;
-  c.timeshift_cam_imu_s = t.imu_time_offset_s;
-  c.gyro_bias_rad_s = t.gyro_bias;
-  c.imu_to_camera = dsp::exp_so3(t.imu_mount_rotation_rad);
-  return c;
-}
+using rsd::test::true_calibration;  // the simulator's; the scenario's below
 
 // What a scenario hid (the tracker's clock, readout, focal length, the camera's mount in the body).
 formats::Calibration true_calibration(const tools::FrameRig& rig) {
@@ -286,22 +133,15 @@ void measure_loop(const char* name, const daemon::Config& replay, const formats:
 }
 
 void run(const Scenario& s, double nominal_at_least_px, double goal_px, double from_best_px) {
-  const Rig r = rig(s);
+  const SimRig r = rig(s);
   const fs::path dir = fs::temp_directory_path() / ("rsd-closed-loop-" + std::string(s.name) + "-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   const int64_t t0 = record(r, s.frames, dir);
   const formats::Calibration learned = learn(dir, s.name);
   std::printf("  true: f %.2f, line delay %.4g\n", r.truth.camera.fx, r.truth.line_delay_s);
-  drivers::SimSource sim(r.truth);  // the scene and motion, for the truth
-  sim.open();
-  dsp::RowTiming global = sim.timing();
-  global.line_delay_s = 1e-12;  // every row at once
-  dsp::RenderOptions ro;
-  ro.supersample = 2;
-  dsp::RsRenderer gs(r.truth.camera, global, ro);
-  const TruthRender truth = [&](double t, const dsp::ImageView& v) { gs.render(sim.scene(), sim.truth(), t - t0 * 1e-9, v); };
+  SimTruth truth(r, t0);
   measure_loop(s.name, replay_of(dir), formats::calibration_of(r.nominal, "nominal"), learned,
-               true_calibration(r.truth, r.nominal), truth, nominal_at_least_px, goal_px, from_best_px);
+               true_calibration(r.truth, r.nominal), std::ref(truth), nominal_at_least_px, goal_px, from_best_px);
   fs::remove_all(dir);
 }
 

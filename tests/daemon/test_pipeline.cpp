@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "daemon/frame_rectifier.hpp"
+#include "daemon/online_calibration.hpp"
 #include "daemon/pipeline.hpp"
 #include "daemon/worker_pool.hpp"
 #include "drivers/sim_source.hpp"
@@ -134,8 +135,23 @@ TEST(Pipeline, WithoutVelocityFramesPassThroughAndSayWhy) {
 
 namespace {
 
-void expect_no_allocation_per_frame(int worker_count) {
+// The online calibration's estimator, fed by the pipeline's frame tap (observe: it tracks and
+// fits on its own thread, which may allocate; the hot path's hand-over may not).
+std::unique_ptr<daemon::OnlineCalibrator> online_estimator(daemon::LcmPublisher& pub) {
+  daemon::OnlineSetup st;
+  st.nominal.cam = dsp::CameraModel::from_hfov(160, 120, 1.0);
+  st.nominal.time.line_delay_s = 1.0 / (120 * 30);
+  st.start = {0, st.nominal.time.line_delay_s, Eigen::Vector3d::Zero()};
+  daemon::OnlineCalibrationConfig c;
+  c.features = 40;
+  c.max_fps = 30;  // every frame of the 30 fps camera offered
+  return std::make_unique<daemon::OnlineCalibrator>(c, st, pub);
+}
+
+void expect_no_allocation_per_frame(int worker_count, bool online = false) {
   Rig rig(true, worker_count);
+  std::unique_ptr<daemon::OnlineCalibrator> est = online ? online_estimator(rig.pub) : nullptr;
+  if (est) rig.pipeline->set_frame_tap(est.get()), est->start();
   rig.rx.decode = false;  // the test's own LCM handlers must not allocate either
   rig.run_until(100);     // warm-up: first frames, first velocity, LCM set-up
   const uint64_t before = g_allocations.load();
@@ -152,6 +168,10 @@ void expect_no_allocation_per_frame(int worker_count) {
   rig.pipeline->stop();
   EXPECT_GE(frames, want) << (test::kSanitized ? test::kSanitizedNote : "");
   EXPECT_EQ(after - before, 0u) << "heap allocations over " << frames << " frames, " << worker_count << " workers";
+  if (!est) return;
+  est->stop();
+  EXPECT_GE(est->frames_offered(), frames);  // every frame was offered (taken or dropped) ...
+  EXPECT_GT(est->latest().updates, 0);       // ... and the estimator worked on them
 }
 
 }  // namespace
@@ -160,3 +180,6 @@ TEST(Pipeline, HotPathAllocatesNothingAfterStartUp) { expect_no_allocation_per_f
 
 // Rows resampled by the rectify thread and two helpers (rectification.workers: 3).
 TEST(Pipeline, HotPathWithWorkersAllocatesNothingAfterStartUp) { expect_no_allocation_per_frame(3); }
+
+// With the online calibration's estimator fed from the rectify thread: still nothing.
+TEST(Pipeline, HotPathWithTheOnlineEstimatorAllocatesNothing) { expect_no_allocation_per_frame(1, true); }

@@ -1,6 +1,7 @@
 // One LCM message as the network brings it (the lcm source, the velocity input): the first
 // byte picks the type, the rest is the payload.
 #include <bot_core/pose_t.hpp>
+#include <rsd/calibration_t.hpp>
 #include <rsd/frame_info_t.hpp>
 #include <rsd/health_t.hpp>
 #include <rsd/velocity_t.hpp>
@@ -13,7 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const uint8_t* p = data + 1;
   const size_t n = size - 1;
   std::string why;
-  switch (data[0] % 5) {
+  switch (data[0] % 6) {
     case 0: {
       bot_core::image_t img;
       rsd::formats::RecordedFrame frame;
@@ -37,6 +38,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     case 3: {
       rsd::frame_info_t m;
+      rsd::formats::decode_checked(p, n, m, why);
+      break;
+    }
+    case 4: {
+      rsd::calibration_t m;
       rsd::formats::decode_checked(p, n, m, why);
       break;
     }

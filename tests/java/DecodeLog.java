@@ -4,6 +4,7 @@
 //   RSD_RAW*, RSD_RECT*   bot_core.image_t
 //   RSD_FRAME_INFO*       rsd.frame_info_t
 //   RSD_HEALTH*           rsd.health_t
+//   RSD_CALIBRATION*      rsd.calibration_t
 //   RSD_VELOCITY*         rsd.velocity_t
 //   POSE*                 bot_core.pose_t
 import java.io.IOException;
@@ -21,6 +22,11 @@ public class DecodeLog {
         } else if (channel.startsWith("RSD_HEALTH")) {
             new rsd.health_t(data);
             return "rsd.health_t";
+        } else if (channel.startsWith("RSD_CALIBRATION")) {
+            rsd.calibration_t c = new rsd.calibration_t(data);
+            if (!java.util.Set.of("converging", "converged", "held", "rejected").contains(c.state))
+                throw new IOException("unknown calibration state " + c.state);
+            return "rsd.calibration_t";
         } else if (channel.startsWith("RSD_VELOCITY")) {
             rsd.velocity_t v = new rsd.velocity_t(data);
             if (v.frame != rsd.velocity_t.FRAME_CAMERA && v.frame != rsd.velocity_t.FRAME_IMU)

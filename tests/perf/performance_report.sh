@@ -1,6 +1,7 @@
 #!/bin/sh
 # Regenerates the measured part of docs/performance.md: runs the rectifier benchmark (3
-# repetitions) and the end-to-end latency benchmark (mono8, then nv12) from a built tree and
+# repetitions) and the end-to-end latency benchmark (mono8, nv12, then mono8 with the online
+# calibration's estimator on at 120 fps and at 30 fps: docs/online-calibration.md) from a built tree and
 # replaces the text between the two "generated" markers with their summaries, the machine and
 # the load. Run on a quiet machine; the build should be Release.
 #
@@ -24,9 +25,19 @@ echo "performance_report: load before: $(cut -d' ' -f1-3 /proc/loadavg)" >&2
 echo "performance_report: bench_rs_rectifier (a few minutes) ..." >&2
 "$rect" --benchmark_repetitions=3 --benchmark_min_time=0.2 --benchmark_format=json \
   >"$out/rectifier.json" 2>"$out/rectifier.txt"
-for f in mono8 nv12; do
-  echo "performance_report: bench_pipeline_latency --format $f ..." >&2
-  "$e2e" --format "$f" >"$out/e2e-$f.txt" 2>&1
+# Each end-to-end run: a name and its arguments.
+runs="mono8 nv12 online online30"
+args_of() {
+  case $1 in
+    online) echo "--online" ;;
+    online30) echo "--online --fps 30" ;;
+    *) echo "--format $1" ;;
+  esac
+}
+for r in $runs; do
+  echo "performance_report: bench_pipeline_latency $(args_of "$r") ..." >&2
+  # shellcheck disable=SC2046  # the arguments are words on purpose
+  "$e2e" $(args_of "$r") >"$out/e2e-$r.txt" 2>&1
 done
 
 cpu=$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -n 1)
@@ -41,12 +52,12 @@ cpu=$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -n 1)
   echo '```'
   sed -n '/^Summary/,$p' "$out/rectifier.txt"
   echo '```'
-  for f in mono8 nv12; do
+  for r in $runs; do
     echo
-    echo "### End to end, $f (bench_pipeline_latency --format $f)"
+    echo "### End to end, $r (bench_pipeline_latency $(args_of "$r"))"
     echo
     echo '```'
-    sed -n '/^End to end/,$p' "$out/e2e-$f.txt"
+    sed -n '/^End to end/,$p' "$out/e2e-$r.txt"
     echo '```'
   done
   echo

@@ -15,6 +15,7 @@
 #include "dsp/online/online_estimator.hpp"
 #include "dsp/sim/recording_simulation.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
+#include "tests/dsp/online/online_figure.hpp"
 
 using namespace rsd::dsp;
 using Eigen::Vector2d;
@@ -39,6 +40,12 @@ SimConfig hand_held(unsigned seed, double duration_s) {
 }
 
 OnlineCalibration nominal_start() { return {0.0, kNominalLineDelay, Vector3d::Zero()}; }
+OnlineCalibration true_calibration(double offset) { return {offset, 1.2 * kNominalLineDelay, Vector3d::Constant(0.01)}; }
+
+// RSD_FIGURES_DIR=docs: docs/online-calibration.md's figures.
+void figure(const char* name, const char* title, const rsd::test::OnlineTrace& trace, const rsd::test::OnlineTruth& truth) {
+  if (const char* dir = getenv("RSD_FIGURES_DIR")) rsd::test::plot_online_trace(std::string(dir) + "/" + name, title, trace, truth);
+}
 
 // Feeds the recording frame by frame: the gyro up to each frame's end on the IMU clock (plus a
 // margin, as it arrives), the frame pair's matches, and an update after every `per_update`
@@ -79,10 +86,14 @@ TEST(OnlineEstimator, ConvergesWithinTenSecondsToTheIssueTolerances) {
   const SimulatedRecording sim = simulate_recording(c);
   OnlineEstimator e(c.nominal, nominal_start());
   double converged_at = -1;
+  rsd::test::OnlineTrace trace;
   stream(sim.rec, e, 30, [&](double t, const OnlineEstimate& est) {
     show(t - c.start_time_s, est);
+    trace.t.push_back(t - c.start_time_s), trace.est.push_back(est);
     if (converged_at < 0 && est.state == OnlineState::Converged) converged_at = t - c.start_time_s;
   });
+  figure("online-calibration-converge.png", "hand-held: offset 15 ms, line delay +20%, gyro bias 0.01 rad/s", trace,
+         {true_calibration(0.015), true_calibration(0.015), -1, kNominalLineDelay});
   const OnlineEstimate& est = e.estimate();
   ASSERT_EQ(est.state, OnlineState::Converged) << est.reason;
   EXPECT_GT(converged_at, 0);
@@ -94,6 +105,25 @@ TEST(OnlineEstimator, ConvergesWithinTenSecondsToTheIssueTolerances) {
   EXPECT_LE(std::abs(est.value.time_offset_s - 0.015), 4 * est.sigma.time_offset_s + 1e-5);
   EXPECT_LE(std::abs(est.value.line_delay_s - 1.2 * kNominalLineDelay), 4 * est.sigma.line_delay_s + 1e-7);
   EXPECT_GT(est.window.inliers, est.window.fitted * 8 / 10);
+  EXPECT_LT(est.value.mount_rotation.norm(), 2e-3);  // none hidden: none found
+}
+
+// The IMU turned by about a degree on its mount beyond the nominal: the hand-held motion turns
+// about every axis, so the mount shows, and is learned with the rest.
+TEST(OnlineEstimator, LearnsTheMountRotationWhenTheMotionShowsIt) {
+  SimConfig c = hand_held(11, 12);
+  const Vector3d mount(0.012, -0.009, 0.006);
+  c.effects.mount_rotation = mount;
+  const SimulatedRecording sim = simulate_recording(c);
+  OnlineEstimator e(c.nominal, nominal_start());
+  stream(sim.rec, e, 30, [&](double t, const OnlineEstimate& est) { show(t - c.start_time_s, est); });
+  const OnlineEstimate& est = e.estimate();
+  ASSERT_EQ(est.state, OnlineState::Converged) << est.reason;
+  EXPECT_TRUE(est.mount_known);
+  EXPECT_LT((est.value.mount_rotation - mount).norm(), 2e-3) << est.value.mount_rotation.transpose();
+  EXPECT_NEAR(est.value.time_offset_s, 0.015, 0.5e-3);
+  EXPECT_NEAR(est.value.line_delay_s / (1.2 * kNominalLineDelay), 1.0, 0.03);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(est.value.gyro_bias[i], 0.01, 0.002) << "axis " << i;
 }
 
 // Two recordings one after the other: the second's time offset 5 ms larger (its frames go on
@@ -116,12 +146,16 @@ TEST(OnlineEstimator, FollowsAStepOfFiveMillisecondsWithinTenSeconds) {
   const Recording rec = with_step(simulate_recording(a), simulate_recording(b));
   OnlineEstimator e(a.nominal, nominal_start());
   double before = 0, followed_at = -1;
+  rsd::test::OnlineTrace trace;
   stream(rec, e, 30, [&](double t, const OnlineEstimate& est) {
     show(t - a.start_time_s, est);
+    trace.t.push_back(t - a.start_time_s), trace.est.push_back(est);
     if (t < b.start_time_s) before = est.value.time_offset_s;
     else if (followed_at < 0 && std::abs(est.value.time_offset_s - 0.020) < 0.5e-3 && est.converged)
       followed_at = t - b.start_time_s;
   });
+  figure("online-calibration-step.png", "the time offset steps by 5 ms at 12 s", trace,
+         {true_calibration(0.015), true_calibration(0.020), b.start_time_s - a.start_time_s, kNominalLineDelay});
   EXPECT_NEAR(before, 0.015, 0.5e-3);
   EXPECT_GE(followed_at, 0) << "never followed the step";
   EXPECT_LE(followed_at, 10.0);

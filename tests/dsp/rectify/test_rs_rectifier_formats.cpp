@@ -189,6 +189,33 @@ TEST(PixelConversion, SmoothImagesSurviveTheRoundTrip) {
   EXPECT_EQ(bayer_colour(PixelFormat::BayerBggr8, 0, 0), 2);
 }
 
+// The luma the online calibration tracks features in, against BT.601 luma of the RGB image
+// every format was made from: exact for YUV's own Y, within rounding for RGB and 16 bit; for a
+// mosaic (R + 2 G + B) / 4 over its 2x2 cell (a smooth image: within a few levels of the pixel's).
+TEST(PixelConversion, LumaOfEveryFormatIsTheRgbImagesLuma) {
+  Image rgb(64, 48, PixelFormat::Rgb8), luma(64, 48, PixelFormat::Mono8);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c)
+        rgb.data[(y * 64 + x) * 3 + c] = static_cast<std::uint8_t>(128 + 60 * std::sin(0.07 * x + c) * std::cos(0.05 * y));
+  for (PixelFormat f : kNative) {
+    Image img(64, 48, f);
+    convert_from_rgb(rgb.view(), img.view());
+    std::fill(luma.data.begin(), luma.data.end(), 0);
+    convert_to_luma(img.view(), luma.view());
+    double worst = 0;
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 64; ++x) {
+        const std::uint8_t* p = &rgb.data[(y * 64 + x) * 3];
+        const double want = is_bayer(f) ? (p[0] + 2.0 * p[1] + p[2]) / 4 : 0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2];
+        worst = std::max(worst, std::abs(luma.data[y * 64 + x] - want));
+      }
+    EXPECT_LE(worst, is_bayer(f) ? 4.0 : 1.0) << format_name(f);
+  }
+  Image mono16(4, 2, PixelFormat::Mono16);
+  EXPECT_THROW(convert_to_luma(mono16.view(), luma.view()), std::invalid_argument);
+}
+
 TEST(PixelFormats, SizesAndNames) {
   EXPECT_EQ(frame_bytes(PixelFormat::Nv12, 640, 480), 640u * 480 * 3 / 2);
   EXPECT_EQ(frame_bytes(PixelFormat::I420, 640, 480), 640u * 480 * 3 / 2);
