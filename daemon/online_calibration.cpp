@@ -88,6 +88,10 @@ OnlineCalibrator::~OnlineCalibrator() { stop(); }
 
 void OnlineCalibrator::start() {
   if (running_.exchange(true)) return;
+  // spdlog's registry, which the thread logs through, exists before the thread does: it is
+  // created lazily inside libspdlog, a guard ThreadSanitizer cannot see (and reported as a race
+  // when the service's first log line came after this thread's start).
+  (void)spdlog::default_logger_raw();
   thread_ = std::thread([this] {
     // Named first: tools (top -H) and the tests' allocation counter tell it from the hot path.
     pthread_setname_np(pthread_self(), kThreadName);
