@@ -165,12 +165,19 @@ TEST(RsRectifierFormats, SimdEqualsScalarAndNothingIsAllocated) {
   }
 }
 
-TEST(PixelConversion, SmoothImagesSurviveTheRoundTrip) {
-  Image rgb(64, 48, PixelFormat::Rgb8), back(64, 48, PixelFormat::Rgb8);
+// A smooth 64x48 RGB image: 128 + a sin(kx x + channel) cos(ky y) in every channel.
+Image smooth_rgb(double a, double kx, double ky) {
+  Image rgb(64, 48, PixelFormat::Rgb8);
   for (int y = 0; y < 48; ++y)
     for (int x = 0; x < 64; ++x)
       for (int c = 0; c < 3; ++c)
-        rgb.data[(y * 64 + x) * 3 + c] = static_cast<std::uint8_t>(128 + 50 * std::sin(0.05 * x + c) * std::cos(0.04 * y));
+        rgb.data[(y * 64 + x) * 3 + c] = static_cast<std::uint8_t>(128 + a * std::sin(kx * x + c) * std::cos(ky * y));
+  return rgb;
+}
+
+TEST(PixelConversion, SmoothImagesSurviveTheRoundTrip) {
+  Image rgb = smooth_rgb(50, 0.05, 0.04);
+  Image back(64, 48, PixelFormat::Rgb8);
   for (PixelFormat f : kNative) {
     Image mid(64, 48, f);
     convert_from_rgb(rgb.view(), mid.view());
@@ -193,11 +200,7 @@ TEST(PixelConversion, SmoothImagesSurviveTheRoundTrip) {
 // every format was made from: exact for YUV's own Y, within rounding for RGB and 16 bit; for a
 // mosaic (R + 2 G + B) / 4 over its 2x2 cell (a smooth image: within a few levels of the pixel's).
 TEST(PixelConversion, LumaOfEveryFormatIsTheRgbImagesLuma) {
-  Image rgb(64, 48, PixelFormat::Rgb8), luma(64, 48, PixelFormat::Mono8);
-  for (int y = 0; y < 48; ++y)
-    for (int x = 0; x < 64; ++x)
-      for (int c = 0; c < 3; ++c)
-        rgb.data[(y * 64 + x) * 3 + c] = static_cast<std::uint8_t>(128 + 60 * std::sin(0.07 * x + c) * std::cos(0.05 * y));
+  Image rgb = smooth_rgb(60, 0.07, 0.05), luma(64, 48, PixelFormat::Mono8);
   for (PixelFormat f : kNative) {
     Image img(64, 48, f);
     convert_from_rgb(rgb.view(), img.view());
