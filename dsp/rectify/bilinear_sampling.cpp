@@ -6,7 +6,7 @@ namespace {
 
 template <class T, int C>
 Samplers scalar_of() {
-  return {sample_row_scalar<T, C>, sample_affine_scalar<T, C>};
+  return {sample_row_scalar<T, C>, sample_cells_scalar<T, C>};
 }
 
 }  // namespace
@@ -27,8 +27,8 @@ Samplers scalar_samplers(SampleKind k) {
     case SampleKind::U8x3: return scalar_of<std::uint8_t, 3>();
     case SampleKind::U16: return scalar_of<std::uint16_t, 1>();
     case SampleKind::StridedU8:
-    case SampleKind::StridedU8x2: return {sample_row_strided<std::uint8_t>, sample_affine_strided<std::uint8_t>};
-    case SampleKind::StridedU16: return {sample_row_strided<std::uint16_t>, sample_affine_strided<std::uint16_t>};
+    case SampleKind::StridedU8x2: return {sample_row_strided<std::uint8_t>, sample_cells_strided<std::uint8_t>};
+    case SampleKind::StridedU16: return {sample_row_strided<std::uint16_t>, sample_cells_strided<std::uint16_t>};
   }
   return {};
 }

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstdint>
+#include <algorithm>
+#include <cstddef>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -136,16 +138,37 @@ inline void sample_affine_strided(const SamplePlane& src, const Affine& a, std::
     sample_pixel_strided<T>(src, static_cast<std::int32_t>(x), static_cast<std::int32_t>(y), out + i * src.step);
 }
 
+// A run of consecutive cells of one row: cell k covers the output samples
+// [k cell_n, min((k + 1) cell_n, total)) and its positions are affine, a[k] from its first
+// sample on. One call per run (not per cell) keeps the per-call set-up out of every cell.
+template <class Segment>
+inline void for_each_cell(const Affine* a, int cell_n, int total, std::size_t bytes, std::uint8_t* out, Segment segment) {
+  for (int c0 = 0, k = 0; c0 < total; c0 += cell_n, ++k) segment(a[k], out + c0 * bytes, std::min(cell_n, total - c0));
+}
+
+template <class T, int C>
+inline void sample_cells_scalar(const SamplePlane& src, const Affine* a, int cell_n, int total, std::uint8_t* out) {
+  for_each_cell(a, cell_n, total, C * sizeof(T), out,
+                [&](const Affine& s, std::uint8_t* o, int n) { sample_affine_scalar<T, C>(src, s, o, n); });
+}
+
+template <class T>
+inline void sample_cells_strided(const SamplePlane& src, const Affine* a, int cell_n, int total, std::uint8_t* out) {
+  for_each_cell(a, cell_n, total, src.step, out,
+                [&](const Affine& s, std::uint8_t* o, int n) { sample_affine_strided<T>(src, s, o, n); });
+}
+
 // The kinds of plane the kernels know: packed 8-bit with 1, 2 or 3 channels, packed 16-bit,
 // strided planes of 8 or 16-bit samples, and among those the one-channel 8-bit samples two
 // bytes apart (YUYV's luma, an 8-bit mosaic's sites), which have SIMD kernels too.
 enum class SampleKind { U8, U8x2, U8x3, U16, StridedU8, StridedU16, StridedU8x2 };
 SampleKind sample_kind(const SamplePlane& p);
 
-// Row samplers for one kind of plane: positions given per pixel, or affine along a cell.
+// Row samplers for one kind of plane: positions given per pixel, or affine along each cell of
+// a run of cells (a single segment: one cell, cell_n = total).
 struct Samplers {
   void (*row)(const SamplePlane&, const std::int32_t*, const std::int32_t*, std::uint8_t*, int);
-  void (*affine)(const SamplePlane&, const Affine&, std::uint8_t*, int);
+  void (*cells)(const SamplePlane& src, const Affine* a, int cell_n, int total, std::uint8_t* out);
 };
 
 // The SIMD kernels of the best target this CPU runs when `simd`, else the scalar reference.

@@ -164,7 +164,7 @@ void sample_row_simd(const SamplePlane& src, const std::int32_t* xs, const std::
 // Positions generated in registers along an affine cell segment, x_k = ax + k sx: the same
 // integers as the scalar code's running sums (int32 arithmetic wraps alike).
 template <class T, int C, int kOut>
-void sample_affine_simd(const SamplePlane& src, const Affine& a, std::uint8_t* out, int n) {
+HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std::uint8_t* out, int n) {
   constexpr int kBytes = kOut;
   const DW32 dw;
   const VW32 lanes = hn::Iota(dw, 0), order = hn::Add(lanes, hn::And(lanes, hn::Set(dw, ~3)));  // the wide layout
@@ -196,9 +196,16 @@ void sample_affine_simd(const SamplePlane& src, const Affine& a, std::uint8_t* o
   sample_row_simd<T, C, kOut>(src, xs, ys, out + i * kBytes, n - i);
 }
 
+// A run of cells in one call: the constants of the segment code stay in registers.
+template <class T, int C, int kOut>
+void sample_cells_simd(const SamplePlane& src, const Affine* a, int cell_n, int total, std::uint8_t* out) {
+  for (int c0 = 0, k = 0; c0 < total; c0 += cell_n, ++k)  // as for_each_cell, with the segment inlined
+    sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(cell_n, total - c0));
+}
+
 template <class T, int C, int kOut = C * sizeof(T)>
 Samplers samplers_of() {
-  return {sample_row_simd<T, C, kOut>, sample_affine_simd<T, C, kOut>};
+  return {sample_row_simd<T, C, kOut>, sample_cells_simd<T, C, kOut>};
 }
 
 Samplers simd_samplers(SampleKind k) {

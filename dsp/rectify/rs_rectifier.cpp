@@ -67,7 +67,7 @@ Rectifier::Rectifier(const CameraModel& cam, const RowTiming& timing, const Came
   simd_ = cfg_.use_simd;
   for (int k = 0; k < kKinds; ++k) {
     const Samplers f = pick_samplers(static_cast<SampleKind>(k), simd_);
-    sample_row_[k] = f.row, sample_affine_[k] = f.affine;
+    sample_row_[k] = f.row, sample_cells_[k] = f.cells;
   }
 }
 
@@ -104,6 +104,7 @@ void Rectifier::allocate_levels() {
   for (RowScratch& b : bands_) {
     for (auto* v : {&b.px, &b.py, &b.ix, &b.iy, &b.rho}) v->resize(widest);
     for (auto* v : {&b.fpx, &b.fpy, &b.fix, &b.fiy}) v->resize(widest);
+    b.cells.resize(widest);
   }
 }
 

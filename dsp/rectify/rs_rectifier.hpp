@@ -126,6 +126,7 @@ class Rectifier {
     std::vector<double> px, py, ix, iy, rho;
     std::vector<std::int32_t> fpx, fpy, fix, fiy;  // the same in 16.16, rounded once per node
     std::vector<std::int32_t> xs, ys;
+    std::vector<Affine> cells;           // a run of the row's cells, for the kernels
     double gain = 0;                     // its node columns' largest table-error gain
   };
 
@@ -142,8 +143,9 @@ class Rectifier {
   double cell_bound(const Branch& b, int i, int j) const;
   int interpolate_row(double y, RowScratch& s) const;
   Affine cell_affine(int i, std::uint8_t mode, const RowScratch& s) const;
-  void cell_columns(int i, const SamplePlane& g, int& c0, int& c1) const;
+  Affine unit_affine(int i, std::uint8_t mode, const RowScratch& s) const;
   Affine plane_affine(int i, std::uint8_t mode, const SamplePlane& g, int c0, const RowScratch& s) const;
+  void cell_columns(int i, const SamplePlane& g, int& c0, int& c1) const;
   void generate_row(double y, const SamplePlane& g, RowScratch& s) const;
   void kink_segment(int i, int c0, int c1, const SamplePlane& g, RowScratch& s) const;
   void remap_rows(const SamplePlane& src, const SamplePlane& dst, int j0, int j1, RowScratch& s) const;
@@ -157,7 +159,7 @@ class Rectifier {
   // The kernels of each kind of sample plane (bilinear_sampling.hpp's SampleKind).
   static constexpr int kKinds = 7;
   void (*sample_row_[kKinds])(const SamplePlane&, const std::int32_t*, const std::int32_t*, std::uint8_t*, int) = {};
-  void (*sample_affine_[kKinds])(const SamplePlane&, const Affine&, std::uint8_t*, int) = {};
+  void (*sample_cells_[kKinds])(const SamplePlane&, const Affine*, int, int, std::uint8_t*) = {};
 
   std::vector<Level> levels_;
   std::size_t level_ = 0;

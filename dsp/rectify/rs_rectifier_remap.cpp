@@ -6,6 +6,7 @@
 
 #include "dsp/rectify/bilinear_sampling.hpp"
 #include "dsp/rectify/fixed_point.hpp"
+#include "dsp/rectify/node_row_lerp.hpp"
 #include "dsp/rectify/rs_rectifier.hpp"
 
 namespace rsd::dsp {
@@ -39,19 +40,24 @@ int Rectifier::interpolate_row(double y, RowScratch& s) const {
   const int j = std::min(static_cast<int>(y) >> L.shift, L.ny - 2);
   const double wy = (y - j * L.spacing) / L.spacing;
   const std::size_t top = static_cast<std::size_t>(j) * L.nx, bot = top + L.nx;
-  auto lerp = [wy](const std::vector<double>& v, std::size_t a, std::size_t b) { return v[a] + wy * (v[b] - v[a]); };
-  for (int i = 0; i < L.nx; ++i) {
-    if (plane_) {
-      s.px[i] = lerp(plane_b_.x, top + i, bot + i), s.py[i] = lerp(plane_b_.y, top + i, bot + i);
-      s.fpx[i] = to_fixed(s.px[i]), s.fpy[i] = to_fixed(s.py[i]);
-    }
-    if (need_infinite_) {
-      s.ix[i] = lerp(inf_b_.x, top + i, bot + i), s.iy[i] = lerp(inf_b_.y, top + i, bot + i);
-      s.fix[i] = to_fixed(s.ix[i]), s.fiy[i] = to_fixed(s.iy[i]);
-    }
-    if (plane_ && need_infinite_) s.rho[i] = lerp(rho_, top + i, bot + i);  // picks the branch in kink cells only
-  }
+  auto lerp = [&](const std::vector<double>& v, std::vector<double>& out, std::vector<std::int32_t>* fixed) {
+    lerp_node_row(&v[top], &v[bot], wy, L.nx, out.data(), fixed ? fixed->data() : nullptr);
+  };
+  if (plane_) lerp(plane_b_.x, s.px, &s.fpx), lerp(plane_b_.y, s.py, &s.fpy);
+  if (need_infinite_) lerp(inf_b_.x, s.ix, &s.fix), lerp(inf_b_.y, s.iy, &s.fiy);
+  if (plane_ && need_infinite_) lerp(rho_, s.rho, nullptr);  // picks the branch in kink cells only
   return j;
+}
+
+// cell_affine in 32-bit arithmetic, for the cells of unit planes (most of them): a linear
+// cell's nodes lie within kLimit px, so that differences and their rounding fit int32 and
+// the result is the same.
+Rectifier::Affine Rectifier::unit_affine(int i, std::uint8_t mode, const RowScratch& s) const {
+  const std::int32_t* X = mode == kPlane ? s.fpx.data() : s.fix.data();
+  const std::int32_t* Y = mode == kPlane ? s.fpy.data() : s.fiy.data();
+  const int shift = levels_[level_].shift;
+  const std::int32_t half = (1 << shift) >> 1;
+  return {X[i], Y[i], (X[i + 1] - X[i] + half) >> shift, (Y[i + 1] - Y[i] + half) >> shift};
 }
 
 Rectifier::Affine Rectifier::cell_affine(int i, std::uint8_t mode, const RowScratch& s) const {
@@ -117,13 +123,15 @@ void Rectifier::kink_segment(int i, int c0, int c1, const SamplePlane& g, RowScr
 }
 
 // Sample rows [j0, j1) of one plane with one band's scratch. Cells of 16 px and more are sampled
-// straight from their affine positions; narrower cells go through the row arrays, so that the
-// kernels still see runs of 16 pixels.
+// straight from their affine positions, each run of consecutive such cells in one kernel call;
+// narrower cells go through the row arrays, so that the kernels still see runs of 16 pixels.
 void Rectifier::remap_rows(const SamplePlane& src, const SamplePlane& dst, int j0, int j1, RowScratch& s) const {
   const Level& L = levels_[level_];
   const int kind = static_cast<int>(sample_kind(src));
   const auto row = sample_row_[kind];
-  const auto affine = sample_affine_[kind];
+  const auto cells = sample_cells_[kind];
+  const int cell_n = L.spacing >> (dst.scale_x - 1);  // samples per cell (spacings are even)
+  const bool unit = dst.scale_x == 1 && dst.scale_y == 1;
   for (int j = j0; j < j1; ++j) {
     std::uint8_t* out = dst.row(j);
     const double y = dst.scale_y * j + dst.offset_y;
@@ -133,20 +141,32 @@ void Rectifier::remap_rows(const SamplePlane& src, const SamplePlane& dst, int j
       continue;
     }
     const std::uint8_t* modes = &cell_mode_[static_cast<std::size_t>(interpolate_row(y, s)) * (L.nx - 1)];
-    for (int i = 0; i + 1 < L.nx; ++i) {
+    int run = 0;  // cells [i - run, i) are affine and not yet sampled
+    auto flush = [&](int i) {
+      if (run == 0) return;
+      const int c0 = (i - run) * cell_n, c1 = std::min(i * cell_n, dst.width);
+      cells(src, s.cells.data(), cell_n, c1 - c0, out + c0 * dst.step);
+      run = 0;
+    };
+    int i = 0;
+    for (; i + 1 < L.nx; ++i) {
       int c0, c1;
       cell_columns(i, dst, c0, c1);
       if (c0 >= c1) break;
+      if (modes[i] == kPlane || modes[i] == kInfinite) {
+        s.cells[run++] = unit ? unit_affine(i, modes[i], s) : plane_affine(i, modes[i], dst, c0, s);
+        continue;
+      }
+      flush(i);
       std::uint8_t* o = out + c0 * dst.step;
       if (modes[i] == kZero) {
         fill_samples(dst, o, c1 - c0);
-      } else if (modes[i] == kKink) {
+      } else {
         kink_segment(i, c0, c1, dst, s);
         row(src, &s.xs[c0], &s.ys[c0], o, c1 - c0);
-      } else {
-        affine(src, plane_affine(i, modes[i], dst, c0, s), o, c1 - c0);
       }
     }
+    flush(i);
   }
 }
 

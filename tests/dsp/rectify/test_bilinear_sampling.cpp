@@ -108,6 +108,11 @@ void expect_same(const std::vector<std::uint8_t>& got, const std::vector<std::ui
   }
 }
 
+// One affine segment: a run of one cell.
+void affine(const Samplers& k, const SamplePlane& src, const Affine& a, std::uint8_t* out, int n) {
+  k.cells(src, &a, n, n, out);
+}
+
 class EveryTarget : public ::testing::Test {
  protected:
   void TearDown() override { force_simd_target(0); }
@@ -159,11 +164,38 @@ TEST_F(EveryTarget, AffineSegmentsEqualTheScalarReference) {
           const int n = trial % 71;
           const Affine a = random_affine(rng, src.view.width, src.view.height);
           std::vector<std::uint8_t> got = guarded(n, f), want = guarded(n, f);
-          simd.affine(src.view, a, got.data(), n);
-          ref.affine(src.view, a, want.data(), n);
+          affine(simd, src.view, a, got.data(), n);
+          affine(ref, src.view, a, want.data(), n);
           expect_same(got, want, n, f, target_name(target) + " " + f.name + " affine trial " + std::to_string(trial));
         }
       }
+  }
+}
+
+// A run of cells in one call is its cells one after the other: each kernel against the
+// scalar reference, and the reference against its cells sampled one call each.
+TEST_F(EveryTarget, RunsOfCellsAreTheirSegmentsInTurn) {
+  for (std::int64_t target : simd_targets()) {
+    force_simd_target(target);
+    for (const Kind& f : kPacked) {
+      const Source src = random_source(90, 40, f, 2, 7);
+      const Samplers simd = dispatched_samplers(f.kind), ref = scalar_samplers(f.kind);
+      std::mt19937 rng(29);
+      for (int trial = 0; trial < 120; ++trial) {
+        const int cell_n = 8 << (trial % 3), cells = 1 + trial % 5;
+        const int total = cells * cell_n - (trial % 4 == 0 ? cell_n / 2 + 1 : 0);  // a short last cell
+        std::vector<Affine> a(cells);
+        for (Affine& c : a) c = random_affine(rng, src.view.width, src.view.height);
+        std::vector<std::uint8_t> got = guarded(total, f), want = guarded(total, f), one_by_one = guarded(total, f);
+        simd.cells(src.view, a.data(), cell_n, total, got.data());
+        ref.cells(src.view, a.data(), cell_n, total, want.data());
+        for (int k = 0; k * cell_n < total; ++k)
+          affine(ref, src.view, a[k], one_by_one.data() + k * cell_n * f.pixel_bytes(), std::min(cell_n, total - k * cell_n));
+        const std::string what = target_name(target) + " " + f.name + " run trial " + std::to_string(trial);
+        expect_same(got, want, total, f, what);
+        expect_same(want, one_by_one, total, f, what + " (reference, cell by cell)");
+      }
+    }
   }
 }
 
@@ -178,7 +210,7 @@ TEST_F(EveryTarget, ATranslationInsideTheImageIsTheBilinearBlend) {
       for (int x = 0; x < 64; ++x) src.bytes[y * 64 + x] = static_cast<std::uint8_t>(3 * x + 5 * y);
     const Samplers k = dispatched_samplers(SampleKind::U8);
     std::vector<std::uint8_t> out(32);
-    k.affine(src.view, {fixed(2.25), fixed(3.5), fixed(1), 0}, out.data(), 32);
+    affine(k, src.view, {fixed(2.25), fixed(3.5), fixed(1), 0}, out.data(), 32);
     for (int i = 0; i < 32; ++i) EXPECT_EQ(out[i], 3 * (2 + i) + 19) << target_name(target) << " pixel " << i;
   }
 }
@@ -192,9 +224,9 @@ TEST_F(EveryTarget, ChromaOutsideThePlaneIsNeutralGrey) {
     std::fill(src.bytes.begin(), src.bytes.end(), std::uint8_t{200});
     const Samplers k = dispatched_samplers(SampleKind::U8x2);
     std::vector<std::uint8_t> out(2 * 16);
-    k.affine(src.view, {fixed(-100), fixed(3), fixed(1), 0}, out.data(), 16);
+    affine(k, src.view, {fixed(-100), fixed(3), fixed(1), 0}, out.data(), 16);
     for (int i = 0; i < 32; ++i) EXPECT_EQ(out[i], 128) << target_name(target) << " byte " << i;
-    k.affine(src.view, {fixed(-0.5), fixed(3), 0, 0}, out.data(), 16);  // halfway between fill and 200
+    affine(k, src.view, {fixed(-0.5), fixed(3), 0, 0}, out.data(), 16);  // halfway between fill and 200
     for (int i = 0; i < 32; ++i) EXPECT_EQ(out[i], 164) << target_name(target) << " byte " << i;
   }
 }
@@ -245,8 +277,8 @@ TEST_F(EveryTarget, StridedPlanesSampleLikeThePackedPlaneOfTheirSamples) {
           ref.row(packed.view, q.xs.data(), q.ys.data(), want.data(), n);
           simd.row(strided, q.xs.data(), q.ys.data(), out, n);
         } else {
-          ref.affine(packed.view, a, want.data(), n);
-          simd.affine(strided, a, out, n);
+          affine(ref, packed.view, a, want.data(), n);
+          affine(simd, strided, a, out, n);
         }
         for (int i = 0; i < n; ++i)
           for (int k = 0; k < ch; ++k)
