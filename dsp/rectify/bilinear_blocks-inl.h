@@ -181,14 +181,16 @@ HWY_INLINE hn::Vec<hn::Repartition<std::uint16_t, DB>> rgb_half(DB d8, hn::Vec<D
   return lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
 }
 
-// Bytes [0, n) of each block's 16-bit lanes, narrowed, to out[b] + at (n: 4 or 8).
+// Bytes [0, n) of each block's 16-bit lanes, narrowed, to out[b] + at (n: 4 or 8), for the
+// blocks whose bit in `skip` is clear.
 template <class DU16x>
-HWY_INLINE void store_per_block(DU16x, hn::Vec<DU16x> v, std::uint8_t* const* out, int at, int n) {
+HWY_INLINE void store_per_block(DU16x, hn::Vec<DU16x> v, std::uint8_t* const* out, int at, int n, unsigned skip = 0) {
   const hn::Rebind<std::uint8_t, DU16x> d8n;
   const auto bytes = hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<DU16x>(), v));
   const hn::Full64<std::uint8_t> d64;
   const hn::Full32<std::uint8_t> d32;
   for (int b = 0; b < blocks_of<DU16x>(); ++b) {
+    if (skip >> b & 1) continue;
     const auto half = part<blocks_of<DU16x>(), decltype(d64)>(d8n, bytes, b);
     if (n == 8)
       hn::StoreU(half, d64, out[b] + at);
@@ -225,30 +227,40 @@ HWY_INLINE bool block_windows(D32x d, const SamplePlane& src, hn::Vec<D32x> X, h
   return !(straddle && ya_max > src.height - 3);
 }
 
+// Four RGB24 pixels per block from the windows at p[b] (positions rx, ry relative to them,
+// 1/256 px) to out[b], for the blocks whose bit in `skip` is clear.
+template <class DB>
+HWY_INLINE void rgb8_window_blend(DB d8, const SamplePlane& src, const std::uint8_t** p,
+                                  hn::Vec<hn::Repartition<std::int32_t, DB>> rx, hn::Vec<hn::Repartition<std::int32_t, DB>> ry,
+                                  bool straddle, std::uint8_t* const* out, unsigned skip) {
+  const hn::Repartition<std::int32_t, DB> d;
+  const hn::Repartition<std::uint16_t, DB> du16;
+  const auto i = hn::ShiftRight<8>(rx);
+  const auto words = hn::BitCast(d8, hn::Or(hn::Or(hn::Add(i, hn::Add(i, i)), hn::ShiftLeft<8>(hn::And(rx, hn::Set(d, 255)))),
+                                            hn::ShiftLeft<16>(ry)));
+  const auto r0 = load_windows(d8, p);
+  for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
+  const auto r1 = load_windows(d8, p);
+  auto r2 = r1;
+  if (straddle) {
+    for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
+    r2 = load_windows(d8, p);
+  }
+  store_per_block(du16, rgb_half(d8, r0, r1, r2, straddle, words, kRgbPixelA, kRgbColourA), out, 0, 8, skip);
+  store_per_block(du16, rgb_half(d8, r0, r1, r2, straddle, words, kRgbPixelB, kRgbColourB), out, 8, 4, skip);
+}
+
 // Four pixels per block (positions X, Y) to out[b].
 template <class DB>
 HWY_INLINE bool rgb8_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
                             hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
   constexpr int kB = blocks_of<DB>();
   const hn::Repartition<std::int32_t, DB> d;
-  const hn::Repartition<std::uint16_t, DB> du16;
   const std::uint8_t* p[kB];
   hn::Vec<decltype(d)> rx, ry;
   bool straddle = false;
   if (!block_windows<3, 4>(d, src, X, Y, p, rx, ry, straddle)) return false;
-  const auto i = hn::ShiftRight<8>(rx);
-  const auto words = hn::BitCast(d8, hn::Or(hn::Or(hn::Add(i, hn::Add(i, i)), hn::ShiftLeft<8>(hn::And(rx, hn::Set(d, 255)))),
-                                            hn::ShiftLeft<16>(ry)));
-  const auto r0 = load_windows(d8, p);
-  for (auto& q : p) q += src.stride;
-  const auto r1 = load_windows(d8, p);
-  auto r2 = r1;
-  if (straddle) {
-    for (auto& q : p) q += src.stride;
-    r2 = load_windows(d8, p);
-  }
-  store_per_block(du16, rgb_half(d8, r0, r1, r2, straddle, words, kRgbPixelA, kRgbColourA), out, 0, 8);
-  store_per_block(du16, rgb_half(d8, r0, r1, r2, straddle, words, kRgbPixelB, kRgbColourB), out, 8, 4);
+  rgb8_window_blend(d8, src, p, rx, ry, straddle, out, 0);
   return true;
 }
 
@@ -407,6 +419,41 @@ inline bool affine_fits(const SamplePlane& src, const Affine& a, int n) {
   const std::int64_t x0 = a.ax, x1 = a.ax + last * a.sx, y0 = a.ay, y1 = a.ay + last * a.sy;
   return ((x0 + 128) >> 16) >= 0 && ((x1 + 128) >> 16) <= src.width - 16 && ((std::min(y0, y1) + 128) >> 16) >= 0 &&
          ((std::max(y0, y1) + 128) >> 16) <= src.height - 3;
+}
+
+// Four RGB24 pixels per block of an affine segment, block b's first pixel first + 8 b
+// (positions X, Y): each block's window origin, whether it fits and whether its taps straddle
+// a row boundary come from the segment in scalars, as tap() rounds them (no per-lane checks);
+// a block whose taps do not fit its window (they span more than 4 px, or lie near an edge)
+// goes to four(), alone.
+template <class T, int C, class DB>
+HWY_INLINE void rgb8_affine_blocks(DB d8, const SamplePlane& src, const Affine& a, int first,
+                                   hn::Vec<hn::Repartition<std::int32_t, DB>> X, hn::Vec<hn::Repartition<std::int32_t, DB>> Y,
+                                   std::uint8_t* const* out) {
+  constexpr int kB = blocks_of<DB>();
+  const hn::Repartition<std::int32_t, DB> d;
+  const std::uint8_t* p[kB];
+  int bx[kB], by[kB];
+  unsigned bad = 0;
+  bool straddle = false;
+  for (int b = 0; b < kB; ++b) {
+    const std::int64_t k = first + 8 * b, x0 = a.ax + k * a.sx, x3 = x0 + 3 * std::int64_t{a.sx};
+    const std::int64_t y0 = a.ay + k * a.sy, y3 = y0 + 3 * std::int64_t{a.sy};
+    int xa = static_cast<int>((x0 + 128) >> 16), ya = static_cast<int>((std::min(y0, y3) + 128) >> 16);
+    const std::int64_t xl = (x3 + 128) >> 16, yb = (std::max(y0, y3) + 128) >> 16;
+    // Monotone along the segment: the first and last pixel bound the block's taps.
+    if (xa >= 0 && xl >= xa && xl - xa <= 3 && 3 * xa + 16 <= 3 * src.width && ya >= 0 && yb <= src.height - 2 && yb - ya <= 1) {
+      straddle |= yb != ya;
+    } else {
+      bad |= 1u << b, xa = 0, ya = 0;  // a window that exists (src is at least 6 x 3), not stored
+    }
+    bx[b] = 128 - xa * 65536, by[b] = 128 - ya * 65536, p[b] = src.row(ya) + 3 * xa;
+  }
+  for (int b = 0; b < kB; ++b)
+    if (bad >> b & 1) four<T, C>(src, block(d, X, b), block(d, Y, b), out[b], false);
+  if (bad == (1u << kB) - 1) return;
+  const auto rx = hn::ShiftRight<8>(hn::Add(X, per_block(d, bx))), ry = hn::ShiftRight<8>(hn::Add(Y, per_block(d, by)));
+  rgb8_window_blend(d8, src, p, rx, ry, straddle, out, bad);
 }
 
 #endif  // HWY_TARGET != HWY_SCALAR

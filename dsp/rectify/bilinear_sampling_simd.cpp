@@ -177,6 +177,13 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
     if (n >= kStep && affine_fits(src, a, n / kStep * kStep))
       for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
         mono8_affine_blocks(DW16(), src, a, i, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i);
+  } else if constexpr (C == 3 && sizeof(T) == 1 && kOut == 3) {  // RGB24: per-block checks in scalars
+    if (src.width >= 6 && src.height >= 3)
+      for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
+        const WideOutputs<kOut> o(out + i * kBytes);
+        rgb8_affine_blocks<T, C>(DW8(), src, a, i, X, Y, o.o0);
+        rgb8_affine_blocks<T, C>(DW8(), src, a, i + 4, hn::Add(X, X4), hn::Add(Y, Y4), o.o1);
+      }
   }
   for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
     wide<T, C, kOut>(src, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes, i + kStep + 2 <= n);
@@ -196,11 +203,39 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
   sample_row_simd<T, C, kOut>(src, xs, ys, out + i * kBytes, n - i);
 }
 
-// A run of cells in one call: the constants of the segment code stay in registers.
+// Positions of samples [c0, c0 + n) of a run of cells (cell_n a multiple of 8) into xs, ys:
+// a + e s for sample e of its cell, in wrapping 32-bit arithmetic like the scalar running sums.
+HWY_INLINE void cell_positions(const Affine* a, int cell_n, int c0, int n, std::int32_t* xs, std::int32_t* ys) {
+  const D32 d;
+  const V32 l4 = hn::Iota(d, 0);
+  auto at = [](std::int32_t a0, std::int32_t step, int e) {
+    return static_cast<std::int32_t>(static_cast<std::uint32_t>(a0) + static_cast<std::uint32_t>(e) * static_cast<std::uint32_t>(step));
+  };
+  for (int k = 0; k < n; k += 4) {
+    const int c = (c0 + k) / cell_n, e = c0 + k - c * cell_n;
+    hn::Store(hn::Add(hn::Set(d, at(a[c].ax, a[c].sx, e)), hn::Mul(l4, hn::Set(d, a[c].sx))), d, xs + k);
+    hn::Store(hn::Add(hn::Set(d, at(a[c].ay, a[c].sy, e)), hn::Mul(l4, hn::Set(d, a[c].sy))), d, ys + k);
+  }
+}
+
+// A run of cells in one call: the constants of the segment code stay in registers. Cells
+// narrower than a wide step (16-sample chroma cells, 16-px cells on AVX-512) would each end in
+// the short tail: their positions go through arrays instead, a chunk of cells at a time, so
+// that the kernels still take whole wide steps.
 template <class T, int C, int kOut>
 void sample_cells_simd(const SamplePlane& src, const Affine* a, int cell_n, int total, std::uint8_t* out) {
-  for (int c0 = 0, k = 0; c0 < total; c0 += cell_n, ++k)  // as for_each_cell, with the segment inlined
-    sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(cell_n, total - c0));
+  if (cell_n >= kStep || cell_n % 8 != 0) {
+    for (int c0 = 0, k = 0; c0 < total; c0 += cell_n, ++k)  // as for_each_cell, with the segment inlined
+      sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(cell_n, total - c0));
+    return;
+  }
+  constexpr int kChunk = 256;
+  alignas(64) std::int32_t xs[kChunk + 4], ys[kChunk + 4];
+  for (int c0 = 0; c0 < total; c0 += kChunk) {
+    const int n = std::min(kChunk, total - c0);
+    cell_positions(a, cell_n, c0, n, xs, ys);
+    sample_row_simd<T, C, kOut>(src, xs, ys, out + c0 * kOut, n);
+  }
 }
 
 template <class T, int C, int kOut = C * sizeof(T)>
