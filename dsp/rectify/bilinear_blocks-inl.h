@@ -278,16 +278,15 @@ HWY_INLINE bool rgb8_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartiti
 //   belong to the image's other planes (the same rows of which the same thread resamples, never
 //   at the same time). The window and the merged 8 bytes stay inside the row for planes that
 //   start one byte into it (block_windows' slack).
+// Four samples per block from the windows at p[b] (positions rx, ry relative to them, 1/256
+// px) to out[b], for the blocks whose bit in `skip` is clear.
 template <bool kPairs, class DB>
-HWY_INLINE bool two_byte_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
-                                hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
+HWY_INLINE void two_byte_window_blend(DB d8, const SamplePlane& src, const std::uint8_t** p,
+                                      hn::Vec<hn::Repartition<std::int32_t, DB>> rx, hn::Vec<hn::Repartition<std::int32_t, DB>> ry,
+                                      bool straddle, std::uint8_t* const* out, unsigned skip) {
   constexpr int kB = blocks_of<DB>();
   const hn::Repartition<std::int32_t, DB> d;
   const hn::Repartition<std::uint16_t, DB> du16;
-  const std::uint8_t* p[kB];
-  hn::Vec<decltype(d)> rx, ry;
-  bool straddle = false;
-  if (!block_windows<2, 7, kPairs ? 0 : 1>(d, src, X, Y, p, rx, ry, straddle)) return false;
   if constexpr (kPairs) rx = hn::Or(rx, hn::ShiftLeft<16>(rx)), ry = hn::Or(ry, hn::ShiftLeft<16>(ry));
   const auto x16 = hn::BitCast(du16, rx), y16 = hn::BitCast(du16, ry);
   const auto i2 = hn::ShiftLeft<1>(hn::ShiftRight<8>(x16));  // the left tap's first byte, per lane
@@ -298,17 +297,30 @@ HWY_INLINE bool two_byte_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repar
   tap_pairs(d8, src, p, idx, straddle, hn::ShiftRight<8>(y16), up, down);
   const auto v = lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
   if constexpr (kPairs) {
-    store_per_block(du16, v, out, 0, 8);
+    store_per_block(du16, v, out, 0, 8, skip);
   } else {
     const hn::Rebind<std::uint8_t, decltype(du16)> d8n;
     const auto bytes = hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<decltype(du16)>(), v));
     const hn::Full64<std::uint8_t> d64;
     const auto others = hn::BitCast(d64, hn::Set(hn::Full64<std::uint16_t>(), 0xFF00));  // the odd bytes
     for (int b = 0; b < kB; ++b) {
+      if (skip >> b & 1) continue;
       const auto ours = part<kB, decltype(d64)>(d8n, bytes, b);
       hn::StoreU(hn::Or(hn::And(hn::LoadU(d64, out[b]), others), ours), d64, out[b]);
     }
   }
+}
+
+template <bool kPairs, class DB>
+HWY_INLINE bool two_byte_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
+                                hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
+  constexpr int kB = blocks_of<DB>();
+  const hn::Repartition<std::int32_t, DB> d;
+  const std::uint8_t* p[kB];
+  hn::Vec<decltype(d)> rx, ry;
+  bool straddle = false;
+  if (!block_windows<2, 7, kPairs ? 0 : 1>(d, src, X, Y, p, rx, ry, straddle)) return false;
+  two_byte_window_blend<kPairs>(d8, src, p, rx, ry, straddle, out, 0);
   return true;
 }
 
@@ -421,39 +433,63 @@ inline bool affine_fits(const SamplePlane& src, const Affine& a, int n) {
          ((std::max(y0, y1) + 128) >> 16) <= src.height - 3;
 }
 
-// Four RGB24 pixels per block of an affine segment, block b's first pixel first + 8 b
-// (positions X, Y): each block's window origin, whether it fits and whether its taps straddle
-// a row boundary come from the segment in scalars, as tap() rounds them (no per-lane checks);
-// a block whose taps do not fit its window (they span more than 4 px, or lie near an edge)
-// goes to four(), alone.
+// ---- Affine blocks of four samples: origins and checks in scalars ----------------------
+//
+// Block b of four samples lies in an affine cell segment: seg[b] is that segment and the index
+// of the block's first sample in it. Each block's window origin, whether its taps fit the window
+// and whether they straddle a row boundary come from the segment in scalars, as tap() rounds
+// them (no per-lane checks): the positions are monotone along a segment, so its first and
+// fourth sample bound the block's taps. A block that does not fit (its taps span more than
+// kMaxTap samples, or lie near an edge) is sampled alone by four(), and left out of the windows.
+
+struct BlockSegment {
+  const Affine* a;
+  int e;  // the block's first sample, from the segment's start
+};
+
+// Windows of kBytes-byte samples: origins p[b], offsets bx, by (for rx, ry) and straddle; returns
+// the blocks that do not fit, as bits (their window is a harmless one at the image's origin;
+// the caller checks the plane is at least 16 bytes wide and 3 rows high).
+template <int kBytes, int kMaxTap, int kB>
+HWY_INLINE unsigned affine_block_windows(const SamplePlane& src, const BlockSegment* seg, int* bx, int* by,
+                                         const std::uint8_t** p, bool& straddle) {
+  unsigned bad = 0;
+  for (int b = 0; b < kB; ++b) {
+    const Affine& a = *seg[b].a;
+    const std::int64_t k = seg[b].e, x0 = a.ax + k * a.sx, x3 = x0 + 3 * std::int64_t{a.sx};
+    const std::int64_t y0 = a.ay + k * a.sy, y3 = y0 + 3 * std::int64_t{a.sy};
+    int xa = static_cast<int>((x0 + 128) >> 16), ya = static_cast<int>((std::min(y0, y3) + 128) >> 16);
+    const std::int64_t xl = (x3 + 128) >> 16, yb = (std::max(y0, y3) + 128) >> 16;
+    if (xa >= 0 && xl >= xa && xl - xa <= kMaxTap && kBytes * xa + 16 <= kBytes * src.width && ya >= 0 &&
+        yb <= src.height - 2 && yb - ya <= 1)
+      straddle |= yb != ya;
+    else
+      bad |= 1u << b, xa = 0, ya = 0;
+    bx[b] = 128 - xa * 65536, by[b] = 128 - ya * 65536, p[b] = src.row(ya) + kBytes * xa;
+  }
+  return bad;
+}
+
+// RGB24 (kPairs unused) or U V pairs: four samples per block of affine segments, positions X, Y.
 template <class T, int C, class DB>
-HWY_INLINE void rgb8_affine_blocks(DB d8, const SamplePlane& src, const Affine& a, int first,
-                                   hn::Vec<hn::Repartition<std::int32_t, DB>> X, hn::Vec<hn::Repartition<std::int32_t, DB>> Y,
-                                   std::uint8_t* const* out) {
+HWY_INLINE void affine_blocks(DB d8, const SamplePlane& src, const BlockSegment* seg,
+                              hn::Vec<hn::Repartition<std::int32_t, DB>> X, hn::Vec<hn::Repartition<std::int32_t, DB>> Y,
+                              std::uint8_t* const* out) {
   constexpr int kB = blocks_of<DB>();
   const hn::Repartition<std::int32_t, DB> d;
   const std::uint8_t* p[kB];
   int bx[kB], by[kB];
-  unsigned bad = 0;
   bool straddle = false;
-  for (int b = 0; b < kB; ++b) {
-    const std::int64_t k = first + 8 * b, x0 = a.ax + k * a.sx, x3 = x0 + 3 * std::int64_t{a.sx};
-    const std::int64_t y0 = a.ay + k * a.sy, y3 = y0 + 3 * std::int64_t{a.sy};
-    int xa = static_cast<int>((x0 + 128) >> 16), ya = static_cast<int>((std::min(y0, y3) + 128) >> 16);
-    const std::int64_t xl = (x3 + 128) >> 16, yb = (std::max(y0, y3) + 128) >> 16;
-    // Monotone along the segment: the first and last pixel bound the block's taps.
-    if (xa >= 0 && xl >= xa && xl - xa <= 3 && 3 * xa + 16 <= 3 * src.width && ya >= 0 && yb <= src.height - 2 && yb - ya <= 1) {
-      straddle |= yb != ya;
-    } else {
-      bad |= 1u << b, xa = 0, ya = 0;  // a window that exists (src is at least 6 x 3), not stored
-    }
-    bx[b] = 128 - xa * 65536, by[b] = 128 - ya * 65536, p[b] = src.row(ya) + 3 * xa;
-  }
+  // A window holds 5 RGB24 pixels (left taps 0..3) or 8 U V pairs (left taps 0..6).
+  const unsigned bad = affine_block_windows<C * sizeof(T), C == 3 ? 3 : 6, kB>(src, seg, bx, by, p, straddle);
   for (int b = 0; b < kB; ++b)
     if (bad >> b & 1) four<T, C>(src, block(d, X, b), block(d, Y, b), out[b], false);
   if (bad == (1u << kB) - 1) return;
   const auto rx = hn::ShiftRight<8>(hn::Add(X, per_block(d, bx))), ry = hn::ShiftRight<8>(hn::Add(Y, per_block(d, by)));
-  rgb8_window_blend(d8, src, p, rx, ry, straddle, out, bad);
+  if constexpr (C == 3)
+    rgb8_window_blend(d8, src, p, rx, ry, straddle, out, bad);
+  else
+    two_byte_window_blend<true>(d8, src, p, rx, ry, straddle, out, bad);
 }
 
 #endif  // HWY_TARGET != HWY_SCALAR

@@ -161,6 +161,25 @@ void sample_row_simd(const SamplePlane& src, const std::int32_t* xs, const std::
   scalar_rest<T, C, kOut>(src, xs + i, ys + i, out + i * kBytes, n - i);
 }
 
+// The kinds whose affine segments go through affine_blocks (bilinear_blocks-inl.h).
+template <class T, int C, int kOut>
+constexpr bool kAffineBlocks = sizeof(T) == 1 && (C == 3 || C == 2) && kOut == C;
+
+// affine_blocks' dummy window needs 16 bytes in a row and three rows.
+template <int C>
+HWY_INLINE bool affine_blocks_fit(const SamplePlane& src) {
+  return C * src.width >= 16 && src.height >= 3;
+}
+
+// One wide step of affine blocks: pixels 8b..8b+3 of block b at X0 (segments s0), 8b+4..8b+7 at X1.
+template <class T, int C>
+HWY_INLINE void affine_step(const SamplePlane& src, const BlockSegment* s0, const BlockSegment* s1, VW32 X0, VW32 Y0, VW32 X1,
+                            VW32 Y1, std::uint8_t* out) {
+  const WideOutputs<C> o(out);
+  affine_blocks<T, C>(DW8(), src, s0, X0, Y0, o.o0);
+  affine_blocks<T, C>(DW8(), src, s1, X1, Y1, o.o1);
+}
+
 // Positions generated in registers along an affine cell segment, x_k = ax + k sx: the same
 // integers as the scalar code's running sums (int32 arithmetic wraps alike).
 template <class T, int C, int kOut>
@@ -177,12 +196,12 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
     if (n >= kStep && affine_fits(src, a, n / kStep * kStep))
       for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
         mono8_affine_blocks(DW16(), src, a, i, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i);
-  } else if constexpr (C == 3 && sizeof(T) == 1 && kOut == 3) {  // RGB24: per-block checks in scalars
-    if (src.width >= 6 && src.height >= 3)
+  } else if constexpr (kAffineBlocks<T, C, kOut>) {  // RGB24, U V pairs: per-block checks in scalars
+    if (affine_blocks_fit<C>(src))
       for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
-        const WideOutputs<kOut> o(out + i * kBytes);
-        rgb8_affine_blocks<T, C>(DW8(), src, a, i, X, Y, o.o0);
-        rgb8_affine_blocks<T, C>(DW8(), src, a, i + 4, hn::Add(X, X4), hn::Add(Y, Y4), o.o1);
+        BlockSegment s0[kBlocks], s1[kBlocks];
+        for (int b = 0; b < kBlocks; ++b) s0[b] = {&a, i + 8 * b}, s1[b] = {&a, i + 8 * b + 4};
+        affine_step<T, C>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes);
       }
   }
   for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
@@ -218,6 +237,33 @@ HWY_INLINE void cell_positions(const Affine* a, int cell_n, int c0, int n, std::
   }
 }
 
+// Cells of half a wide step (16-sample chroma cells on AVX-512): two per step, the lower blocks
+// from the first, the upper from the second; a last odd or short cell alone.
+template <class T, int C, int kOut>
+HWY_INLINE void paired_cells(const SamplePlane& src, const Affine* a, int total, std::uint8_t* out) {
+  constexpr int kHalf = kStep / 2, kHalfBlocks = kBlocks / 2;
+  const DW32 dw;
+  const hn::Half<DW32> dh;
+  const auto lanes = hn::Iota(dh, 0), order = hn::Add(lanes, hn::And(lanes, hn::Set(dh, ~3)));  // the wide layout
+  auto half = [&](std::int32_t a0, std::int32_t s) { return hn::Add(hn::Set(dh, a0), hn::Mul(order, hn::Set(dh, s))); };
+  int c0 = 0, k = 0;
+  for (; c0 + kStep <= total; c0 += kStep, k += 2) {
+    const Affine &lo = a[k], &hi = a[k + 1];
+    const VW32 X = hn::Combine(dw, half(hi.ax, hi.sx), half(lo.ax, lo.sx));
+    const VW32 Y = hn::Combine(dw, half(hi.ay, hi.sy), half(lo.ay, lo.sy));
+    const VW32 X4 = hn::ShiftLeft<2>(hn::Combine(dw, hn::Set(dh, hi.sx), hn::Set(dh, lo.sx)));  // 4 s, wrapping
+    const VW32 Y4 = hn::ShiftLeft<2>(hn::Combine(dw, hn::Set(dh, hi.sy), hn::Set(dh, lo.sy)));
+    BlockSegment s0[kBlocks], s1[kBlocks];
+    for (int b = 0; b < kBlocks; ++b) {
+      const Affine* cell = b < kHalfBlocks ? &lo : &hi;
+      const int e = 8 * (b % kHalfBlocks);
+      s0[b] = {cell, e}, s1[b] = {cell, e + 4};
+    }
+    affine_step<T, C>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut);
+  }
+  for (; c0 < total; c0 += kHalf, ++k) sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(kHalf, total - c0));
+}
+
 // A run of cells in one call: the constants of the segment code stay in registers. Cells
 // narrower than a wide step (16-sample chroma cells, 16-px cells on AVX-512) would each end in
 // the short tail: their positions go through arrays instead, a chunk of cells at a time, so
@@ -228,6 +274,9 @@ void sample_cells_simd(const SamplePlane& src, const Affine* a, int cell_n, int 
     for (int c0 = 0, k = 0; c0 < total; c0 += cell_n, ++k)  // as for_each_cell, with the segment inlined
       sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(cell_n, total - c0));
     return;
+  }
+  if constexpr (kAffineBlocks<T, C, kOut> && kBlocks >= 2) {
+    if (2 * cell_n == kStep && affine_blocks_fit<C>(src)) return paired_cells<T, C, kOut>(src, a, total, out);
   }
   constexpr int kChunk = 256;
   alignas(64) std::int32_t xs[kChunk + 4], ys[kChunk + 4];

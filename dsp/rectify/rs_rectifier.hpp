@@ -143,8 +143,7 @@ class Rectifier {
   double cell_bound(const Branch& b, int i, int j) const;
   int interpolate_row(double y, RowScratch& s) const;
   Affine cell_affine(int i, std::uint8_t mode, const RowScratch& s) const;
-  Affine unit_affine(int i, std::uint8_t mode, const RowScratch& s) const;
-  Affine plane_affine(int i, std::uint8_t mode, const SamplePlane& g, int c0, const RowScratch& s) const;
+  Affine plane_affine(int i, std::uint8_t mode, const SamplePlane& g, const RowScratch& s) const;
   void cell_columns(int i, const SamplePlane& g, int& c0, int& c1) const;
   void generate_row(double y, const SamplePlane& g, RowScratch& s) const;
   void kink_segment(int i, int c0, int c1, const SamplePlane& g, RowScratch& s) const;

@@ -17,13 +17,6 @@ using namespace rectify_detail;
 
 namespace {
 
-// 16.16 start and per-pixel step of a cell segment from its two ends (one cell apart, 16.16).
-Affine affine_between(std::int32_t ax, std::int32_t ay, std::int32_t bx, std::int32_t by, int shift) {
-  const std::int64_t half = (std::int64_t{1} << shift) >> 1;
-  return {ax, ay, static_cast<std::int32_t>((std::int64_t{bx} - ax + half) >> shift),
-          static_cast<std::int32_t>((std::int64_t{by} - ay + half) >> shift)};
-}
-
 void linear_segment(const Affine& a, std::int32_t* xs, std::int32_t* ys, int count) {
   // Running sums (a vector induction, no multiplies), wrapping like the sampler's.
   std::uint32_t x = static_cast<std::uint32_t>(a.ax), y = static_cast<std::uint32_t>(a.ay);
@@ -49,21 +42,15 @@ int Rectifier::interpolate_row(double y, RowScratch& s) const {
   return j;
 }
 
-// cell_affine in 32-bit arithmetic, for the cells of unit planes (most of them): a linear
-// cell's nodes lie within kLimit px, so that differences and their rounding fit int32 and
-// the result is the same.
-Rectifier::Affine Rectifier::unit_affine(int i, std::uint8_t mode, const RowScratch& s) const {
+// 16.16 start and per-pixel step of cell i of a unit plane, from its two end nodes (one cell
+// apart), rounded to nearest. A linear cell's nodes lie within kLimit px, so that their
+// differences and the rounding fit int32.
+Rectifier::Affine Rectifier::cell_affine(int i, std::uint8_t mode, const RowScratch& s) const {
   const std::int32_t* X = mode == kPlane ? s.fpx.data() : s.fix.data();
   const std::int32_t* Y = mode == kPlane ? s.fpy.data() : s.fiy.data();
   const int shift = levels_[level_].shift;
   const std::int32_t half = (1 << shift) >> 1;
   return {X[i], Y[i], (X[i + 1] - X[i] + half) >> shift, (Y[i + 1] - Y[i] + half) >> shift};
-}
-
-Rectifier::Affine Rectifier::cell_affine(int i, std::uint8_t mode, const RowScratch& s) const {
-  const std::vector<std::int32_t>& X = mode == kPlane ? s.fpx : s.fix;
-  const std::vector<std::int32_t>& Y = mode == kPlane ? s.fpy : s.fiy;
-  return affine_between(X[i], Y[i], X[i + 1], Y[i + 1], levels_[level_].shift);
 }
 
 // The samples [c0, c1) of plane g whose image positions lie in cell i (a cell spans an even
@@ -74,20 +61,26 @@ void Rectifier::cell_columns(int i, const SamplePlane& g, int& c0, int& c1) cons
   c0 = (i * sp) >> shift, c1 = std::min(((i + 1) * sp) >> shift, g.width);
 }
 
-// Cell i's affine segment at plane g's samples from c0 on, in the plane's own coordinates: the
-// image position of sample c is x = scale_x c + offset_x, e pixels into the segment at c0, and
-// a source position P in image pixels is sample (P - offset) / scale of the source plane. In
-// integers (offsets are whole or half pixels, scales 1 or 2), rounded to nearest: this runs per
-// cell of every chroma or mosaic row.
-Rectifier::Affine Rectifier::plane_affine(int i, std::uint8_t mode, const SamplePlane& g, int c0, const RowScratch& s) const {
-  const Affine a = cell_affine(i, mode, s);
-  if (g.scale_x == 1 && g.scale_y == 1) return a;  // (unit planes have no offset)
+// A cell's affine segment (cell_affine, image pixels) at plane g's samples, in the plane's own
+// coordinates: the cell's first sample c0 = i spacing / scale_x sits at image position
+// x = scale_x c0 + offset_x, offset_x into the cell, and a source position P in image pixels is
+// sample (P - offset) / scale of the source plane. In integers (offsets are whole or half
+// pixels, scales 1 or 2), rounded to nearest: this runs per cell of every chroma or mosaic row.
+namespace {
+void to_plane(Rectifier::Affine& a, const SamplePlane& g) {
   const auto ox2 = static_cast<std::int64_t>(2 * g.offset_x), oy2 = static_cast<std::int64_t>(2 * g.offset_y);
-  const std::int64_t e2 = 2 * (static_cast<std::int64_t>(g.scale_x) * c0 - static_cast<std::int64_t>(i) * levels_[level_].spacing) + ox2;
   // floor((num + d / 2) / d) for d = 2 scale, a power of two: an arithmetic shift.
   auto divide = [](std::int64_t num, int scale) { return static_cast<std::int32_t>((num + scale) >> (scale == 1 ? 1 : 2)); };
-  return {divide(2 * std::int64_t{a.ax} + e2 * a.sx - ox2 * 65536, g.scale_x),
-          divide(2 * std::int64_t{a.ay} + e2 * a.sy - oy2 * 65536, g.scale_y), a.sx, a.sy * (g.scale_x / g.scale_y)};
+  a.ax = divide(2 * std::int64_t{a.ax} + ox2 * a.sx - ox2 * 65536, g.scale_x);
+  a.ay = divide(2 * std::int64_t{a.ay} + ox2 * a.sy - oy2 * 65536, g.scale_y);
+  a.sy *= g.scale_x / g.scale_y;
+}
+}  // namespace
+
+Rectifier::Affine Rectifier::plane_affine(int i, std::uint8_t mode, const SamplePlane& g, const RowScratch& s) const {
+  Affine a = cell_affine(i, mode, s);
+  if (g.scale_x != 1 || g.scale_y != 1) to_plane(a, g);  // (unit planes have no offset)
+  return a;
 }
 
 // Source positions of plane g's samples on image row y into s.xs, s.ys (16.16 in the plane's
@@ -104,7 +97,7 @@ void Rectifier::generate_row(double y, const SamplePlane& g, RowScratch& s) cons
     else if (modes[i] == kKink)
       kink_segment(i, c0, c1, g, s);
     else
-      linear_segment(plane_affine(i, modes[i], g, c0, s), &s.xs[c0], &s.ys[c0], c1 - c0);
+      linear_segment(plane_affine(i, modes[i], g, s), &s.xs[c0], &s.ys[c0], c1 - c0);
   }
 }
 
@@ -154,7 +147,9 @@ void Rectifier::remap_rows(const SamplePlane& src, const SamplePlane& dst, int j
       cell_columns(i, dst, c0, c1);
       if (c0 >= c1) break;
       if (modes[i] == kPlane || modes[i] == kInfinite) {
-        s.cells[run++] = unit ? unit_affine(i, modes[i], s) : plane_affine(i, modes[i], dst, c0, s);
+        Affine& a = s.cells[run++];
+        a = cell_affine(i, modes[i], s);
+        if (!unit) to_plane(a, dst);
         continue;
       }
       flush(i);
