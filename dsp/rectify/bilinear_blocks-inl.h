@@ -332,21 +332,25 @@ HWY_INLINE bool two_byte_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repar
 // window they are below 15 x 256, and the saturating narrowing keeps anything further out of
 // range); byte pairs (p0, p1) come out of the windows by lookup and blend on 16-bit lanes.
 
-// The positions relative to each block's window origin (xa[b], ya[b]), narrowed to 16 bits.
+// The positions relative to each block's window origin, narrowed to 16 bits: the origin is
+// (xa, ya) = (the block's first left tap, the upper of its first and last pixel's top taps), as
+// tap() rounds them; in 1/256 px that is lane 0 of (X0 + 128) >> 8, and the smaller of lane 0
+// of (Y0 + 128) >> 8 and lane 3 of (Y1 + 128) >> 8, each rounded down to whole pixels
+// (Broadcast: per 128-bit block, no lane crossing).
 template <class D16x>
-HWY_INLINE void mono8_relative(D16x d16, hn::Vec<hn::Repartition<std::int32_t, D16x>> X0,
+HWY_INLINE void mono8_relative(D16x, hn::Vec<hn::Repartition<std::int32_t, D16x>> X0,
                                hn::Vec<hn::Repartition<std::int32_t, D16x>> Y0, hn::Vec<hn::Repartition<std::int32_t, D16x>> X1,
-                               hn::Vec<hn::Repartition<std::int32_t, D16x>> Y1, const int* xa, const int* ya,
-                               hn::Vec<hn::RebindToUnsigned<D16x>>& rx, hn::Vec<hn::RebindToUnsigned<D16x>>& ry) {
-  constexpr int kB = blocks_of<D16x>();
+                               hn::Vec<hn::Repartition<std::int32_t, D16x>> Y1, hn::Vec<hn::RebindToUnsigned<D16x>>& rx,
+                               hn::Vec<hn::RebindToUnsigned<D16x>>& ry) {
   const hn::Repartition<std::int32_t, D16x> d32;
   const hn::RebindToUnsigned<D16x> du16;
-  int bx[kB], by[kB];
-  for (int b = 0; b < kB; ++b) bx[b] = 128 - xa[b] * 65536, by[b] = 128 - ya[b] * 65536;
-  const auto ox = per_block(d32, bx), oy = per_block(d32, by);
-  (void)d16;
-  rx = hn::BitCast(du16, narrow_blocks(d32, hn::ShiftRight<8>(hn::Add(X0, ox)), hn::ShiftRight<8>(hn::Add(X1, ox))));
-  ry = hn::BitCast(du16, narrow_blocks(d32, hn::ShiftRight<8>(hn::Add(Y0, oy)), hn::ShiftRight<8>(hn::Add(Y1, oy))));
+  const auto half = hn::Set(d32, 128), whole = hn::Set(d32, ~255);
+  const auto x0 = hn::ShiftRight<8>(hn::Add(X0, half)), x1 = hn::ShiftRight<8>(hn::Add(X1, half));
+  const auto y0 = hn::ShiftRight<8>(hn::Add(Y0, half)), y1 = hn::ShiftRight<8>(hn::Add(Y1, half));
+  const auto xa = hn::And(hn::Broadcast<0>(x0), whole);
+  const auto ya = hn::And(hn::Min(hn::Broadcast<0>(y0), hn::Broadcast<3>(y1)), whole);
+  rx = hn::BitCast(du16, narrow_blocks(d32, hn::Sub(x0, xa), hn::Sub(x1, xa)));
+  ry = hn::BitCast(du16, narrow_blocks(d32, hn::Sub(y0, ya), hn::Sub(y1, ya)));
 }
 
 // The taps looked up in the windows at rows ya[b] (and the next one or two) and blended.
@@ -387,7 +391,7 @@ HWY_INLINE bool mono8_blocks(D16x d16, const SamplePlane& src, hn::Vec<hn::Repar
     ya_max = std::max(ya_max, ya[b]);
   }
   hn::Vec<decltype(du16)> rx, ry;
-  mono8_relative(d16, X0, Y0, X1, Y1, xa, ya, rx, ry);
+  mono8_relative(d16, X0, Y0, X1, Y1, rx, ry);
   const auto fits = hn::And(hn::Lt(hn::BitCast(d16, rx), hn::Set(d16, 15 * 256)),
                             hn::Lt(hn::BitCast(d16, ry), hn::Set(d16, 2 * 256)));
   const auto ahead = hn::And(hn::Gt(hn::BitCast(d16, rx), hn::Set(d16, -1)), hn::Gt(hn::BitCast(d16, ry), hn::Set(d16, -1)));
@@ -417,7 +421,7 @@ HWY_INLINE void mono8_affine_blocks(D16x d16, const SamplePlane& src, const Affi
     straddle |= ((std::max(y0, y7) + 128) >> 16) != ya[b];
   }
   hn::Vec<decltype(du16)> rx, ry;
-  mono8_relative(d16, X0, Y0, X1, Y1, xa, ya, rx, ry);
+  mono8_relative(d16, X0, Y0, X1, Y1, rx, ry);
   mono8_blend(d16, src, xa, ya, rx, ry, straddle, out);
 }
 
@@ -447,12 +451,12 @@ struct BlockSegment {
   int e;  // the block's first sample, from the segment's start
 };
 
-// Windows of kBytes-byte samples: origins p[b], offsets bx, by (for rx, ry) and straddle; returns
+// Windows of kBytes-byte samples: origins p[b] and straddle; returns
 // the blocks that do not fit, as bits (their window is a harmless one at the image's origin;
 // the caller checks the plane is at least 16 bytes wide and 3 rows high).
 template <int kBytes, int kMaxTap, int kB>
-HWY_INLINE unsigned affine_block_windows(const SamplePlane& src, const BlockSegment* seg, int* bx, int* by,
-                                         const std::uint8_t** p, bool& straddle) {
+HWY_INLINE unsigned affine_block_windows(const SamplePlane& src, const BlockSegment* seg, const std::uint8_t** p,
+                                         bool& straddle) {
   unsigned bad = 0;
   for (int b = 0; b < kB; ++b) {
     const Affine& a = *seg[b].a;
@@ -465,7 +469,7 @@ HWY_INLINE unsigned affine_block_windows(const SamplePlane& src, const BlockSegm
       straddle |= yb != ya;
     else
       bad |= 1u << b, xa = 0, ya = 0;
-    bx[b] = 128 - xa * 65536, by[b] = 128 - ya * 65536, p[b] = src.row(ya) + kBytes * xa;
+    p[b] = src.row(ya) + kBytes * xa;
   }
   return bad;
 }
@@ -478,14 +482,18 @@ HWY_INLINE void affine_blocks(DB d8, const SamplePlane& src, const BlockSegment*
   constexpr int kB = blocks_of<DB>();
   const hn::Repartition<std::int32_t, DB> d;
   const std::uint8_t* p[kB];
-  int bx[kB], by[kB];
   bool straddle = false;
   // A window holds 5 RGB24 pixels (left taps 0..3) or 8 U V pairs (left taps 0..6).
-  const unsigned bad = affine_block_windows<C * sizeof(T), C == 3 ? 3 : 6, kB>(src, seg, bx, by, p, straddle);
+  const unsigned bad = affine_block_windows<C * sizeof(T), C == 3 ? 3 : 6, kB>(src, seg, p, straddle);
   for (int b = 0; b < kB; ++b)
     if (bad >> b & 1) four<T, C>(src, block(d, X, b), block(d, Y, b), out[b], false);
   if (bad == (1u << kB) - 1) return;
-  const auto rx = hn::ShiftRight<8>(hn::Add(X, per_block(d, bx))), ry = hn::ShiftRight<8>(hn::Add(Y, per_block(d, by)));
+  // Relative to the origins as mono8_relative computes them (the first pixel's left tap, the
+  // upper of the first and fourth pixel's top taps): the same as p[b] for the blocks that fit.
+  const auto half = hn::Set(d, 128), whole = hn::Set(d, ~255);
+  const auto x8 = hn::ShiftRight<8>(hn::Add(X, half)), y8 = hn::ShiftRight<8>(hn::Add(Y, half));
+  const auto rx = hn::Sub(x8, hn::And(hn::Broadcast<0>(x8), whole));
+  const auto ry = hn::Sub(y8, hn::And(hn::Min(hn::Broadcast<0>(y8), hn::Broadcast<3>(y8)), whole));
   if constexpr (C == 3)
     rgb8_window_blend(d8, src, p, rx, ry, straddle, out, bad);
   else

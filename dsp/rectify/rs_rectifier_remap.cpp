@@ -125,6 +125,8 @@ void Rectifier::remap_rows(const SamplePlane& src, const SamplePlane& dst, int j
   const auto cells = sample_cells_[kind];
   const int cell_n = L.spacing >> (dst.scale_x - 1);  // samples per cell (spacings are even)
   const bool unit = dst.scale_x == 1 && dst.scale_y == 1;
+  const int n_cells = std::min(L.nx - 1, (dst.width + cell_n - 1) / cell_n);  // those with samples of this plane
+  const std::int32_t half = (1 << L.shift) >> 1;                             // cell_affine's rounding
   for (int j = j0; j < j1; ++j) {
     std::uint8_t* out = dst.row(j);
     const double y = dst.scale_y * j + dst.offset_y;
@@ -142,19 +144,21 @@ void Rectifier::remap_rows(const SamplePlane& src, const SamplePlane& dst, int j
       run = 0;
     };
     int i = 0;
-    for (; i + 1 < L.nx; ++i) {
-      int c0, c1;
-      cell_columns(i, dst, c0, c1);
-      if (c0 >= c1) break;
-      if (modes[i] == kPlane || modes[i] == kInfinite) {
+    for (; i < n_cells; ++i) {
+      const std::uint8_t m = modes[i];
+      if (m == kPlane || m == kInfinite) {  // the common case, kept short: cell_affine inline
+        const std::int32_t* X = m == kPlane ? s.fpx.data() : s.fix.data();
+        const std::int32_t* Y = m == kPlane ? s.fpy.data() : s.fiy.data();
         Affine& a = s.cells[run++];
-        a = cell_affine(i, modes[i], s);
+        a.ax = X[i], a.ay = Y[i], a.sx = (X[i + 1] - X[i] + half) >> L.shift, a.sy = (Y[i + 1] - Y[i] + half) >> L.shift;
         if (!unit) to_plane(a, dst);
         continue;
       }
       flush(i);
+      int c0, c1;
+      cell_columns(i, dst, c0, c1);
       std::uint8_t* o = out + c0 * dst.step;
-      if (modes[i] == kZero) {
+      if (m == kZero) {
         fill_samples(dst, o, c1 - c0);
       } else {
         kink_segment(i, c0, c1, dst, s);
