@@ -1,5 +1,5 @@
 #!/bin/sh
-# Regenerates the measured part of docs/performance.md: runs the rectifier benchmark (3
+# Regenerates the measured part of docs/performance.md: runs the rectifier benchmark (5
 # repetitions) and the end-to-end latency benchmark (mono8, nv12, then mono8 with the online
 # calibration's estimator on at 120 fps and at 30 fps: docs/online-calibration.md) from a built tree and
 # replaces the text between the two "generated" markers with their summaries, the machine and
@@ -23,7 +23,7 @@ out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 echo "performance_report: load before: $(cut -d' ' -f1-3 /proc/loadavg)" >&2
 echo "performance_report: bench_rs_rectifier (a few minutes) ..." >&2
-"$rect" --benchmark_repetitions=3 --benchmark_min_time=0.2 --benchmark_format=json \
+"$rect" --benchmark_repetitions=5 --benchmark_min_time=0.2 --benchmark_enable_random_interleaving=true --benchmark_format=json \
   >"$out/rectifier.json" 2>"$out/rectifier.txt"
 # Each end-to-end run: a name and its arguments.
 runs="mono8 nv12 online online30"
