@@ -120,22 +120,45 @@ HWY_INLINE V blend_pairs(V pairs, V f) {
   return lerp16(hn::And(pairs, hn::Set(d, 0xFF)), hn::ShiftRight<8>(pairs), f);
 }
 
+// YUYV's U V of eight samples from p[b] (a sample's U; its V two bytes on, the next sample's U
+// four): two 16-byte loads per block, their even bytes packed as eight U V pairs, the layout of
+// an NV12 chroma window.
+alignas(16) constexpr std::uint8_t kEvenBytes[16] = {0, 2, 4, 6, 8, 10, 12, 14, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80};
+template <class D>
+HWY_INLINE hn::Vec<D> load_uv4_windows(D d8, const std::uint8_t* const* p) {
+  const std::uint8_t* q[blocks_of<D>()];
+  for (int b = 0; b < blocks_of<D>(); ++b) q[b] = p[b] + 16;
+  const auto even = hn::LoadDup128(d8, kEvenBytes);
+  const hn::Repartition<std::uint64_t, D> d64;
+  return hn::BitCast(d8, hn::InterleaveLower(d64, hn::BitCast(d64, hn::TableLookupBytesOr0(load_windows(d8, p), even)),
+                                             hn::BitCast(d64, hn::TableLookupBytesOr0(load_windows(d8, q), even))));
+}
+
+// A row's window per block: 16 bytes, or for YUYV's U V (kUV4) the pairs of load_uv4_windows.
+template <bool kUV4, class D>
+HWY_INLINE hn::Vec<D> row_windows(D d8, const std::uint8_t* const* p) {
+  if constexpr (kUV4)
+    return load_uv4_windows(d8, p);
+  else
+    return load_windows(d8, p);
+}
+
 // The tap pairs of every 16-bit lane on its two rows, up and down, looked up by idx (0x80: zero)
 // in the blocks' windows at p[b] (advanced past the rows read): rows ya and ya + 1, or, for the
 // lanes whose `lower` is 1 when the taps straddle a row boundary, ya + 1 and ya + 2.
-template <class DB, class VU>
+template <bool kUV4 = false, class DB, class VU>
 HWY_INLINE void tap_pairs(DB d8, const SamplePlane& src, const std::uint8_t** p, hn::Vec<DB> idx, bool straddle, VU lower,
                           VU& up, VU& down) {
   const hn::DFromV<VU> du16;
-  const auto r0 = load_windows(d8, p);
+  const auto r0 = row_windows<kUV4>(d8, p);
   for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
   up = hn::BitCast(du16, hn::TableLookupBytesOr0(r0, idx));
-  down = hn::BitCast(du16, hn::TableLookupBytesOr0(load_windows(d8, p), idx));
+  down = hn::BitCast(du16, hn::TableLookupBytesOr0(row_windows<kUV4>(d8, p), idx));
   if (!straddle) return;
   for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
   const auto m = hn::Eq(lower, hn::Set(du16, 1));
   up = hn::IfThenElse(m, down, up);
-  down = hn::IfThenElse(m, hn::BitCast(du16, hn::TableLookupBytesOr0(load_windows(d8, p), idx)), down);
+  down = hn::IfThenElse(m, hn::BitCast(du16, hn::TableLookupBytesOr0(row_windows<kUV4>(d8, p), idx)), down);
 }
 
 // ---- RGB24, four pixels per block on 16-bit lanes --------------------------------------------
@@ -280,7 +303,7 @@ HWY_INLINE bool rgb8_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartiti
 //   start one byte into it (block_windows' slack).
 // Four samples per block from the windows at p[b] (positions rx, ry relative to them, 1/256
 // px) to out[b], for the blocks whose bit in `skip` is clear.
-template <bool kPairs, class DB>
+template <bool kPairs, bool kUV4 = false, class DB>
 HWY_INLINE void two_byte_window_blend(DB d8, const SamplePlane& src, const std::uint8_t** p,
                                       hn::Vec<hn::Repartition<std::int32_t, DB>> rx, hn::Vec<hn::Repartition<std::int32_t, DB>> ry,
                                       bool straddle, std::uint8_t* const* out, unsigned skip) {
@@ -294,9 +317,21 @@ HWY_INLINE void two_byte_window_blend(DB d8, const SamplePlane& src, const std::
   const auto idx = hn::BitCast(d8, hn::Add(hn::Or(i2, hn::ShiftLeft<8>(i2)), pattern));
   const auto fx = hn::And(x16, hn::Set(du16, 255)), fy = hn::And(y16, hn::Set(du16, 255));
   hn::Vec<decltype(du16)> up, down;
-  tap_pairs(d8, src, p, idx, straddle, hn::ShiftRight<8>(y16), up, down);
+  tap_pairs<kUV4>(d8, src, p, idx, straddle, hn::ShiftRight<8>(y16), up, down);
   const auto v = lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
-  if constexpr (kPairs) {
+  if constexpr (kUV4) {  // U V to bytes 0 and 2 of each sample's four, merged with the others (luma)
+    const hn::Rebind<std::uint8_t, decltype(du16)> d8n;
+    const auto bytes = hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<decltype(du16)>(), v));
+    const hn::Full64<std::uint8_t> d64;
+    const hn::Full128<std::uint16_t> w16;
+    const hn::Full128<std::uint8_t> w8;
+    for (int b = 0; b < kB; ++b) {
+      if (skip >> b & 1) continue;
+      const auto ours = hn::BitCast(w8, hn::PromoteTo(w16, part<kB, decltype(d64)>(d8n, bytes, b)));
+      const auto others = hn::And(hn::LoadU(w8, out[b]), hn::BitCast(w8, hn::Set(w16, 0xFF00)));
+      hn::StoreU(hn::Or(others, ours), w8, out[b]);
+    }
+  } else if constexpr (kPairs) {
     store_per_block(du16, v, out, 0, 8, skip);
   } else {
     const hn::Rebind<std::uint8_t, decltype(du16)> d8n;
@@ -321,6 +356,24 @@ HWY_INLINE bool two_byte_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repar
   bool straddle = false;
   if (!block_windows<2, 7, kPairs ? 0 : 1>(d, src, X, Y, p, rx, ry, straddle)) return false;
   two_byte_window_blend<kPairs>(d8, src, p, rx, ry, straddle, out, 0);
+  return true;
+}
+
+// YUYV's U V, four samples per block: windows of eight samples (32 bytes from the block's first
+// left tap, packed to eight U V pairs) taken when the taps lie within 6 samples right of it and
+// one row below, then blended as NV12's pairs. The 32 bytes read and the 16 merged per block
+// (the four samples and the luma byte after them, which the caller's room guarantees) stay
+// inside the row: the plane starts one byte into it (block_windows' slack: 16 + 1).
+template <class DB>
+HWY_INLINE bool uv4_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
+                           hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
+  constexpr int kB = blocks_of<DB>();
+  const hn::Repartition<std::int32_t, DB> d;
+  const std::uint8_t* p[kB];
+  hn::Vec<decltype(d)> rx, ry;
+  bool straddle = false;
+  if (!block_windows<4, 7, 17>(d, src, X, Y, p, rx, ry, straddle)) return false;
+  two_byte_window_blend<true, true>(d8, src, p, rx, ry, straddle, out, 0);
   return true;
 }
 

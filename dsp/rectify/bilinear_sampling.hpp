@@ -159,9 +159,11 @@ inline void sample_cells_strided(const SamplePlane& src, const Affine* a, int ce
 }
 
 // The kinds of plane the kernels know: packed 8-bit with 1, 2 or 3 channels, packed 16-bit,
-// strided planes of 8 or 16-bit samples, and among those the one-channel 8-bit samples two
-// bytes apart (YUYV's luma, an 8-bit mosaic's sites), which have SIMD kernels too.
-enum class SampleKind { U8, U8x2, U8x3, U16, StridedU8, StridedU16, StridedU8x2 };
+// strided planes of 8 or 16-bit samples, and among those the ones with SIMD kernels too: the
+// one-channel 8-bit samples two bytes apart (YUYV's luma, an 8-bit mosaic's sites) and two
+// 8-bit channels two bytes apart in four-byte samples (YUYV's U V).
+enum class SampleKind { U8, U8x2, U8x3, U16, StridedU8, StridedU16, StridedU8x2, StridedUV4 };
+inline constexpr int kSampleKinds = 8;
 SampleKind sample_kind(const SamplePlane& p);
 
 // Row samplers for one kind of plane: positions given per pixel, or affine along each cell of

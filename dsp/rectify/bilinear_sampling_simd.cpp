@@ -61,7 +61,13 @@ HWY_INLINE void strided_four(const SamplePlane& src, V32 X, V32 Y, std::uint8_t*
 // room: as blend_store's, after the eighth pixel.
 template <class T, int C, int kOut>
 HWY_INLINE void eight(const SamplePlane& src, V32 X0, V32 Y0, V32 X1, V32 Y1, std::uint8_t* out, bool room) {
-  if constexpr (kOut != C * sizeof(T)) {
+  if constexpr (C == 2 && kOut == 4) {  // YUYV's U V
+    std::uint8_t* o0[1] = {out};
+    std::uint8_t* o1[1] = {out + 16};
+    if (!uv4_blocks(D8(), src, X0, Y0, o0)) strided_four(src, X0, Y0, out);
+    if (!room || !uv4_blocks(D8(), src, X1, Y1, o1)) strided_four(src, X1, Y1, out + 16);
+    return;
+  } else if constexpr (kOut != C * sizeof(T)) {
     std::uint8_t* o0[1] = {out};
     std::uint8_t* o1[1] = {out + 8};
     if (!two_byte_blocks<false>(D8(), src, X0, Y0, o0)) strided_four(src, X0, Y0, out);
@@ -100,7 +106,10 @@ struct WideOutputs {
 // One wide step; room: as blend_store's, after the step's last pixel.
 template <class T, int C, int kOut>
 HWY_INLINE void wide(const SamplePlane& src, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1, std::uint8_t* out, bool room) {
-  if constexpr (kOut != C * sizeof(T)) {
+  if constexpr (C == 2 && kOut == 4) {
+    const WideOutputs<kOut> o(out);
+    if (room && uv4_blocks(DW8(), src, X0, Y0, o.o0) && uv4_blocks(DW8(), src, X1, Y1, o.o1)) return;
+  } else if constexpr (kOut != C * sizeof(T)) {
     const WideOutputs<kOut> o(out);
     if (room && two_byte_blocks<false>(DW8(), src, X0, Y0, o.o0) && two_byte_blocks<false>(DW8(), src, X1, Y1, o.o1)) return;
   } else if constexpr (C == 1 && sizeof(T) == 1) {
@@ -299,6 +308,7 @@ Samplers simd_samplers(SampleKind k) {
     case SampleKind::U8x3: return samplers_of<std::uint8_t, 3>();
     case SampleKind::U16: return samplers_of<std::uint16_t, 1>();
     case SampleKind::StridedU8x2: return samplers_of<std::uint8_t, 1, 2>();
+    case SampleKind::StridedUV4: return samplers_of<std::uint8_t, 2, 4>();
     case SampleKind::StridedU8:
     case SampleKind::StridedU16: break;
   }

@@ -65,6 +65,7 @@ Rectifier::Rectifier(const CameraModel& cam, const RowTiming& timing, const Came
   table_v0_ = -0.5 * timing_.height;
   table_.resize(2 * static_cast<std::size_t>(timing_.height));
   simd_ = cfg_.use_simd;
+  static_assert(kKinds == kSampleKinds);
   for (int k = 0; k < kKinds; ++k) {
     const Samplers f = pick_samplers(static_cast<SampleKind>(k), simd_);
     sample_row_[k] = f.row, sample_cells_[k] = f.cells;

@@ -156,7 +156,7 @@ class Rectifier {
   RectifierConfig cfg_;
   bool simd_ = false;
   // The kernels of each kind of sample plane (bilinear_sampling.hpp's SampleKind).
-  static constexpr int kKinds = 7;
+  static constexpr int kKinds = 8;  // rectify_detail::kSampleKinds (bilinear_sampling.hpp, not included here)
   void (*sample_row_[kKinds])(const SamplePlane&, const std::int32_t*, const std::int32_t*, std::uint8_t*, int) = {};
   void (*sample_cells_[kKinds])(const SamplePlane&, const Affine*, int, int, std::uint8_t*) = {};
 

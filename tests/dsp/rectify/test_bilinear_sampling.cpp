@@ -232,7 +232,8 @@ TEST_F(EveryTarget, ChromaOutsideThePlaneIsNeutralGrey) {
 }
 
 // A strided plane (a Bayer site: every other sample of every other row, starting at byte 0 or
-// 1 of its pair; YUYV's luma; YUYV's U V: two channels two bytes apart, four bytes per pair)
+// 1 of its pair; YUYV's luma; YUYV's U V: two channels two bytes apart, four bytes per pair;
+// one byte in three, the generic strided kind)
 // gives the values the packed plane holding the same samples gives, written at the strided
 // places and nowhere else, on every SIMD target. The source's last row ends with the plane's
 // last sample and the output with its last byte (the sanitizer tree catches any access beyond).
@@ -246,7 +247,8 @@ TEST_F(EveryTarget, StridedPlanesSampleLikeThePackedPlaneOfTheirSamples) {
                         {kPacked[0], 2, 1, 1, SampleKind::StridedU8x2},
                         {kPacked[3], 4, 2, 0, SampleKind::StridedU16},
                         {kPacked[3], 4, 2, 2, SampleKind::StridedU16},
-                        {kPacked[1], 4, 2, 1, SampleKind::StridedU8}};
+                        {kPacked[1], 4, 2, 1, SampleKind::StridedUV4},
+                        {kPacked[0], 3, 1, 0, SampleKind::StridedU8}};
   for (std::int64_t target : simd_targets()) {
     force_simd_target(target);
     for (const Case& c : cases) {
