@@ -120,12 +120,13 @@ HWY_INLINE V blend_pairs(V pairs, V f) {
   return lerp16(hn::And(pairs, hn::Set(d, 0xFF)), hn::ShiftRight<8>(pairs), f);
 }
 
-// YUYV's U V of eight samples from p[b] (a sample's U; its V two bytes on, the next sample's U
-// four): two 16-byte loads per block, their even bytes packed as eight U V pairs, the layout of
-// an NV12 chroma window.
+// The even bytes of 32 from p[b], as one 16-byte window per block: the samples of a plane whose
+// samples are two bytes apart (YUYV's luma, an 8-bit mosaic's sites: 16 samples), or YUYV's U V
+// from a sample's U (its V two bytes on, the next sample's U four: eight U V pairs, the layout
+// of an NV12 chroma window). Two 16-byte loads per block.
 alignas(16) constexpr std::uint8_t kEvenBytes[16] = {0, 2, 4, 6, 8, 10, 12, 14, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80};
 template <class D>
-HWY_INLINE hn::Vec<D> load_uv4_windows(D d8, const std::uint8_t* const* p) {
+HWY_INLINE hn::Vec<D> load_even_windows(D d8, const std::uint8_t* const* p) {
   const std::uint8_t* q[blocks_of<D>()];
   for (int b = 0; b < blocks_of<D>(); ++b) q[b] = p[b] + 16;
   const auto even = hn::LoadDup128(d8, kEvenBytes);
@@ -134,31 +135,50 @@ HWY_INLINE hn::Vec<D> load_uv4_windows(D d8, const std::uint8_t* const* p) {
                                              hn::BitCast(d64, hn::TableLookupBytesOr0(load_windows(d8, q), even))));
 }
 
-// A row's window per block: 16 bytes, or for YUYV's U V (kUV4) the pairs of load_uv4_windows.
-template <bool kUV4, class D>
+// A row's window per block: 16 bytes, or the even bytes of 32 (kEven).
+template <bool kEven, class D>
 HWY_INLINE hn::Vec<D> row_windows(D d8, const std::uint8_t* const* p) {
-  if constexpr (kUV4)
-    return load_uv4_windows(d8, p);
+  if constexpr (kEven)
+    return load_even_windows(d8, p);
   else
     return load_windows(d8, p);
+}
+
+// Bytes v (8 per block, the result of a block's 16-bit lanes) to the even bytes of the 16 at
+// out[b], merged with the odd ones there (another plane's samples), for the blocks whose bit in
+// skip is clear.
+template <class DU16x>
+HWY_INLINE void store_even_per_block(DU16x, hn::Vec<DU16x> v, std::uint8_t* const* out, unsigned skip = 0) {
+  constexpr int kB = blocks_of<DU16x>();
+  const hn::Rebind<std::uint8_t, DU16x> d8n;
+  const auto bytes = hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<DU16x>(), v));
+  const hn::Full64<std::uint8_t> d64;
+  const hn::Full128<std::uint16_t> w16;
+  const hn::Full128<std::uint8_t> w8;
+  for (int b = 0; b < kB; ++b) {
+    if (skip >> b & 1) continue;
+    const auto ours = hn::BitCast(w8, hn::PromoteTo(w16, part<kB, decltype(d64)>(d8n, bytes, b)));
+    const auto others = hn::And(hn::LoadU(w8, out[b]), hn::BitCast(w8, hn::Set(w16, 0xFF00)));
+    hn::StoreU(hn::Or(others, ours), w8, out[b]);
+  }
 }
 
 // The tap pairs of every 16-bit lane on its two rows, up and down, looked up by idx (0x80: zero)
 // in the blocks' windows at p[b] (advanced past the rows read): rows ya and ya + 1, or, for the
 // lanes whose `lower` is 1 when the taps straddle a row boundary, ya + 1 and ya + 2.
-template <bool kUV4 = false, class DB, class VU>
+template <bool kEven = false, class DB, class VU>
 HWY_INLINE void tap_pairs(DB d8, const SamplePlane& src, const std::uint8_t** p, hn::Vec<DB> idx, bool straddle, VU lower,
                           VU& up, VU& down) {
   const hn::DFromV<VU> du16;
-  const auto r0 = row_windows<kUV4>(d8, p);
+  const auto r0 = row_windows<kEven>(d8, p);
   for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
   up = hn::BitCast(du16, hn::TableLookupBytesOr0(r0, idx));
-  down = hn::BitCast(du16, hn::TableLookupBytesOr0(row_windows<kUV4>(d8, p), idx));
+  down = hn::BitCast(du16, hn::TableLookupBytesOr0(row_windows<kEven>(d8, p), idx));
   if (!straddle) return;
   for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
   const auto m = hn::Eq(lower, hn::Set(du16, 1));
   up = hn::IfThenElse(m, down, up);
-  down = hn::IfThenElse(m, hn::BitCast(du16, hn::TableLookupBytesOr0(row_windows<kUV4>(d8, p), idx)), down);
+  down = hn::IfThenElse(m, hn::BitCast(du16, hn::TableLookupBytesOr0(row_windows<kEven>(d8, p), idx)), down);
 }
 
 // ---- RGB24, four pixels per block on 16-bit lanes --------------------------------------------
@@ -287,75 +307,48 @@ HWY_INLINE bool rgb8_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartiti
   return true;
 }
 
-// ---- Two bytes a sample: U V pairs (NV12's chroma), or 8-bit samples two bytes apart (YUYV's
-// luma, an 8-bit mosaic's sites); four per block on 16-bit lanes ------------------------------
+// ---- U V pairs (NV12's chroma, YUYV's U V), four per block on 16-bit lanes ------------------
 //
-// One 16-byte window (8 samples) per row and block from the block's first left tap, taken when
+// One 16-byte window (8 pairs) per row and block from the block's first left tap, taken when
 // its four taps lie within 6 samples right of it and one row below. Each sample's 32-bit lane
-// splits into two 16-bit lanes:
-// - U V pairs (kPairs): its U and its V. Positions (below 2^16) are copied into the high half,
-//   and the lookup pattern 2i, 2i + 2, 2i + 1, 2i + 3 puts the U taps in the low lane and the V
-//   taps in the high one;
-// - one channel: the low lane looks up the taps 2i, 2i + 2, the high lane reads zeros, and the
-//   four results land on every other output byte, merged with the bytes between them, which
-//   belong to the image's other planes (the same rows of which the same thread resamples, never
-//   at the same time). The window and the merged 8 bytes stay inside the row for planes that
-//   start one byte into it (block_windows' slack).
+// splits into two 16-bit lanes, its U and its V: positions (below 2^16) are copied into the high
+// half, and the lookup pattern 2i, 2i + 2, 2i + 1, 2i + 3 puts the U taps in the low lane and
+// the V taps in the high one. YUYV's U V (kUV4) come from the even bytes of 32 (load_even_windows)
+// and land on bytes 0 and 2 of each sample's four, merged with the luma between them (the same
+// rows of which the same thread resamples, never at the same time).
+//
 // Four samples per block from the windows at p[b] (positions rx, ry relative to them, 1/256
 // px) to out[b], for the blocks whose bit in `skip` is clear.
-template <bool kPairs, bool kUV4 = false, class DB>
-HWY_INLINE void two_byte_window_blend(DB d8, const SamplePlane& src, const std::uint8_t** p,
-                                      hn::Vec<hn::Repartition<std::int32_t, DB>> rx, hn::Vec<hn::Repartition<std::int32_t, DB>> ry,
-                                      bool straddle, std::uint8_t* const* out, unsigned skip) {
-  constexpr int kB = blocks_of<DB>();
+template <bool kUV4, class DB>
+HWY_INLINE void pairs_window_blend(DB d8, const SamplePlane& src, const std::uint8_t** p,
+                                   hn::Vec<hn::Repartition<std::int32_t, DB>> rx, hn::Vec<hn::Repartition<std::int32_t, DB>> ry,
+                                   bool straddle, std::uint8_t* const* out, unsigned skip) {
   const hn::Repartition<std::int32_t, DB> d;
   const hn::Repartition<std::uint16_t, DB> du16;
-  if constexpr (kPairs) rx = hn::Or(rx, hn::ShiftLeft<16>(rx)), ry = hn::Or(ry, hn::ShiftLeft<16>(ry));
+  rx = hn::Or(rx, hn::ShiftLeft<16>(rx)), ry = hn::Or(ry, hn::ShiftLeft<16>(ry));  // U and V lanes alike
   const auto x16 = hn::BitCast(du16, rx), y16 = hn::BitCast(du16, ry);
   const auto i2 = hn::ShiftLeft<1>(hn::ShiftRight<8>(x16));  // the left tap's first byte, per lane
-  const auto pattern = hn::BitCast(du16, hn::Set(d, kPairs ? 0x03010200 : static_cast<std::int32_t>(0x80800200u)));
-  const auto idx = hn::BitCast(d8, hn::Add(hn::Or(i2, hn::ShiftLeft<8>(i2)), pattern));
+  const auto idx = hn::BitCast(d8, hn::Add(hn::Or(i2, hn::ShiftLeft<8>(i2)), hn::BitCast(du16, hn::Set(d, 0x03010200))));
   const auto fx = hn::And(x16, hn::Set(du16, 255)), fy = hn::And(y16, hn::Set(du16, 255));
   hn::Vec<decltype(du16)> up, down;
   tap_pairs<kUV4>(d8, src, p, idx, straddle, hn::ShiftRight<8>(y16), up, down);
   const auto v = lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
-  if constexpr (kUV4) {  // U V to bytes 0 and 2 of each sample's four, merged with the others (luma)
-    const hn::Rebind<std::uint8_t, decltype(du16)> d8n;
-    const auto bytes = hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<decltype(du16)>(), v));
-    const hn::Full64<std::uint8_t> d64;
-    const hn::Full128<std::uint16_t> w16;
-    const hn::Full128<std::uint8_t> w8;
-    for (int b = 0; b < kB; ++b) {
-      if (skip >> b & 1) continue;
-      const auto ours = hn::BitCast(w8, hn::PromoteTo(w16, part<kB, decltype(d64)>(d8n, bytes, b)));
-      const auto others = hn::And(hn::LoadU(w8, out[b]), hn::BitCast(w8, hn::Set(w16, 0xFF00)));
-      hn::StoreU(hn::Or(others, ours), w8, out[b]);
-    }
-  } else if constexpr (kPairs) {
+  if constexpr (kUV4)  // U V to bytes 0 and 2 of each sample's four, merged around the luma
+    store_even_per_block(du16, v, out, skip);
+  else
     store_per_block(du16, v, out, 0, 8, skip);
-  } else {
-    const hn::Rebind<std::uint8_t, decltype(du16)> d8n;
-    const auto bytes = hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<decltype(du16)>(), v));
-    const hn::Full64<std::uint8_t> d64;
-    const auto others = hn::BitCast(d64, hn::Set(hn::Full64<std::uint16_t>(), 0xFF00));  // the odd bytes
-    for (int b = 0; b < kB; ++b) {
-      if (skip >> b & 1) continue;
-      const auto ours = part<kB, decltype(d64)>(d8n, bytes, b);
-      hn::StoreU(hn::Or(hn::And(hn::LoadU(d64, out[b]), others), ours), d64, out[b]);
-    }
-  }
 }
 
-template <bool kPairs, class DB>
-HWY_INLINE bool two_byte_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
-                                hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
+template <class DB>
+HWY_INLINE bool pairs_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
+                             hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
   constexpr int kB = blocks_of<DB>();
   const hn::Repartition<std::int32_t, DB> d;
   const std::uint8_t* p[kB];
   hn::Vec<decltype(d)> rx, ry;
   bool straddle = false;
-  if (!block_windows<2, 7, kPairs ? 0 : 1>(d, src, X, Y, p, rx, ry, straddle)) return false;
-  two_byte_window_blend<kPairs>(d8, src, p, rx, ry, straddle, out, 0);
+  if (!block_windows<2, 7>(d, src, X, Y, p, rx, ry, straddle)) return false;
+  pairs_window_blend<false>(d8, src, p, rx, ry, straddle, out, 0);
   return true;
 }
 
@@ -373,7 +366,7 @@ HWY_INLINE bool uv4_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartitio
   hn::Vec<decltype(d)> rx, ry;
   bool straddle = false;
   if (!block_windows<4, 7, 17>(d, src, X, Y, p, rx, ry, straddle)) return false;
-  two_byte_window_blend<true, true>(d8, src, p, rx, ry, straddle, out, 0);
+  pairs_window_blend<true>(d8, src, p, rx, ry, straddle, out, 0);
   return true;
 }
 
@@ -407,28 +400,45 @@ HWY_INLINE void mono8_relative(D16x, hn::Vec<hn::Repartition<std::int32_t, D16x>
 }
 
 // The taps looked up in the windows at rows ya[b] (and the next one or two) and blended.
-template <class D16x>
+// kEven: samples two bytes apart (mono8_blocks).
+template <bool kEven, class D16x>
 HWY_INLINE void mono8_blend(D16x d16, const SamplePlane& src, const int* xa, const int* ya,
                             hn::Vec<hn::RebindToUnsigned<D16x>> rx, hn::Vec<hn::RebindToUnsigned<D16x>> ry, bool straddle,
                             std::uint8_t* out) {
   const hn::RebindToUnsigned<D16x> du16;
   const hn::Repartition<std::uint8_t, D16x> d8;
   using VU = hn::Vec<decltype(du16)>;
-  const std::uint8_t* p[blocks_of<D16x>()];
-  for (int b = 0; b < blocks_of<D16x>(); ++b) p[b] = src.row(ya[b]) + xa[b];
+  constexpr int kB = blocks_of<D16x>();
+  const std::uint8_t* p[kB];
+  for (int b = 0; b < kB; ++b) p[b] = src.row(ya[b]) + (kEven ? 2 : 1) * xa[b];
   const VU i = hn::ShiftRight<8>(rx), lower = hn::ShiftRight<8>(ry);
   const VU fx = hn::And(rx, hn::Set(du16, 0xFF)), fy = hn::And(ry, hn::Set(du16, 0xFF));
   const auto idx = hn::BitCast(d8, hn::Or(i, hn::ShiftLeft<8>(hn::Add(i, hn::Set(du16, 1)))));
   VU up, down;
-  tap_pairs(d8, src, p, idx, straddle, lower, up, down);
+  tap_pairs<kEven>(d8, src, p, idx, straddle, lower, up, down);
   const VU v = lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
-  const hn::Rebind<std::uint8_t, D16x> d8n;
-  hn::StoreU(hn::DemoteTo(d8n, hn::BitCast(d16, v)), d8n, out);
+  if constexpr (kEven) {
+    std::uint8_t* o[kB];
+    for (int b = 0; b < kB; ++b) o[b] = out + 16 * b;
+    store_even_per_block(du16, v, o);
+  } else {
+    const hn::Rebind<std::uint8_t, D16x> d8n;
+    hn::StoreU(hn::DemoteTo(d8n, hn::BitCast(d16, v)), d8n, out);
+  }
+}
+
+// The last window origin whose reads stay in the row: 16 bytes, or 32 from a plane of samples
+// two bytes apart that may start one byte into its row.
+template <bool kEven>
+HWY_INLINE int last_origin(const SamplePlane& src) {
+  return kEven ? src.width - 17 : src.width - 16;
 }
 
 // Any positions: each block's origin read from its lanes, every lane checked; false (nothing
-// written) when a block's taps do not fit its windows.
-template <class D16x>
+// written) when a block's taps do not fit its windows. kEven: samples two bytes apart (YUYV's
+// luma, an 8-bit mosaic's sites), written to every other byte of out, merged with the bytes
+// between (the other planes': 16 bytes per block, the last one the caller's room).
+template <bool kEven = false, class D16x>
 HWY_INLINE bool mono8_blocks(D16x d16, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, D16x>> X0,
                              hn::Vec<hn::Repartition<std::int32_t, D16x>> Y0, hn::Vec<hn::Repartition<std::int32_t, D16x>> X1,
                              hn::Vec<hn::Repartition<std::int32_t, D16x>> Y1, std::uint8_t* out) {
@@ -440,7 +450,7 @@ HWY_INLINE bool mono8_blocks(D16x d16, const SamplePlane& src, hn::Vec<hn::Repar
     const V32 x0 = block(d32, X0, b), y0 = block(d32, Y0, b), y1 = block(d32, Y1, b);
     xa[b] = (hn::GetLane(x0) + 128) >> 16;  // the block's first left tap, as tap() rounds
     ya[b] = (std::min(hn::GetLane(y0), hn::ExtractLane(y1, 3)) + 128) >> 16;
-    if (xa[b] < 0 || xa[b] > src.width - 16 || ya[b] < 0 || ya[b] > src.height - 2) return false;
+    if (xa[b] < 0 || xa[b] > last_origin<kEven>(src) || ya[b] < 0 || ya[b] > src.height - 2) return false;
     ya_max = std::max(ya_max, ya[b]);
   }
   hn::Vec<decltype(du16)> rx, ry;
@@ -451,14 +461,14 @@ HWY_INLINE bool mono8_blocks(D16x d16, const SamplePlane& src, hn::Vec<hn::Repar
   if (!hn::AllTrue(d16, hn::And(fits, ahead))) return false;
   const bool straddle = !hn::AllTrue(du16, hn::Lt(ry, hn::Set(du16, 256)));
   if (straddle && ya_max > src.height - 3) return false;
-  mono8_blend(d16, src, xa, ya, rx, ry, straddle, out);
+  mono8_blend<kEven>(d16, src, xa, ya, rx, ry, straddle, out);
   return true;
 }
 
 // An affine segment known to fit (affine_fits): each block's origin and whether its taps
 // straddle a row boundary come from the segment's positions in scalars, as tap() rounds them;
 // the same integers as mono8_blocks without its per-lane checks. k0: the step's first pixel.
-template <class D16x>
+template <bool kEven, class D16x>
 HWY_INLINE void mono8_affine_blocks(D16x d16, const SamplePlane& src, const Affine& a, int k0,
                                     hn::Vec<hn::Repartition<std::int32_t, D16x>> X0, hn::Vec<hn::Repartition<std::int32_t, D16x>> Y0,
                                     hn::Vec<hn::Repartition<std::int32_t, D16x>> X1, hn::Vec<hn::Repartition<std::int32_t, D16x>> Y1,
@@ -475,18 +485,19 @@ HWY_INLINE void mono8_affine_blocks(D16x d16, const SamplePlane& src, const Affi
   }
   hn::Vec<decltype(du16)> rx, ry;
   mono8_relative(d16, X0, Y0, X1, Y1, rx, ry);
-  mono8_blend(d16, src, xa, ya, rx, ry, straddle, out);
+  mono8_blend<kEven>(d16, src, xa, ya, rx, ry, straddle, out);
 }
 
 // Whether every block of kStep-pixel steps over pixels [0, n) of segment a fits its windows
 // without checks: the taps move right by at most 1.75 px a pixel (a block's eight span at most
 // 13.25 px of a 16-byte window) and by less than 1/8 row a pixel (at most two rows), and every
 // tap of the segment lies at least 16 px from the right edge and 3 rows from the bottom.
+template <bool kEven>
 inline bool affine_fits(const SamplePlane& src, const Affine& a, int n) {
   if (a.sx < 0 || a.sx > 7 * 65536 / 4 || std::abs(std::int64_t{a.sy}) * 8 >= 65536 || n < 1) return false;
   const std::int64_t last = n - 1;
   const std::int64_t x0 = a.ax, x1 = a.ax + last * a.sx, y0 = a.ay, y1 = a.ay + last * a.sy;
-  return ((x0 + 128) >> 16) >= 0 && ((x1 + 128) >> 16) <= src.width - 16 && ((std::min(y0, y1) + 128) >> 16) >= 0 &&
+  return ((x0 + 128) >> 16) >= 0 && ((x1 + 128) >> 16) <= last_origin<kEven>(src) && ((std::min(y0, y1) + 128) >> 16) >= 0 &&
          ((std::max(y0, y1) + 128) >> 16) <= src.height - 3;
 }
 
@@ -550,7 +561,7 @@ HWY_INLINE void affine_blocks(DB d8, const SamplePlane& src, const BlockSegment*
   if constexpr (C == 3)
     rgb8_window_blend(d8, src, p, rx, ry, straddle, out, bad);
   else
-    two_byte_window_blend<true>(d8, src, p, rx, ry, straddle, out, bad);
+    pairs_window_blend<false>(d8, src, p, rx, ry, straddle, out, bad);
 }
 
 #endif  // HWY_TARGET != HWY_SCALAR

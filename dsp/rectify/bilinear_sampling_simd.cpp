@@ -49,7 +49,7 @@ Samplers simd_samplers(SampleKind k) { return scalar_samplers(k); }
 #else
 namespace hn = hwy::HWY_NAMESPACE;
 
-// Four samples of a strided 8-bit plane by the scalar code (where two_byte_blocks<false> does not fit).
+// Four samples of a strided 8-bit plane by the scalar code (where the SIMD blocks do not fit).
 HWY_INLINE void strided_four(const SamplePlane& src, V32 X, V32 Y, std::uint8_t* out) {
   alignas(16) std::int32_t xs[4], ys[4];
   hn::Store(X, D32(), xs), hn::Store(Y, D32(), ys);
@@ -67,11 +67,10 @@ HWY_INLINE void eight(const SamplePlane& src, V32 X0, V32 Y0, V32 X1, V32 Y1, st
     if (!uv4_blocks(D8(), src, X0, Y0, o0)) strided_four(src, X0, Y0, out);
     if (!room || !uv4_blocks(D8(), src, X1, Y1, o1)) strided_four(src, X1, Y1, out + 16);
     return;
-  } else if constexpr (kOut != C * sizeof(T)) {
-    std::uint8_t* o0[1] = {out};
-    std::uint8_t* o1[1] = {out + 8};
-    if (!two_byte_blocks<false>(D8(), src, X0, Y0, o0)) strided_four(src, X0, Y0, out);
-    if (!room || !two_byte_blocks<false>(D8(), src, X1, Y1, o1)) strided_four(src, X1, Y1, out + 8);
+  } else if constexpr (kOut != C * sizeof(T)) {  // samples two bytes apart: merged 16 bytes need room
+    if (room && mono8_blocks<true>(D16(), src, X0, Y0, X1, Y1, out)) return;
+    strided_four(src, X0, Y0, out);
+    strided_four(src, X1, Y1, out + 8);
     return;
   } else if constexpr (C == 1 && sizeof(T) == 1) {
     if (mono8_blocks(D16(), src, X0, Y0, X1, Y1, out)) return;
@@ -84,8 +83,8 @@ HWY_INLINE void eight(const SamplePlane& src, V32 X0, V32 Y0, V32 X1, V32 Y1, st
   } else if constexpr (C == 2) {
     std::uint8_t* o0[1] = {out};
     std::uint8_t* o1[1] = {out + 8};
-    if (!two_byte_blocks<true>(D8(), src, X0, Y0, o0)) four<T, C>(src, X0, Y0, out, true);
-    if (!two_byte_blocks<true>(D8(), src, X1, Y1, o1)) four<T, C>(src, X1, Y1, out + 8, room);
+    if (!pairs_blocks(D8(), src, X0, Y0, o0)) four<T, C>(src, X0, Y0, out, true);
+    if (!pairs_blocks(D8(), src, X1, Y1, o1)) four<T, C>(src, X1, Y1, out + 8, room);
     return;
   }
   four<T, C>(src, X0, Y0, out, true);
@@ -110,8 +109,7 @@ HWY_INLINE void wide(const SamplePlane& src, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1,
     const WideOutputs<kOut> o(out);
     if (room && uv4_blocks(DW8(), src, X0, Y0, o.o0) && uv4_blocks(DW8(), src, X1, Y1, o.o1)) return;
   } else if constexpr (kOut != C * sizeof(T)) {
-    const WideOutputs<kOut> o(out);
-    if (room && two_byte_blocks<false>(DW8(), src, X0, Y0, o.o0) && two_byte_blocks<false>(DW8(), src, X1, Y1, o.o1)) return;
+    if (room && mono8_blocks<true>(DW16(), src, X0, Y0, X1, Y1, out)) return;
   } else if constexpr (C == 1 && sizeof(T) == 1) {
     if (mono8_blocks(DW16(), src, X0, Y0, X1, Y1, out)) return;
   } else if constexpr (C == 3) {
@@ -119,7 +117,7 @@ HWY_INLINE void wide(const SamplePlane& src, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1,
     if (rgb8_blocks(DW8(), src, X0, Y0, o.o0) && rgb8_blocks(DW8(), src, X1, Y1, o.o1)) return;
   } else if constexpr (C == 2) {
     const WideOutputs<kOut> o(out);
-    if (two_byte_blocks<true>(DW8(), src, X0, Y0, o.o0) && two_byte_blocks<true>(DW8(), src, X1, Y1, o.o1)) return;
+    if (pairs_blocks(DW8(), src, X0, Y0, o.o0) && pairs_blocks(DW8(), src, X1, Y1, o.o1)) return;
   }
   const DW32 dw;
   for (int b = 0; b < kBlocks; ++b)
@@ -191,8 +189,9 @@ HWY_INLINE void affine_step(const SamplePlane& src, const BlockSegment* s0, cons
 
 // Positions generated in registers along an affine cell segment, x_k = ax + k sx: the same
 // integers as the scalar code's running sums (int32 arithmetic wraps alike).
+// room_after: the row goes on after the segment (its next cell follows in the same run).
 template <class T, int C, int kOut>
-HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std::uint8_t* out, int n) {
+HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std::uint8_t* out, int n, bool room_after) {
   constexpr int kBytes = kOut;
   const DW32 dw;
   const VW32 lanes = hn::Iota(dw, 0), order = hn::Add(lanes, hn::And(lanes, hn::Set(dw, ~3)));  // the wide layout
@@ -201,10 +200,13 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
   const VW32 X4 = hn::Mul(hn::Set(dw, 4), sx), Y4 = hn::Mul(hn::Set(dw, 4), sy);
   const VW32 Xs = hn::Mul(hn::Set(dw, kStep), sx), Ys = hn::Mul(hn::Set(dw, kStep), sy);
   int i = 0;
-  if constexpr (C == 1 && sizeof(T) == 1 && kOut == 1) {  // Mono8: most segments need no checks
-    if (n >= kStep && affine_fits(src, a, n / kStep * kStep))
-      for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
-        mono8_affine_blocks(DW16(), src, a, i, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i);
+  if constexpr (C == 1 && sizeof(T) == 1) {  // Mono8 and 8-bit samples two bytes apart: most segments need no checks
+    constexpr bool kEven = kOut == 2;
+    // The merged 16 bytes of a strided block reach the next sample's pair: the last step needs room.
+    const int end = kEven && !room_after ? n - 1 : n;
+    if (end >= kStep && affine_fits<kEven>(src, a, end / kStep * kStep))
+      for (; i + kStep <= end; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
+        mono8_affine_blocks<kEven>(DW16(), src, a, i, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kOut);
   } else if constexpr (kAffineBlocks<T, C, kOut>) {  // RGB24, U V pairs: per-block checks in scalars
     if (affine_blocks_fit<C>(src))
       for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
@@ -270,7 +272,8 @@ HWY_INLINE void paired_cells(const SamplePlane& src, const Affine* a, int total,
     }
     affine_step<T, C>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut);
   }
-  for (; c0 < total; c0 += kHalf, ++k) sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(kHalf, total - c0));
+  for (; c0 < total; c0 += kHalf, ++k)
+    sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(kHalf, total - c0), c0 + kHalf < total);
 }
 
 // A run of cells in one call: the constants of the segment code stay in registers. Cells
@@ -281,7 +284,7 @@ template <class T, int C, int kOut>
 void sample_cells_simd(const SamplePlane& src, const Affine* a, int cell_n, int total, std::uint8_t* out) {
   if (cell_n >= kStep || cell_n % 8 != 0) {
     for (int c0 = 0, k = 0; c0 < total; c0 += cell_n, ++k)  // as for_each_cell, with the segment inlined
-      sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(cell_n, total - c0));
+      sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(cell_n, total - c0), c0 + cell_n < total);
     return;
   }
   if constexpr (kAffineBlocks<T, C, kOut> && kBlocks >= 2) {

@@ -252,7 +252,7 @@ TEST_F(EveryTarget, StridedPlanesSampleLikeThePackedPlaneOfTheirSamples) {
   for (std::int64_t target : simd_targets()) {
     force_simd_target(target);
     for (const Case& c : cases) {
-      const int w = 37, h = 15, b = c.packed.bytes, ch = c.packed.channels;
+      const int w = 61, h = 15, b = c.packed.bytes, ch = c.packed.channels;
       const Source packed = random_source(w, h, c.packed, 0, 11);
       const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(w) * c.step, stride = 2 * row;  // every other row
       std::vector<std::uint8_t> mosaic(static_cast<std::size_t>(stride * (h - 1) + row - (c.step - c.offset - (ch - 1) * c.channel_step - b)), 0x5A);
@@ -268,8 +268,8 @@ TEST_F(EveryTarget, StridedPlanesSampleLikeThePackedPlaneOfTheirSamples) {
       const std::string what = target_name(target) + " " + c.packed.name + " step " + std::to_string(c.step) + " offset " +
                                std::to_string(c.offset);
       std::mt19937 rng(29);
-      for (int trial = 0; trial < 300; ++trial) {
-        const int n = 1 + trial % 40;
+      for (int trial = 0; trial < 400; ++trial) {
+        const int n = 1 + trial % 71;
         const bool per_pixel = trial % 2;
         const Affine a = random_affine(rng, w, h);
         const Positions q = random_positions(rng, n, w, h);
@@ -278,6 +278,12 @@ TEST_F(EveryTarget, StridedPlanesSampleLikeThePackedPlaneOfTheirSamples) {
         if (per_pixel) {
           ref.row(packed.view, q.xs.data(), q.ys.data(), want.data(), n);
           simd.row(strided, q.xs.data(), q.ys.data(), out, n);
+        } else if (trial % 4 == 2) {  // a run of cells: the row goes on after each but the last
+          const int cell_n = 8 << (trial / 4 % 3);
+          std::vector<Affine> run((n + cell_n - 1) / cell_n);
+          for (Affine& r : run) r = random_affine(rng, w, h);
+          ref.cells(packed.view, run.data(), cell_n, n, want.data());
+          simd.cells(strided, run.data(), cell_n, n, out);
         } else {
           affine(ref, packed.view, a, want.data(), n);
           affine(simd, strided, a, out, n);
