@@ -535,6 +535,11 @@ HWY_INLINE unsigned affine_block_windows(const SamplePlane& src, const BlockSegm
       bad |= 1u << b, xa = 0, ya = 0;
     p[b] = src.row(ya) + kBytes * xa;
   }
+  // When some block straddles, every block reads a third row: one whose rows end at the last
+  // row goes alone too.
+  if (straddle)
+    for (int b = 0; b < kB; ++b)
+      if (p[b] >= src.row(src.height - 2)) bad |= 1u << b, p[b] = src.data;
   return bad;
 }
 
