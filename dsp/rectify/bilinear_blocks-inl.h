@@ -293,20 +293,6 @@ HWY_INLINE void rgb8_window_blend(DB d8, const SamplePlane& src, const std::uint
   store_per_block(du16, rgb_half(d8, r0, r1, r2, straddle, words, kRgbPixelB, kRgbColourB), out, 8, 4, skip);
 }
 
-// Four pixels per block (positions X, Y) to out[b].
-template <class DB>
-HWY_INLINE bool rgb8_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
-                            hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
-  constexpr int kB = blocks_of<DB>();
-  const hn::Repartition<std::int32_t, DB> d;
-  const std::uint8_t* p[kB];
-  hn::Vec<decltype(d)> rx, ry;
-  bool straddle = false;
-  if (!block_windows<3, 4>(d, src, X, Y, p, rx, ry, straddle)) return false;
-  rgb8_window_blend(d8, src, p, rx, ry, straddle, out, 0);
-  return true;
-}
-
 // ---- U V pairs (NV12's chroma, YUYV's U V), four per block on 16-bit lanes ------------------
 //
 // One 16-byte window (8 pairs) per row and block from the block's first left tap, taken when
@@ -339,34 +325,30 @@ HWY_INLINE void pairs_window_blend(DB d8, const SamplePlane& src, const std::uin
     store_per_block(du16, v, out, 0, 8, skip);
 }
 
-template <class DB>
-HWY_INLINE bool pairs_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
-                             hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
-  constexpr int kB = blocks_of<DB>();
-  const hn::Repartition<std::int32_t, DB> d;
-  const std::uint8_t* p[kB];
-  hn::Vec<decltype(d)> rx, ry;
-  bool straddle = false;
-  if (!block_windows<2, 7>(d, src, X, Y, p, rx, ry, straddle)) return false;
-  pairs_window_blend<false>(d8, src, p, rx, ry, straddle, out, 0);
-  return true;
-}
+// ---- Four samples per block at any positions ----------------------------------------------
+//
+// RGB24 pixels, U V pairs, or YUYV's U V (windows of eight samples: 32 bytes from the block's
+// first left tap, packed to eight U V pairs; the 32 bytes read and the 16 merged per block, the
+// four samples and the luma byte after them, which the caller's room guarantees, stay inside the
+// row: the plane starts one byte into it, block_windows' slack 16 + 1). Each block's origin read
+// from its lanes, every lane checked; false (nothing written) when a block's taps do not fit.
+enum class FourKind { kRgb24, kPairs, kYuyvUV };
 
-// YUYV's U V, four samples per block: windows of eight samples (32 bytes from the block's first
-// left tap, packed to eight U V pairs) taken when the taps lie within 6 samples right of it and
-// one row below, then blended as NV12's pairs. The 32 bytes read and the 16 merged per block
-// (the four samples and the luma byte after them, which the caller's room guarantees) stay
-// inside the row: the plane starts one byte into it (block_windows' slack: 16 + 1).
-template <class DB>
-HWY_INLINE bool uv4_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
-                           hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
+template <FourKind kKind, class DB>
+HWY_INLINE bool four_blocks(DB d8, const SamplePlane& src, hn::Vec<hn::Repartition<std::int32_t, DB>> X,
+                            hn::Vec<hn::Repartition<std::int32_t, DB>> Y, std::uint8_t* const* out) {
   constexpr int kB = blocks_of<DB>();
+  constexpr int kBytes = kKind == FourKind::kRgb24 ? 3 : kKind == FourKind::kPairs ? 2 : 4;
+  constexpr int kRight = kKind == FourKind::kRgb24 ? 4 : 7;  // a window: 5 RGB24 pixels or 8 pairs
   const hn::Repartition<std::int32_t, DB> d;
   const std::uint8_t* p[kB];
   hn::Vec<decltype(d)> rx, ry;
   bool straddle = false;
-  if (!block_windows<4, 7, 17>(d, src, X, Y, p, rx, ry, straddle)) return false;
-  pairs_window_blend<true>(d8, src, p, rx, ry, straddle, out, 0);
+  if (!block_windows<kBytes, kRight, kKind == FourKind::kYuyvUV ? 17 : 0>(d, src, X, Y, p, rx, ry, straddle)) return false;
+  if constexpr (kKind == FourKind::kRgb24)
+    rgb8_window_blend(d8, src, p, rx, ry, straddle, out, 0);
+  else
+    pairs_window_blend<kKind == FourKind::kYuyvUV>(d8, src, p, rx, ry, straddle, out, 0);
   return true;
 }
 

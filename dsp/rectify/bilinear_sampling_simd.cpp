@@ -9,12 +9,16 @@
 // vector as a fixed-width target holds (AVX2 two, AVX-512 four: "wide steps"), one
 // elsewhere (SSE, NEON, EMU128, and SVE whatever its vector length). Per block:
 // - Mono8: 8 pixels through one window per row (two rows, three where the taps straddle a row
-//   boundary), blended on 16-bit lanes (mono8_blocks);
+//   boundary), blended on 16-bit lanes (mono8_blocks); 8-bit samples two bytes apart (YUYV's
+//   luma, 8-bit mosaic sites) alike, the window the even bytes of 32, merged into every other
+//   output byte (mono8_blocks<true>);
 // - RGB24: 4 pixels through one 5-pixel window per row, each output byte a 16-bit lane that
-//   looks up its own colour's tap pair (rgb8_blocks);
+//   looks up its own colour's tap pair (four_blocks<kRgb24>);
 // - U V pairs (NV12's chroma): 4 pixels through one 8-pair window per row, U and V in the two
-//   16-bit halves of each pixel's lane (two_byte_blocks<true>); 8-bit samples two bytes apart
-//   (YUYV's luma, 8-bit mosaic sites) alike, merged into every other byte (two_byte_blocks<false>);
+//   16-bit halves of each pixel's lane (four_blocks<kPairs>); YUYV's U V alike from the even
+//   bytes of 32, merged around the luma (four_blocks<kYuyvUV>);
+// - along affine segments: Mono8 (and its strided kind) with the checks once per segment
+//   (affine_fits), RGB24 and U V pairs with per-block checks in scalars (affine_blocks);
 // - otherwise (Mono16, steps whose taps do not fit a window) 4 pixels on 32-bit lanes: windows
 //   where the taps fit, else a gather of the 32-bit word at each left tap (it holds the right tap
 //   too: bytes 0..1 for Mono8, both halves for Mono16 and U V; RGB24 gathers again at +3), only
@@ -49,46 +53,49 @@ Samplers simd_samplers(SampleKind k) { return scalar_samplers(k); }
 #else
 namespace hn = hwy::HWY_NAMESPACE;
 
-// Four samples of a strided 8-bit plane by the scalar code (where the SIMD blocks do not fit).
-HWY_INLINE void strided_four(const SamplePlane& src, V32 X, V32 Y, std::uint8_t* out) {
-  alignas(16) std::int32_t xs[4], ys[4];
-  hn::Store(X, D32(), xs), hn::Store(Y, D32(), ys);
-  sample_row_strided<std::uint8_t>(src, xs, ys, out, 4);
+// The plane (T, C, kOut bytes a sample) four_blocks takes, as its FourKind, or -1.
+template <class T, int C, int kOut>
+constexpr int kFourKind = sizeof(T) != 1                ? -1
+                          : C == 3 && kOut == 3         ? static_cast<int>(FourKind::kRgb24)
+                          : C == 2 && kOut == 2         ? static_cast<int>(FourKind::kPairs)
+                          : C == 2 && kOut == 4         ? static_cast<int>(FourKind::kYuyvUV)
+                                                        : -1;
+// Its stores merge 16 bytes that reach the next sample: only where the row goes on (room).
+template <class T, int C, int kOut>
+constexpr bool kMerged = kOut != C * static_cast<int>(sizeof(T));
+
+// Four samples where the SIMD blocks do not fit: the 32-bit lanes (four), or for a strided
+// plane the scalar code.
+template <class T, int C, int kOut>
+HWY_INLINE void four_fallback(const SamplePlane& src, V32 X, V32 Y, std::uint8_t* out, bool room) {
+  if constexpr (kMerged<T, C, kOut>) {
+    (void)room;
+    alignas(16) std::int32_t xs[4], ys[4];
+    hn::Store(X, D32(), xs), hn::Store(Y, D32(), ys);
+    sample_row_strided<T>(src, xs, ys, out, 4);
+  } else {
+    four<T, C>(src, X, Y, out, room);
+  }
 }
 
 // Eight pixels: positions X0, Y0 for pixels 0-3, X1, Y1 for 4-7; kOut bytes from one output
-// pixel to the next (C sizeof(T), or 2 for a strided 8-bit plane).
+// pixel to the next (C sizeof(T), or more for a strided plane).
 // room: as blend_store's, after the eighth pixel.
 template <class T, int C, int kOut>
 HWY_INLINE void eight(const SamplePlane& src, V32 X0, V32 Y0, V32 X1, V32 Y1, std::uint8_t* out, bool room) {
-  if constexpr (C == 2 && kOut == 4) {  // YUYV's U V
+  constexpr bool kMerge = kMerged<T, C, kOut>;
+  if constexpr (kFourKind<T, C, kOut> >= 0) {
+    constexpr auto kKind = static_cast<FourKind>(kFourKind<T, C, kOut>);
     std::uint8_t* o0[1] = {out};
-    std::uint8_t* o1[1] = {out + 16};
-    if (!uv4_blocks(D8(), src, X0, Y0, o0)) strided_four(src, X0, Y0, out);
-    if (!room || !uv4_blocks(D8(), src, X1, Y1, o1)) strided_four(src, X1, Y1, out + 16);
+    std::uint8_t* o1[1] = {out + 4 * kOut};
+    if (!four_blocks<kKind>(D8(), src, X0, Y0, o0)) four_fallback<T, C, kOut>(src, X0, Y0, out, true);
+    if ((kMerge && !room) || !four_blocks<kKind>(D8(), src, X1, Y1, o1)) four_fallback<T, C, kOut>(src, X1, Y1, o1[0], room);
     return;
-  } else if constexpr (kOut != C * sizeof(T)) {  // samples two bytes apart: merged 16 bytes need room
-    if (room && mono8_blocks<true>(D16(), src, X0, Y0, X1, Y1, out)) return;
-    strided_four(src, X0, Y0, out);
-    strided_four(src, X1, Y1, out + 8);
-    return;
-  } else if constexpr (C == 1 && sizeof(T) == 1) {
-    if (mono8_blocks(D16(), src, X0, Y0, X1, Y1, out)) return;
-  } else if constexpr (C == 3) {
-    std::uint8_t* o0[1] = {out};
-    std::uint8_t* o1[1] = {out + 12};
-    if (!rgb8_blocks(D8(), src, X0, Y0, o0)) four<T, C>(src, X0, Y0, out, true);
-    if (!rgb8_blocks(D8(), src, X1, Y1, o1)) four<T, C>(src, X1, Y1, out + 12, room);
-    return;
-  } else if constexpr (C == 2) {
-    std::uint8_t* o0[1] = {out};
-    std::uint8_t* o1[1] = {out + 8};
-    if (!pairs_blocks(D8(), src, X0, Y0, o0)) four<T, C>(src, X0, Y0, out, true);
-    if (!pairs_blocks(D8(), src, X1, Y1, o1)) four<T, C>(src, X1, Y1, out + 8, room);
-    return;
+  } else if constexpr (C == 1 && sizeof(T) == 1) {  // Mono8, or samples two bytes apart
+    if ((!kMerge || room) && mono8_blocks<kMerge>(D16(), src, X0, Y0, X1, Y1, out)) return;
   }
-  four<T, C>(src, X0, Y0, out, true);
-  four<T, C>(src, X1, Y1, out + 4 * C * sizeof(T), room);
+  four_fallback<T, C, kOut>(src, X0, Y0, out, true);
+  four_fallback<T, C, kOut>(src, X1, Y1, out + 4 * kOut, room);
 }
 
 // Per block b of a wide step, the output of its pixels 8b (o0) and 8b + 4 (o1), whose positions
@@ -105,19 +112,14 @@ struct WideOutputs {
 // One wide step; room: as blend_store's, after the step's last pixel.
 template <class T, int C, int kOut>
 HWY_INLINE void wide(const SamplePlane& src, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1, std::uint8_t* out, bool room) {
-  if constexpr (C == 2 && kOut == 4) {
+  constexpr bool kMerge = kMerged<T, C, kOut>;
+  if constexpr (kFourKind<T, C, kOut> >= 0) {
+    constexpr auto kKind = static_cast<FourKind>(kFourKind<T, C, kOut>);
     const WideOutputs<kOut> o(out);
-    if (room && uv4_blocks(DW8(), src, X0, Y0, o.o0) && uv4_blocks(DW8(), src, X1, Y1, o.o1)) return;
-  } else if constexpr (kOut != C * sizeof(T)) {
-    if (room && mono8_blocks<true>(DW16(), src, X0, Y0, X1, Y1, out)) return;
+    if ((!kMerge || room) && four_blocks<kKind>(DW8(), src, X0, Y0, o.o0) && four_blocks<kKind>(DW8(), src, X1, Y1, o.o1))
+      return;
   } else if constexpr (C == 1 && sizeof(T) == 1) {
-    if (mono8_blocks(DW16(), src, X0, Y0, X1, Y1, out)) return;
-  } else if constexpr (C == 3) {
-    const WideOutputs<kOut> o(out);
-    if (rgb8_blocks(DW8(), src, X0, Y0, o.o0) && rgb8_blocks(DW8(), src, X1, Y1, o.o1)) return;
-  } else if constexpr (C == 2) {
-    const WideOutputs<kOut> o(out);
-    if (pairs_blocks(DW8(), src, X0, Y0, o.o0) && pairs_blocks(DW8(), src, X1, Y1, o.o1)) return;
+    if ((!kMerge || room) && mono8_blocks<kMerge>(DW16(), src, X0, Y0, X1, Y1, out)) return;
   }
   const DW32 dw;
   for (int b = 0; b < kBlocks; ++b)
