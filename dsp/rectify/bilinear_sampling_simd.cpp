@@ -189,6 +189,22 @@ HWY_INLINE void affine_step(const SamplePlane& src, const BlockSegment* s0, cons
   affine_blocks<T, C>(DW8(), src, s1, X1, Y1, o.o1);
 }
 
+// Positions of samples [c0, c0 + n) of a run of cells into xs, ys (n rounded up to 4): a + e s
+// for sample e of its cell, in wrapping 32-bit arithmetic like the scalar running sums. Groups
+// of four never straddle two cells: cell_n and c0 are multiples of 4, or there is one cell.
+HWY_INLINE void cell_positions(const Affine* a, int cell_n, int c0, int n, std::int32_t* xs, std::int32_t* ys) {
+  const D32 d;
+  const V32 l4 = hn::Iota(d, 0);
+  auto at = [](std::int32_t a0, std::int32_t step, int e) {
+    return static_cast<std::int32_t>(static_cast<std::uint32_t>(a0) + static_cast<std::uint32_t>(e) * static_cast<std::uint32_t>(step));
+  };
+  for (int k = 0; k < n; k += 4) {
+    const int c = (c0 + k) / cell_n, e = c0 + k - c * cell_n;
+    hn::Store(hn::Add(hn::Set(d, at(a[c].ax, a[c].sx, e)), hn::Mul(l4, hn::Set(d, a[c].sx))), d, xs + k);
+    hn::Store(hn::Add(hn::Set(d, at(a[c].ay, a[c].sy, e)), hn::Mul(l4, hn::Set(d, a[c].sy))), d, ys + k);
+  }
+}
+
 // Positions generated in registers along an affine cell segment, x_k = ax + k sx: the same
 // integers as the scalar code's running sums (int32 arithmetic wraps alike).
 // room_after: the row goes on after the segment (its next cell follows in the same run).
@@ -220,34 +236,10 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
   for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
     wide<T, C, kOut>(src, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes, i + kStep + 2 <= n);
   if (i == n) return;  // (cells are whole steps, as a rule)
-  // The rest, fewer than kStep pixels, from pixel i on.
+  // The rest, fewer than kStep pixels, from pixel i on: the segment as a run of one cell.
   alignas(64) std::int32_t xs[kStep], ys[kStep];
-  const D32 d;
-  const V32 l4 = hn::Iota(d, 0);
-  // a + (i + k) s in wrapping 32-bit arithmetic, as the vectors and the scalar sums compute it.
-  auto at = [&](std::int32_t a0, std::int32_t step, int k) {
-    return static_cast<std::int32_t>(static_cast<std::uint32_t>(a0) + static_cast<std::uint32_t>(i + k) * static_cast<std::uint32_t>(step));
-  };
-  for (int k = 0; k < kStep; k += 4) {
-    hn::Store(hn::Add(hn::Set(d, at(a.ax, a.sx, k)), hn::Mul(l4, hn::Set(d, a.sx))), d, xs + k);
-    hn::Store(hn::Add(hn::Set(d, at(a.ay, a.sy, k)), hn::Mul(l4, hn::Set(d, a.sy))), d, ys + k);
-  }
+  cell_positions(&a, n, i, n - i, xs, ys);
   sample_row_simd<T, C, kOut>(src, xs, ys, out + i * kBytes, n - i);
-}
-
-// Positions of samples [c0, c0 + n) of a run of cells (cell_n a multiple of 8) into xs, ys:
-// a + e s for sample e of its cell, in wrapping 32-bit arithmetic like the scalar running sums.
-HWY_INLINE void cell_positions(const Affine* a, int cell_n, int c0, int n, std::int32_t* xs, std::int32_t* ys) {
-  const D32 d;
-  const V32 l4 = hn::Iota(d, 0);
-  auto at = [](std::int32_t a0, std::int32_t step, int e) {
-    return static_cast<std::int32_t>(static_cast<std::uint32_t>(a0) + static_cast<std::uint32_t>(e) * static_cast<std::uint32_t>(step));
-  };
-  for (int k = 0; k < n; k += 4) {
-    const int c = (c0 + k) / cell_n, e = c0 + k - c * cell_n;
-    hn::Store(hn::Add(hn::Set(d, at(a[c].ax, a[c].sx, e)), hn::Mul(l4, hn::Set(d, a[c].sx))), d, xs + k);
-    hn::Store(hn::Add(hn::Set(d, at(a[c].ay, a[c].sy, e)), hn::Mul(l4, hn::Set(d, a[c].sy))), d, ys + k);
-  }
 }
 
 // Cells of half a wide step (16-sample chroma cells on AVX-512): two per step, the lower blocks
