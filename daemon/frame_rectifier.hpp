@@ -23,7 +23,7 @@ struct RectifyConfig {
   DepthKind depth = DepthKind::Infinite;
   double depth_m = 5.0;          // Plane: distance of the fronto-parallel plane
   double camera_height_m = 1.5;  // Ground: height of the camera above the ground (y down)
-  int grid_px = 32;              // the map starts at this node spacing and refines itself to 0.05 px
+  int grid_px = 64;              // the map starts at this node spacing and refines itself to 0.05 px
   bool gyro_only = false;        // ignore linear velocity even when it is known
   double threshold_px = 1.0;     // the applicability verdict's threshold
   // The longest the rectifier waits for the IMU samples covering a frame's last row (a live

@@ -525,8 +525,40 @@ HWY_INLINE unsigned affine_block_windows(const SamplePlane& src, const BlockSegm
   return bad;
 }
 
-// RGB24 (kPairs unused) or U V pairs: four samples per block of affine segments, positions X, Y.
-template <class T, int C, class DB>
+// Windows of blocks whose segments are known to fit (segment_blocks_fit): the origins and
+// straddle as affine_block_windows computes them, without its checks.
+template <int kBytes, int kB>
+HWY_INLINE void fitted_block_windows(const SamplePlane& src, const BlockSegment* seg, const std::uint8_t** p, bool& straddle) {
+  for (int b = 0; b < kB; ++b) {
+    const Affine& a = *seg[b].a;
+    const std::int64_t k = seg[b].e, x0 = a.ax + k * a.sx, y0 = a.ay + k * a.sy, y3 = y0 + 3 * std::int64_t{a.sy};
+    const int ya = static_cast<int>((std::min(y0, y3) + 128) >> 16);
+    straddle |= ((std::max(y0, y3) + 128) >> 16) != ya;
+    p[b] = src.row(ya) + kBytes * static_cast<int>((x0 + 128) >> 16);
+  }
+}
+
+// Whether every block of four samples among samples [0, n) of segment a passes
+// affine_block_windows' checks, from the segment's ends: the left taps of four consecutive
+// samples span at most kMaxTap (3 sx < kMaxTap px: their rounded span is at most
+// floor(3 sx) + 1), their top taps at most one row (3 |sy| < 1 row), and the taps are monotone,
+// so the first and last sample bound every origin; rows end 3 before the bottom, so that a
+// straddling block's third row exists.
+template <int kBytes, int kMaxTap>
+inline bool segment_blocks_fit(const SamplePlane& src, const Affine& a, int n) {
+  if (n < 1 || a.sx < 0 || 3 * std::int64_t{a.sx} >= kMaxTap * 65536 || 3 * std::abs(std::int64_t{a.sy}) >= 65536) return false;
+  const std::int64_t last = n - 1, x1 = a.ax + last * a.sx, y0 = a.ay, y1 = a.ay + last * a.sy;
+  return ((a.ax + 128) >> 16) >= 0 && kBytes * ((x1 + 128) >> 16) + 16 <= kBytes * std::int64_t{src.width} &&
+         ((std::min(y0, y1) + 128) >> 16) >= 0 && ((std::max(y0, y1) + 128) >> 16) <= src.height - 3;
+}
+
+// A window holds 5 RGB24 pixels (left taps 0..3) or 8 U V pairs (left taps 0..6).
+template <int C>
+constexpr int kMaxTap = C == 3 ? 3 : 6;
+
+// RGB24 or U V pairs: four samples per block of affine segments, positions X, Y. kFitted: every
+// block's segment passed segment_blocks_fit.
+template <class T, int C, bool kFitted, class DB>
 HWY_INLINE void affine_blocks(DB d8, const SamplePlane& src, const BlockSegment* seg,
                               hn::Vec<hn::Repartition<std::int32_t, DB>> X, hn::Vec<hn::Repartition<std::int32_t, DB>> Y,
                               std::uint8_t* const* out) {
@@ -534,11 +566,15 @@ HWY_INLINE void affine_blocks(DB d8, const SamplePlane& src, const BlockSegment*
   const hn::Repartition<std::int32_t, DB> d;
   const std::uint8_t* p[kB];
   bool straddle = false;
-  // A window holds 5 RGB24 pixels (left taps 0..3) or 8 U V pairs (left taps 0..6).
-  const unsigned bad = affine_block_windows<C * sizeof(T), C == 3 ? 3 : 6, kB>(src, seg, p, straddle);
-  for (int b = 0; b < kB; ++b)
-    if (bad >> b & 1) four<T, C>(src, block(d, X, b), block(d, Y, b), out[b], false);
-  if (bad == (1u << kB) - 1) return;
+  unsigned bad = 0;
+  if constexpr (kFitted) {
+    fitted_block_windows<C * sizeof(T), kB>(src, seg, p, straddle);
+  } else {
+    bad = affine_block_windows<C * sizeof(T), kMaxTap<C>, kB>(src, seg, p, straddle);
+    for (int b = 0; b < kB; ++b)
+      if (bad >> b & 1) four<T, C>(src, block(d, X, b), block(d, Y, b), out[b], false);
+    if (bad == (1u << kB) - 1) return;
+  }
   // Relative to the origins as mono8_relative computes them (the first pixel's left tap, the
   // upper of the first and fourth pixel's top taps): the same as p[b] for the blocks that fit.
   const auto half = hn::Set(d, 128), whole = hn::Set(d, ~255);

@@ -18,7 +18,8 @@
 //   16-bit halves of each pixel's lane (four_blocks<kPairs>); YUYV's U V alike from the even
 //   bytes of 32, merged around the luma (four_blocks<kYuyvUV>);
 // - along affine segments: Mono8 (and its strided kind) with the checks once per segment
-//   (affine_fits), RGB24 and U V pairs with per-block checks in scalars (affine_blocks);
+//   (affine_fits), RGB24 and U V pairs too when the segment's ends show that every block fits
+//   (segment_blocks_fit), else with per-block checks in scalars (affine_blocks);
 // - otherwise (Mono16, steps whose taps do not fit a window) 4 pixels on 32-bit lanes: windows
 //   where the taps fit, else a gather of the 32-bit word at each left tap (it holds the right tap
 //   too: bytes 0..1 for Mono8, both halves for Mono16 and U V; RGB24 gathers again at +3), only
@@ -35,6 +36,7 @@
 #include <algorithm>
 #include <cstring>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "dsp/rectify/bilinear_sampling.hpp"
@@ -181,12 +183,18 @@ HWY_INLINE bool affine_blocks_fit(const SamplePlane& src) {
 }
 
 // One wide step of affine blocks: pixels 8b..8b+3 of block b at X0 (segments s0), 8b+4..8b+7 at X1.
-template <class T, int C>
+template <class T, int C, bool kFitted>
 HWY_INLINE void affine_step(const SamplePlane& src, const BlockSegment* s0, const BlockSegment* s1, VW32 X0, VW32 Y0, VW32 X1,
                             VW32 Y1, std::uint8_t* out) {
   const WideOutputs<C> o(out);
-  affine_blocks<T, C>(DW8(), src, s0, X0, Y0, o.o0);
-  affine_blocks<T, C>(DW8(), src, s1, X1, Y1, o.o1);
+  affine_blocks<T, C, kFitted>(DW8(), src, s0, X0, Y0, o.o0);
+  affine_blocks<T, C, kFitted>(DW8(), src, s1, X1, Y1, o.o1);
+}
+
+// Whether the blocks of whole steps over samples [0, n) of segment a fit (segment_blocks_fit).
+template <class T, int C>
+HWY_INLINE bool steps_fit(const SamplePlane& src, const Affine& a, int n) {
+  return segment_blocks_fit<C * sizeof(T), kMaxTap<C>>(src, a, n / kStep * kStep);
 }
 
 // Positions of samples [c0, c0 + n) of a run of cells into xs, ys (n rounded up to 4): a + e s
@@ -225,13 +233,20 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
     if (end >= kStep && affine_fits<kEven>(src, a, end / kStep * kStep))
       for (; i + kStep <= end; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
         mono8_affine_blocks<kEven>(DW16(), src, a, i, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kOut);
-  } else if constexpr (kAffineBlocks<T, C, kOut>) {  // RGB24, U V pairs: per-block checks in scalars
-    if (affine_blocks_fit<C>(src))
-      for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
-        BlockSegment s0[kBlocks], s1[kBlocks];
-        for (int b = 0; b < kBlocks; ++b) s0[b] = {&a, i + 8 * b}, s1[b] = {&a, i + 8 * b + 4};
-        affine_step<T, C>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes);
-      }
+  } else if constexpr (kAffineBlocks<T, C, kOut>) {  // RGB24, U V pairs: checks per segment, else per block
+    if (affine_blocks_fit<C>(src)) {
+      auto steps = [&](auto fitted) {
+        for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
+          BlockSegment s0[kBlocks], s1[kBlocks];
+          for (int b = 0; b < kBlocks; ++b) s0[b] = {&a, i + 8 * b}, s1[b] = {&a, i + 8 * b + 4};
+          affine_step<T, C, decltype(fitted)::value>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes);
+        }
+      };
+      if (steps_fit<T, C>(src, a, n))
+        steps(std::true_type{});
+      else
+        steps(std::false_type{});
+    }
   }
   for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
     wide<T, C, kOut>(src, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes, i + kStep + 2 <= n);
@@ -264,7 +279,10 @@ HWY_INLINE void paired_cells(const SamplePlane& src, const Affine* a, int total,
       const int e = 8 * (b % kHalfBlocks);
       s0[b] = {cell, e}, s1[b] = {cell, e + 4};
     }
-    affine_step<T, C>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut);
+    if (segment_blocks_fit<C * sizeof(T), kMaxTap<C>>(src, lo, kHalf) && segment_blocks_fit<C * sizeof(T), kMaxTap<C>>(src, hi, kHalf))
+      affine_step<T, C, true>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut);
+    else
+      affine_step<T, C, false>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut);
   }
   for (; c0 < total; c0 += kHalf, ++k)
     sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(kHalf, total - c0), c0 + kHalf < total);

@@ -45,7 +45,7 @@ class RowExecutor {
 };
 
 struct RectifierConfig {
-  int initial_spacing = 32;     // node spacing tried first (output px, a power of two >= 2)
+  int initial_spacing = 64;     // node spacing tried first (output px, a power of two >= 2)
   int min_spacing = 4;          // the refinement halves the spacing down to this
   double tolerance_px = 0.05;   // wanted bound on |interpolated - exact source position|
   int table_step_rows = 8;      // pose table step (rows); halved while its error share is large
@@ -58,6 +58,7 @@ struct RectifierConfig {
 struct RectifyReport {
   bool rectified = false;       // false: the frame was copied unrectified
   int spacing = 0;              // node spacing of the map used
+  int levels_solved = 0;        // grids solved to reach it (levels predicted to miss are skipped)
   double error_bound_px = 0;    // bound on the map error over every cell that is sampled
   int invalid_nodes = 0;        // nodes without a solution in the capture window (cells black)
   int unbounded_cells = 0;      // cells whose bound could not be estimated (invalid neighbours)
@@ -141,6 +142,8 @@ class Rectifier {
   RectifyReport assess_level();
   double max_node_displacement() const;
   double cell_bound(const Branch& b, int i, int j) const;
+  static double fixed_point_error(int spacing);
+  std::size_t next_level(std::size_t level, double bound) const;
   int interpolate_row(double y, RowScratch& s) const;
   Affine cell_affine(int i, std::uint8_t mode, const RowScratch& s) const;
   Affine plane_affine(int i, std::uint8_t mode, const SamplePlane& g, const RowScratch& s) const;

@@ -81,10 +81,30 @@ RectifyReport Rectifier::assess_level() {
     rep.invalid_nodes += !(plane_ && rho_[n] > 0 ? plane_b_.ok[n] : inf_b_.ok[n]);
   // Table: linear interpolation errs by 1/8 of a second difference (times the node's gain).
   table_error_px_ = std::max(cam_.fx, cam_.fy) / 8.0 * gain_max_;
-  // Fixed point: rounding to 1/256 px, plus the 16.16 step's rounding accumulated over a cell.
-  const double fixed = std::sqrt(2.0) * (1.0 / 512 + (L.spacing + 1) / 131072.0);
-  rep.error_bound_px = worst + table_error_px_ + fixed;
+  rep.error_bound_px = worst + table_error_px_ + fixed_point_error(L.spacing);
   return rep;
+}
+
+// Fixed point: rounding to 1/256 px, plus the 16.16 step's rounding accumulated over a cell.
+double Rectifier::fixed_point_error(int spacing) {
+  return std::sqrt(2.0) * (1.0 / 512 + (spacing + 1) / 131072.0);
+}
+
+// The level after `level` worth solving when `level` missed the tolerance with bound `bound`.
+// Halving the spacing divides the interpolation part of the bound by 4 to 8 (cell_bound: s^2/8
+// times second differences that go as s^2, plus their corner differences that go as s^3), so
+// a level is skipped only when even the division by 8 leaves it above the tolerance: a skip
+// must not cost resolution (a level that would have held), while a level tried in vain costs a
+// quarter of the next one's nodes. An unbounded level (invalid stencil nodes) predicts nothing.
+std::size_t Rectifier::next_level(std::size_t level, double bound) const {
+  double interpolation = bound - table_error_px_ - fixed_point_error(levels_[level].spacing);
+  if (!std::isfinite(interpolation)) return level + 1;
+  std::size_t next = level + 1;
+  for (; next + 1 < levels_.size(); ++next) {
+    interpolation /= 8;
+    if (interpolation + table_error_px_ + fixed_point_error(levels_[next].spacing) <= cfg_.tolerance_px) break;
+  }
+  return next;
 }
 
 RectifyReport Rectifier::build_map(const CameraMotion& motion, const DepthModel& depth, double t_ref) {
@@ -104,14 +124,17 @@ RectifyReport Rectifier::build_map(const CameraMotion& motion, const DepthModel&
   // The grid is refined until the bound holds; the pose table too, where its share is large
   // (only for very fast motion: its error grows with the square of the rotation per step).
   RectifyReport rep;
+  int solved = 0;
   for (int step = std::min(cfg_.table_step_rows, timing_.height);; step = std::max(1, step / 2)) {
     build_pose_table(motion, step);
-    for (level_ = 0;; ++level_) {
+    for (level_ = 0;; level_ = next_level(level_, rep.error_bound_px)) {
       rep = solve_level();
+      ++solved;
       if (rep.error_bound_px <= cfg_.tolerance_px || level_ + 1 == levels_.size()) break;
     }
     if (table_error_px_ <= 0.25 * cfg_.tolerance_px || step == 1) break;
   }
+  rep.levels_solved = solved;
   map_ready_ = true;
   rep.rectified = true;
   rep.max_displacement_px = max_node_displacement();

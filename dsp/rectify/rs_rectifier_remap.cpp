@@ -67,19 +67,26 @@ void Rectifier::cell_columns(int i, const SamplePlane& g, int& c0, int& c1) cons
 // sample (P - offset) / scale of the source plane. In integers (offsets are whole or half
 // pixels, scales 1 or 2), rounded to nearest: this runs per cell of every chroma or mosaic row.
 namespace {
-void to_plane(Rectifier::Affine& a, const SamplePlane& g) {
-  const auto ox2 = static_cast<std::int64_t>(2 * g.offset_x), oy2 = static_cast<std::int64_t>(2 * g.offset_y);
-  // floor((num + d / 2) / d) for d = 2 scale, a power of two: an arithmetic shift.
-  auto divide = [](std::int64_t num, int scale) { return static_cast<std::int32_t>((num + scale) >> (scale == 1 ? 1 : 2)); };
-  a.ax = divide(2 * std::int64_t{a.ax} + ox2 * a.sx - ox2 * 65536, g.scale_x);
-  a.ay = divide(2 * std::int64_t{a.ay} + ox2 * a.sy - oy2 * 65536, g.scale_y);
-  a.sy *= g.scale_x / g.scale_y;
+// to_plane's constants for one plane, once per call rather than per cell.
+struct PlaneScale {
+  std::int64_t ox2, oy2;  // twice the offsets (whole numbers)
+  int scale_x, scale_y;   // 1 or 2: floor((num + d / 2) / d) for d = 2 scale is (num + scale) >> scale
+  std::int32_t sy_factor; // a step along the row is scale_x image pixels, sy in plane rows of scale_y
+  explicit PlaneScale(const SamplePlane& g)
+      : ox2(static_cast<std::int64_t>(2 * g.offset_x)), oy2(static_cast<std::int64_t>(2 * g.offset_y)),
+        scale_x(g.scale_x), scale_y(g.scale_y), sy_factor(g.scale_x / g.scale_y) {}
+};
+
+void to_plane(Rectifier::Affine& a, const PlaneScale& g) {
+  a.ax = static_cast<std::int32_t>((2 * std::int64_t{a.ax} + g.ox2 * a.sx - g.ox2 * 65536 + g.scale_x) >> g.scale_x);
+  a.ay = static_cast<std::int32_t>((2 * std::int64_t{a.ay} + g.ox2 * a.sy - g.oy2 * 65536 + g.scale_y) >> g.scale_y);
+  a.sy *= g.sy_factor;
 }
 }  // namespace
 
 Rectifier::Affine Rectifier::plane_affine(int i, std::uint8_t mode, const SamplePlane& g, const RowScratch& s) const {
   Affine a = cell_affine(i, mode, s);
-  if (g.scale_x != 1 || g.scale_y != 1) to_plane(a, g);  // (unit planes have no offset)
+  if (g.scale_x != 1 || g.scale_y != 1) to_plane(a, PlaneScale(g));  // (unit planes have no offset)
   return a;
 }
 
@@ -127,6 +134,7 @@ void Rectifier::remap_rows(const SamplePlane& src, const SamplePlane& dst, int j
   const bool unit = dst.scale_x == 1 && dst.scale_y == 1;
   const int n_cells = std::min(L.nx - 1, (dst.width + cell_n - 1) / cell_n);  // those with samples of this plane
   const std::int32_t half = (1 << L.shift) >> 1;                             // cell_affine's rounding
+  const PlaneScale scale(dst);
   for (int j = j0; j < j1; ++j) {
     std::uint8_t* out = dst.row(j);
     const double y = dst.scale_y * j + dst.offset_y;
@@ -151,7 +159,7 @@ void Rectifier::remap_rows(const SamplePlane& src, const SamplePlane& dst, int j
         const std::int32_t* Y = m == kPlane ? s.fpy.data() : s.fiy.data();
         Affine& a = s.cells[run++];
         a.ax = X[i], a.ay = Y[i], a.sx = (X[i + 1] - X[i] + half) >> L.shift, a.sy = (Y[i + 1] - Y[i] + half) >> L.shift;
-        if (!unit) to_plane(a, dst);
+        if (!unit) to_plane(a, scale);
         continue;
       }
       flush(i);

@@ -118,6 +118,38 @@ TEST(RsRectifier, RefinesTheGridOnlyWhenTheBoundNeedsIt) {
   EXPECT_LE(m.worst, fast.error_bound_px);
 }
 
+// The refinement skips the levels the bound's scaling predicts to miss; on these cases it lands
+// on the level a search one level at a time finds (the coarsest within the tolerance: rectifiers
+// that each have a single spacing, the independent path), so it costs no accuracy and wastes no
+// resolution, and the fast motions solve fewer grids than that search.
+TEST(RsRectifier, SkippedLevelsWouldHaveMissedTheTolerance) {
+  std::vector<Case> all = cases();
+  const CameraModel hd = camera(1920, 1080, 60);
+  const RowTiming hd_timing = RowTiming::full_frame(1080, 30);
+  const double hd_mid = reference_time(hd_timing, ReferenceRow::Middle);
+  for (double wy : {0.2, 1.5, 6.0})  // slow, the benchmark's, fast
+    all.push_back({"hd", hd, hd_timing, twist({0.5, 0.1, 1.0}, {0.3, wy, 0.4}), DepthModel::at_infinity(), hd_mid});
+  int skipped = 0;
+  for (const Case& c : all) {
+    Rectifier rect(c.cam, c.timing, PixelFormat::Mono8);
+    const RectifyReport rep = rect.build_map(ScrewMotion(c.tw), c.depth, c.t_ref);
+    int coarsest = 0, searched = 0;
+    for (int s = RectifierConfig{}.initial_spacing; s >= RectifierConfig{}.min_spacing && !coarsest; s /= 2, ++searched) {
+      RectifierConfig one;
+      one.initial_spacing = one.min_spacing = s;
+      Rectifier single(c.cam, c.timing, PixelFormat::Mono8, one);
+      if (single.build_map(ScrewMotion(c.tw), c.depth, c.t_ref).within_tolerance()) coarsest = s;
+    }
+    std::printf("[ level ] %-24s spacing %2d after %d grids; one at a time %2d after %d\n", c.name, rep.spacing,
+                rep.levels_solved, coarsest, searched);
+    EXPECT_EQ(rep.spacing, coarsest) << c.name;
+    EXPECT_TRUE(rep.within_tolerance()) << c.name;
+    EXPECT_LE(rep.levels_solved, searched) << c.name;
+    skipped += searched - rep.levels_solved;
+  }
+  EXPECT_GT(skipped, 0);  // the prediction does skip
+}
+
 TEST(RsRectifier, MotionBeyondTheFinestGridIsReportedNotHidden) {
   // 20 rad/s: even 4 px cells cannot keep the bound under 0.05 px. The frame is rectified
   // anyway, the report says so, and the bound still holds (every 2nd pixel).
