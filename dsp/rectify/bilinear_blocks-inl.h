@@ -306,9 +306,9 @@ HWY_INLINE void rgb8_window_blend(DB d8, const SamplePlane& src, const std::uint
 // Four samples per block from the windows at p[b] (positions rx, ry relative to them, 1/256
 // px) to out[b], for the blocks whose bit in `skip` is clear.
 template <bool kUV4, class DB>
-HWY_INLINE void pairs_window_blend(DB d8, const SamplePlane& src, const std::uint8_t** p,
-                                   hn::Vec<hn::Repartition<std::int32_t, DB>> rx, hn::Vec<hn::Repartition<std::int32_t, DB>> ry,
-                                   bool straddle, std::uint8_t* const* out, unsigned skip) {
+HWY_INLINE hn::Vec<hn::Repartition<std::uint16_t, DB>> pairs_blend(DB d8, const SamplePlane& src, const std::uint8_t** p,
+                                                                 hn::Vec<hn::Repartition<std::int32_t, DB>> rx,
+                                                                 hn::Vec<hn::Repartition<std::int32_t, DB>> ry, bool straddle) {
   const hn::Repartition<std::int32_t, DB> d;
   const hn::Repartition<std::uint16_t, DB> du16;
   rx = hn::Or(rx, hn::ShiftLeft<16>(rx)), ry = hn::Or(ry, hn::ShiftLeft<16>(ry));  // U and V lanes alike
@@ -318,7 +318,15 @@ HWY_INLINE void pairs_window_blend(DB d8, const SamplePlane& src, const std::uin
   const auto fx = hn::And(x16, hn::Set(du16, 255)), fy = hn::And(y16, hn::Set(du16, 255));
   hn::Vec<decltype(du16)> up, down;
   tap_pairs<kUV4>(d8, src, p, idx, straddle, hn::ShiftRight<8>(y16), up, down);
-  const auto v = lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
+  return lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
+}
+
+template <bool kUV4, class DB>
+HWY_INLINE void pairs_window_blend(DB d8, const SamplePlane& src, const std::uint8_t** p,
+                                   hn::Vec<hn::Repartition<std::int32_t, DB>> rx, hn::Vec<hn::Repartition<std::int32_t, DB>> ry,
+                                   bool straddle, std::uint8_t* const* out, unsigned skip) {
+  const hn::Repartition<std::uint16_t, DB> du16;
+  const auto v = pairs_blend<kUV4>(d8, src, p, rx, ry, straddle);
   if constexpr (kUV4)  // U V to bytes 0 and 2 of each sample's four, merged around the luma
     store_even_per_block(du16, v, out, skip);
   else
@@ -525,17 +533,42 @@ HWY_INLINE unsigned affine_block_windows(const SamplePlane& src, const BlockSegm
   return bad;
 }
 
-// Windows of blocks whose segments are known to fit (segment_blocks_fit): the origins and
-// straddle as affine_block_windows computes them, without its checks.
-template <int kBytes, int kB>
-HWY_INLINE void fitted_block_windows(const SamplePlane& src, const BlockSegment* seg, const std::uint8_t** p, bool& straddle) {
-  for (int b = 0; b < kB; ++b) {
-    const Affine& a = *seg[b].a;
-    const std::int64_t k = seg[b].e, x0 = a.ax + k * a.sx, y0 = a.ay + k * a.sy, y3 = y0 + 3 * std::int64_t{a.sy};
-    const int ya = static_cast<int>((std::min(y0, y3) + 128) >> 16);
-    straddle |= ((std::max(y0, y3) + 128) >> 16) != ya;
-    p[b] = src.row(ya) + kBytes * static_cast<int>((x0 + 128) >> 16);
+// The window origins of `count` blocks of four samples of segment a known to fit
+// (segment_blocks_fit), the blocks at samples e0, e0 + 4, ...: p[m], and whether the taps of
+// the even (straddle[0]) and of the odd blocks (straddle[1]) straddle a row boundary. As
+// affine_block_windows computes them, without its checks, from running sums: the positions of
+// a segment that fits lie inside the image, so they neither wrap nor differ from the lanes'.
+template <int kBytes>
+HWY_INLINE void fitted_origins(const SamplePlane& src, const Affine& a, int e0, int count, const std::uint8_t** p, bool* straddle) {
+  const std::int64_t sy3 = 3 * std::int64_t{a.sy}, top = std::min<std::int64_t>(0, sy3), bottom = std::max<std::int64_t>(0, sy3);
+  std::int64_t x = a.ax + std::int64_t{e0} * a.sx + 128, y = a.ay + std::int64_t{e0} * a.sy + 128;
+  for (int m = 0; m < count; ++m, x += 4 * std::int64_t{a.sx}, y += 4 * std::int64_t{a.sy}) {
+    const int ya = static_cast<int>((y + top) >> 16);
+    straddle[m & 1] |= ((y + bottom) >> 16) != ya;
+    p[m] = src.row(ya) + kBytes * static_cast<int>(x >> 16);
   }
+}
+
+// Positions relative to each block's window origin in 1/256 px, the origin as mono8_relative
+// takes it (the first sample's left tap, the upper of the first and fourth sample's top taps).
+template <class D32x>
+HWY_INLINE void block_relative(D32x d, hn::Vec<D32x> X, hn::Vec<D32x> Y, hn::Vec<D32x>& rx, hn::Vec<D32x>& ry) {
+  const auto half = hn::Set(d, 128), whole = hn::Set(d, ~255);
+  const auto x8 = hn::ShiftRight<8>(hn::Add(X, half)), y8 = hn::ShiftRight<8>(hn::Add(Y, half));
+  rx = hn::Sub(x8, hn::And(hn::Broadcast<0>(x8), whole));
+  ry = hn::Sub(y8, hn::And(hn::Min(hn::Broadcast<0>(y8), hn::Broadcast<3>(y8)), whole));
+}
+
+// The low bytes of the 16-bit lanes of v0 and v1 (each block: 8 bytes of each), as block b of
+// the output: those of v0's block b, then v1's; one store of a whole vector (16 bytes a block).
+alignas(16) constexpr std::uint8_t kLowBytesFirst[16] = {0, 2, 4, 6, 8, 10, 12, 14, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80};
+alignas(16) constexpr std::uint8_t kLowBytesSecond[16] = {0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0, 2, 4, 6, 8, 10, 12, 14};
+template <class DU16x>
+HWY_INLINE void store_block_pairs(DU16x, hn::Vec<DU16x> v0, hn::Vec<DU16x> v1, std::uint8_t* out) {
+  const hn::Repartition<std::uint8_t, DU16x> d8;
+  const auto first = hn::TableLookupBytesOr0(hn::BitCast(d8, v0), hn::LoadDup128(d8, kLowBytesFirst));
+  const auto second = hn::TableLookupBytesOr0(hn::BitCast(d8, v1), hn::LoadDup128(d8, kLowBytesSecond));
+  hn::StoreU(hn::Or(first, second), d8, out);
 }
 
 // Whether every block of four samples among samples [0, n) of segment a passes
@@ -554,11 +587,10 @@ inline bool segment_blocks_fit(const SamplePlane& src, const Affine& a, int n) {
 
 // A window holds 5 RGB24 pixels (left taps 0..3) or 8 U V pairs (left taps 0..6).
 template <int C>
-constexpr int kMaxTap = C == 3 ? 3 : 6;
+constexpr int kWindowTaps = C == 3 ? 3 : 6;
 
-// RGB24 or U V pairs: four samples per block of affine segments, positions X, Y. kFitted: every
-// block's segment passed segment_blocks_fit.
-template <class T, int C, bool kFitted, class DB>
+// RGB24 or U V pairs: four samples per block of affine segments, positions X, Y.
+template <class T, int C, class DB>
 HWY_INLINE void affine_blocks(DB d8, const SamplePlane& src, const BlockSegment* seg,
                               hn::Vec<hn::Repartition<std::int32_t, DB>> X, hn::Vec<hn::Repartition<std::int32_t, DB>> Y,
                               std::uint8_t* const* out) {
@@ -566,21 +598,14 @@ HWY_INLINE void affine_blocks(DB d8, const SamplePlane& src, const BlockSegment*
   const hn::Repartition<std::int32_t, DB> d;
   const std::uint8_t* p[kB];
   bool straddle = false;
-  unsigned bad = 0;
-  if constexpr (kFitted) {
-    fitted_block_windows<C * sizeof(T), kB>(src, seg, p, straddle);
-  } else {
-    bad = affine_block_windows<C * sizeof(T), kMaxTap<C>, kB>(src, seg, p, straddle);
-    for (int b = 0; b < kB; ++b)
-      if (bad >> b & 1) four<T, C>(src, block(d, X, b), block(d, Y, b), out[b], false);
-    if (bad == (1u << kB) - 1) return;
-  }
-  // Relative to the origins as mono8_relative computes them (the first pixel's left tap, the
-  // upper of the first and fourth pixel's top taps): the same as p[b] for the blocks that fit.
-  const auto half = hn::Set(d, 128), whole = hn::Set(d, ~255);
-  const auto x8 = hn::ShiftRight<8>(hn::Add(X, half)), y8 = hn::ShiftRight<8>(hn::Add(Y, half));
-  const auto rx = hn::Sub(x8, hn::And(hn::Broadcast<0>(x8), whole));
-  const auto ry = hn::Sub(y8, hn::And(hn::Min(hn::Broadcast<0>(y8), hn::Broadcast<3>(y8)), whole));
+  const unsigned bad = affine_block_windows<C * sizeof(T), kWindowTaps<C>, kB>(src, seg, p, straddle);
+  for (int b = 0; b < kB; ++b)
+    if (bad >> b & 1) four<T, C>(src, block(d, X, b), block(d, Y, b), out[b], false);
+  if (bad == (1u << kB) - 1) return;
+  // Relative to the origins as mono8_relative computes them: the same as p[b] for the blocks
+  // that fit.
+  hn::Vec<decltype(d)> rx, ry;
+  block_relative(d, X, Y, rx, ry);
   if constexpr (C == 3)
     rgb8_window_blend(d8, src, p, rx, ry, straddle, out, bad);
   else

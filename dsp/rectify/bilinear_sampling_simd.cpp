@@ -36,7 +36,6 @@
 #include <algorithm>
 #include <cstring>
 #include <string>
-#include <type_traits>
 #include <vector>
 
 #include "dsp/rectify/bilinear_sampling.hpp"
@@ -183,18 +182,42 @@ HWY_INLINE bool affine_blocks_fit(const SamplePlane& src) {
 }
 
 // One wide step of affine blocks: pixels 8b..8b+3 of block b at X0 (segments s0), 8b+4..8b+7 at X1.
-template <class T, int C, bool kFitted>
+template <class T, int C>
 HWY_INLINE void affine_step(const SamplePlane& src, const BlockSegment* s0, const BlockSegment* s1, VW32 X0, VW32 Y0, VW32 X1,
                             VW32 Y1, std::uint8_t* out) {
   const WideOutputs<C> o(out);
-  affine_blocks<T, C, kFitted>(DW8(), src, s0, X0, Y0, o.o0);
-  affine_blocks<T, C, kFitted>(DW8(), src, s1, X1, Y1, o.o1);
+  affine_blocks<T, C>(DW8(), src, s0, X0, Y0, o.o0);
+  affine_blocks<T, C>(DW8(), src, s1, X1, Y1, o.o1);
 }
 
 // Whether the blocks of whole steps over samples [0, n) of segment a fit (segment_blocks_fit).
 template <class T, int C>
 HWY_INLINE bool steps_fit(const SamplePlane& src, const Affine& a, int n) {
-  return segment_blocks_fit<C * sizeof(T), kMaxTap<C>>(src, a, n / kStep * kStep);
+  return segment_blocks_fit<C * sizeof(T), kWindowTaps<C>>(src, a, n / kStep * kStep);
+}
+
+// One wide step of blocks known to fit: p[2b] the window origin of block b of X0 (pixels
+// 8b..8b+3), p[2b + 1] of block b of X1; straddle[0], [1]: theirs (fitted_origins).
+template <class T, int C>
+HWY_INLINE void fitted_step(const SamplePlane& src, const std::uint8_t* const* p, const bool* straddle, VW32 X0, VW32 Y0,
+                            VW32 X1, VW32 Y1, std::uint8_t* out) {
+  const DW8 d8;
+  const DW32 dw;
+  const std::uint8_t* p0[kBlocks];
+  const std::uint8_t* p1[kBlocks];
+  for (int b = 0; b < kBlocks; ++b) p0[b] = p[2 * b], p1[b] = p[2 * b + 1];
+  VW32 rx0, ry0, rx1, ry1;
+  block_relative(dw, X0, Y0, rx0, ry0);
+  block_relative(dw, X1, Y1, rx1, ry1);
+  if constexpr (C == 3) {
+    const WideOutputs<C> o(out);
+    rgb8_window_blend(d8, src, p0, rx0, ry0, straddle[0], o.o0, 0);
+    rgb8_window_blend(d8, src, p1, rx1, ry1, straddle[1], o.o1, 0);
+  } else {  // U V pairs: block b's 16 output bytes are X0's 8 and X1's 8
+    const DWU16 du16;
+    store_block_pairs(du16, pairs_blend<false>(d8, src, p0, rx0, ry0, straddle[0]),
+                      pairs_blend<false>(d8, src, p1, rx1, ry1, straddle[1]), out);
+  }
 }
 
 // Positions of samples [c0, c0 + n) of a run of cells into xs, ys (n rounded up to 4): a + e s
@@ -234,18 +257,19 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
       for (; i + kStep <= end; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
         mono8_affine_blocks<kEven>(DW16(), src, a, i, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kOut);
   } else if constexpr (kAffineBlocks<T, C, kOut>) {  // RGB24, U V pairs: checks per segment, else per block
-    if (affine_blocks_fit<C>(src)) {
-      auto steps = [&](auto fitted) {
-        for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
-          BlockSegment s0[kBlocks], s1[kBlocks];
-          for (int b = 0; b < kBlocks; ++b) s0[b] = {&a, i + 8 * b}, s1[b] = {&a, i + 8 * b + 4};
-          affine_step<T, C, decltype(fitted)::value>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes);
-        }
-      };
-      if (steps_fit<T, C>(src, a, n))
-        steps(std::true_type{});
-      else
-        steps(std::false_type{});
+    if (steps_fit<T, C>(src, a, n)) {
+      for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
+        const std::uint8_t* p[2 * kBlocks];
+        bool straddle[2] = {false, false};
+        fitted_origins<C * sizeof(T)>(src, a, i, 2 * kBlocks, p, straddle);
+        fitted_step<T, C>(src, p, straddle, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes);
+      }
+    } else if (affine_blocks_fit<C>(src)) {
+      for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
+        BlockSegment s0[kBlocks], s1[kBlocks];
+        for (int b = 0; b < kBlocks; ++b) s0[b] = {&a, i + 8 * b}, s1[b] = {&a, i + 8 * b + 4};
+        affine_step<T, C>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes);
+      }
     }
   }
   for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
@@ -273,16 +297,22 @@ HWY_INLINE void paired_cells(const SamplePlane& src, const Affine* a, int total,
     const VW32 Y = hn::Combine(dw, half(hi.ay, hi.sy), half(lo.ay, lo.sy));
     const VW32 X4 = hn::ShiftLeft<2>(hn::Combine(dw, hn::Set(dh, hi.sx), hn::Set(dh, lo.sx)));  // 4 s, wrapping
     const VW32 Y4 = hn::ShiftLeft<2>(hn::Combine(dw, hn::Set(dh, hi.sy), hn::Set(dh, lo.sy)));
+    if (segment_blocks_fit<C * sizeof(T), kWindowTaps<C>>(src, lo, kHalf) &&
+        segment_blocks_fit<C * sizeof(T), kWindowTaps<C>>(src, hi, kHalf)) {
+      const std::uint8_t* p[2 * kBlocks];  // the lower blocks' from lo, the upper ones' from hi
+      bool straddle[2] = {false, false};
+      fitted_origins<C * sizeof(T)>(src, lo, 0, kBlocks, p, straddle);
+      fitted_origins<C * sizeof(T)>(src, hi, 0, kBlocks, p + kBlocks, straddle);
+      fitted_step<T, C>(src, p, straddle, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut);
+      continue;
+    }
     BlockSegment s0[kBlocks], s1[kBlocks];
     for (int b = 0; b < kBlocks; ++b) {
       const Affine* cell = b < kHalfBlocks ? &lo : &hi;
       const int e = 8 * (b % kHalfBlocks);
       s0[b] = {cell, e}, s1[b] = {cell, e + 4};
     }
-    if (segment_blocks_fit<C * sizeof(T), kMaxTap<C>>(src, lo, kHalf) && segment_blocks_fit<C * sizeof(T), kMaxTap<C>>(src, hi, kHalf))
-      affine_step<T, C, true>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut);
-    else
-      affine_step<T, C, false>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut);
+    affine_step<T, C>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut);
   }
   for (; c0 < total; c0 += kHalf, ++k)
     sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(kHalf, total - c0), c0 + kHalf < total);
