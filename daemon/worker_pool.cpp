@@ -1,9 +1,30 @@
 #include "daemon/worker_pool.hpp"
 
+#include <chrono>
 #include <stdexcept>
 #include <string>
 
 namespace rsd::daemon {
+
+namespace {
+
+// How long a helper keeps polling for the next job before it sleeps: longer than the gaps
+// between a frame's jobs (the serial parts of the map), far shorter than a frame period.
+constexpr auto kSpin = std::chrono::microseconds(50);
+
+void cpu_relax() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#elif defined(__aarch64__)
+  asm volatile("yield" ::: "memory");
+#endif
+}
+
+constexpr std::uint64_t make_ticket(std::uint32_t generation, int parts) {
+  return std::uint64_t{generation} << 32 | static_cast<std::uint64_t>(parts) << 16;
+}
+
+}  // namespace
 
 WorkerPool::WorkerPool(int workers) : workers_(workers) {
   if (workers < 1 || workers > kMaxWorkers)
@@ -19,37 +40,70 @@ WorkerPool::~WorkerPool() {
   for (std::thread& t : helpers_) t.join();
 }
 
+// One part of the current job, if any is left. The acquire pairs with run()'s release of the
+// ticket: a claimed part's job (fn_, ctx_) is visible, and stays unchanged until the part is done.
+bool WorkerPool::claim(int& part, int& parts) {
+  std::uint64_t t = ticket_.load(std::memory_order_acquire);
+  for (;;) {
+    parts = static_cast<int>(t >> 16 & 0xFFFF);
+    const int next = static_cast<int>(t & 0xFFFF);
+    if (next >= parts) return false;
+    if (ticket_.compare_exchange_weak(t, t + 1, std::memory_order_acquire, std::memory_order_acquire)) {
+      part = next;
+      return true;
+    }
+  }
+}
+
 void WorkerPool::work() {
-  for (int p = next_.fetch_add(1, std::memory_order_relaxed); p < parts_;
-       p = next_.fetch_add(1, std::memory_order_relaxed))
-    fn_(ctx_, p);
+  for (int part = 0, parts = 0; claim(part, parts);) {
+    fn_(ctx_, part);
+    if (done_.fetch_add(1, std::memory_order_acq_rel) + 1 == parts) done_.notify_one();
+  }
 }
 
 void WorkerPool::run(int parts, void (*fn)(void*, int), void* ctx) {
+  if (parts > kMaxParts) throw std::invalid_argument("WorkerPool::run: more than 65535 parts");
   if (helpers_.empty()) {
     for (int p = 0; p < parts; ++p) fn(ctx, p);
     return;
   }
-  fn_ = fn, ctx_ = ctx, parts_ = parts;
-  next_.store(0, std::memory_order_relaxed);
-  pending_.store(static_cast<int>(helpers_.size()), std::memory_order_relaxed);
-  generation_.fetch_add(1, std::memory_order_release);  // publishes the job
+  if (parts < 1) return;
+  // No part of the previous job is claimable or running: the job may be rewritten.
+  fn_ = fn, ctx_ = ctx;
+  done_.store(0, std::memory_order_relaxed);
+  const std::uint32_t generation = generation_.load(std::memory_order_relaxed) + 1;
+  ticket_.store(make_ticket(generation, parts), std::memory_order_release);  // publishes the job
+  generation_.store(generation, std::memory_order_release);
   generation_.notify_all();
   work();
-  // Every helper checks out of the job after its last part: then all parts are done, their
-  // pixels are visible here (acquire), and the next job may overwrite fn_, ctx_, parts_.
-  for (int n = pending_.load(std::memory_order_acquire); n != 0; n = pending_.load(std::memory_order_acquire))
-    pending_.wait(n, std::memory_order_acquire);
+  // The parts the helpers claimed: running now, each a share of the frame's work.
+  for (int n = done_.load(std::memory_order_acquire), spins = 0; n != parts; n = done_.load(std::memory_order_acquire))
+    if (++spins < 4096)
+      cpu_relax();
+    else
+      done_.wait(n, std::memory_order_acquire);
+}
+
+// Until the generation moves on from `seen`: polling for kSpin, then asleep.
+void WorkerPool::await_job(std::uint32_t seen) {
+  const auto until = std::chrono::steady_clock::now() + kSpin;
+  for (int i = 1; generation_.load(std::memory_order_acquire) == seen; ++i) {
+    if (i % 64 == 0 && std::chrono::steady_clock::now() > until) {
+      generation_.wait(seen, std::memory_order_acquire);
+      return;
+    }
+    cpu_relax();
+  }
 }
 
 void WorkerPool::helper_loop() {
   std::uint32_t seen = 0;  // the constructor's generation
   for (;;) {
-    generation_.wait(seen, std::memory_order_acquire);
+    await_job(seen);
     seen = generation_.load(std::memory_order_acquire);
     if (stop_.load(std::memory_order_relaxed)) return;
     work();
-    if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) pending_.notify_one();
   }
 }
 
