@@ -1,6 +1,7 @@
 // The rectify stage's worker pool (daemon/worker_pool): every part runs exactly once per job,
 // the helpers really run at the same time as the caller, a job allocates nothing, jobs follow
-// one another without losing or repeating parts, and a bad worker count is refused.
+// one another without losing or repeating parts (also jobs of different sizes, where a late
+// helper could claim a stale part), and a bad worker count is refused.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -33,6 +34,23 @@ TEST(WorkerPool, EveryPartRunsExactlyOncePerJob) {
       for (int p = 0; p < parts; ++p)
         ASSERT_EQ(tally.runs[p].load(), 200) << workers << " workers, " << parts << " parts, part " << p;
     }
+}
+
+// Jobs of different sizes back to back, each with its own tally: a helper that wakes late for
+// one job must neither run a part of it after run() returned nor a part beyond the next job's
+// count (a claim checks the job and its part count in one atomic ticket).
+TEST(WorkerPool, JobsOfDifferentSizesNeverShareAPart) {
+  constexpr int kSizes[] = {16, 1, 7, 2, 3, 16, 1};
+  for (int workers : {2, 3, 5}) {
+    WorkerPool pool(workers);
+    for (int round = 0; round < 300; ++round) {
+      const int parts = kSizes[round % 7];
+      Tally tally(parts);
+      pool.run(parts, Tally::part, &tally);
+      for (int p = 0; p < parts; ++p)
+        ASSERT_EQ(tally.runs[p].load(), 1) << workers << " workers, job " << round << ", part " << p;
+    }
+  }
 }
 
 TEST(WorkerPool, HelpersRunAtTheSameTimeAsTheCaller) {
