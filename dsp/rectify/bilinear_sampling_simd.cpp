@@ -273,7 +273,7 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
     }
   }
   for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
-    wide<T, C, kOut>(src, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes, i + kStep + 2 <= n);
+    wide<T, C, kOut>(src, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes, room_after || i + kStep + 2 <= n);
   if (i == n) return;  // (cells are whole steps, as a rule)
   // The rest, fewer than kStep pixels, from pixel i on: the segment as a run of one cell.
   alignas(64) std::int32_t xs[kStep], ys[kStep];
