@@ -1,5 +1,7 @@
 #include "daemon/worker_pool.hpp"
 
+#include <sched.h>
+
 #include <chrono>
 #include <stdexcept>
 #include <string>
@@ -11,6 +13,14 @@ namespace {
 // How long a helper keeps polling for the next job before it sleeps: longer than the gaps
 // between a frame's jobs (the serial parts of the map), far shorter than a frame period.
 constexpr auto kSpin = std::chrono::microseconds(50);
+
+// Polling only pays where every thread of the team has a CPU of its own: otherwise a polling
+// helper would take the CPU from the thread that works.
+bool cpus_for(int threads) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  return sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) >= threads;
+}
 
 void cpu_relax() {
 #if defined(__x86_64__) || defined(__i386__)
@@ -29,6 +39,7 @@ constexpr std::uint64_t make_ticket(std::uint32_t generation, int parts) {
 WorkerPool::WorkerPool(int workers) : workers_(workers) {
   if (workers < 1 || workers > kMaxWorkers)
     throw std::invalid_argument("rectification.workers must be 1.." + std::to_string(kMaxWorkers));
+  spin_ = cpus_for(workers) ? kSpin : std::chrono::microseconds(0);
   helpers_.reserve(workers - 1);
   for (int i = 1; i < workers; ++i) helpers_.emplace_back([this] { helper_loop(); });
 }
@@ -85,9 +96,9 @@ void WorkerPool::run(int parts, void (*fn)(void*, int), void* ctx) {
       done_.wait(n, std::memory_order_acquire);
 }
 
-// Until the generation moves on from `seen`: polling for kSpin, then asleep.
+// Until the generation moves on from `seen`: polling for spin_, then asleep.
 void WorkerPool::await_job(std::uint32_t seen) {
-  const auto until = std::chrono::steady_clock::now() + kSpin;
+  const auto until = std::chrono::steady_clock::now() + spin_;
   for (int i = 1; generation_.load(std::memory_order_acquire) == seen; ++i) {
     if (i % 64 == 0 && std::chrono::steady_clock::now() > until) {
       generation_.wait(seen, std::memory_order_acquire);

@@ -7,13 +7,15 @@
 // returns when every part is done; it allocates nothing and waits for nothing but parts that
 // are running: a helper that wakes late finds the job's parts taken and does nothing, and the
 // caller does not wait for it. Parts are claimed through one atomic ticket (job, parts, next
-// part), so a stale helper can never claim a part of a finished job. After a job a helper spins
-// for up to kSpin (a frame's jobs follow one another within microseconds: the map's columns, then
-// the rows) and then sleeps (futex, std::atomic::wait) until the next frame. workers = 1: no
-// helper thread, run() does everything on the caller.
+// part), so a stale helper can never claim a part of a finished job. After a job a helper polls
+// for up to 50 us (a frame's jobs follow one another within microseconds: the map's columns, then
+// the rows) when the process has a CPU for every thread, and then sleeps (futex,
+// std::atomic::wait) until the next frame. workers = 1: no helper thread, run() does everything
+// on the caller.
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <thread>
 #include <vector>
@@ -51,6 +53,7 @@ class WorkerPool final : public dsp::RowExecutor {
   std::atomic<int> done_{0};                  // parts of the current job finished
   std::atomic<std::uint32_t> generation_{0};  // bumped per job (and to stop): what sleepers wait on
   std::atomic<bool> stop_{false};
+  std::chrono::microseconds spin_{0};         // how long a helper polls after a job (cpus_for)
 };
 
 }  // namespace rsd::daemon

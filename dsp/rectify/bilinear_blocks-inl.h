@@ -39,6 +39,7 @@ using DW8 = hn::Repartition<std::uint8_t, DW16>;
 using VW32 = hn::Vec<DW32>;
 constexpr int kBlocks = static_cast<int>(hn::MaxLanes(DW16()) / 8);
 constexpr int kStep = 8 * kBlocks;
+constexpr int kStepShift = kBlocks == 1 ? 3 : kBlocks == 2 ? 4 : 5;  // kStep = 1 << kStepShift
 static_assert(kBlocks == 1 || kBlocks == 2 || kBlocks == 4, "one, two or four 128-bit blocks per step");
 
 // The helpers below take a vector of 1, 2 or 4 blocks (tag D) and recurse on its halves; they
@@ -467,11 +468,14 @@ HWY_INLINE void mono8_affine_blocks(D16x d16, const SamplePlane& src, const Affi
   const hn::RebindToUnsigned<D16x> du16;
   int xa[kB], ya[kB];
   bool straddle = false;
-  for (int b = 0; b < kB; ++b) {
-    const std::int64_t k = k0 + 8 * b, x = a.ax + k * a.sx, y0 = a.ay + k * a.sy, y7 = y0 + 7 * std::int64_t{a.sy};
-    xa[b] = static_cast<int>((x + 128) >> 16);
-    ya[b] = static_cast<int>((std::min(y0, y7) + 128) >> 16);
-    straddle |= ((std::max(y0, y7) + 128) >> 16) != ya[b];
+  // Running sums from the step's first pixel (rounded: + 128); a block's top taps lie between
+  // its first pixel's and its eighth's, y and y + 7 sy.
+  const std::int64_t sy7 = 7 * std::int64_t{a.sy}, top = std::min<std::int64_t>(0, sy7), bottom = std::max<std::int64_t>(0, sy7);
+  std::int64_t x = a.ax + std::int64_t{k0} * a.sx + 128, y = a.ay + std::int64_t{k0} * a.sy + 128;
+  for (int b = 0; b < kB; ++b, x += 8 * std::int64_t{a.sx}, y += 8 * std::int64_t{a.sy}) {
+    xa[b] = static_cast<int>(x >> 16);
+    ya[b] = static_cast<int>((y + top) >> 16);
+    straddle |= ((y + bottom) >> 16) != ya[b];
   }
   hn::Vec<decltype(du16)> rx, ry;
   mono8_relative(d16, X0, Y0, X1, Y1, rx, ry);

@@ -246,8 +246,8 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
   const VW32 lanes = hn::Iota(dw, 0), order = hn::Add(lanes, hn::And(lanes, hn::Set(dw, ~3)));  // the wide layout
   const VW32 sx = hn::Set(dw, a.sx), sy = hn::Set(dw, a.sy);
   VW32 X = hn::Add(hn::Set(dw, a.ax), hn::Mul(order, sx)), Y = hn::Add(hn::Set(dw, a.ay), hn::Mul(order, sy));
-  const VW32 X4 = hn::Mul(hn::Set(dw, 4), sx), Y4 = hn::Mul(hn::Set(dw, 4), sy);
-  const VW32 Xs = hn::Mul(hn::Set(dw, kStep), sx), Ys = hn::Mul(hn::Set(dw, kStep), sy);
+  const VW32 X4 = hn::ShiftLeft<2>(sx), Y4 = hn::ShiftLeft<2>(sy);  // 4 s and kStep s, wrapping like products
+  const VW32 Xs = hn::ShiftLeft<kStepShift>(sx), Ys = hn::ShiftLeft<kStepShift>(sy);
   int i = 0;
   if constexpr (C == 1 && sizeof(T) == 1) {  // Mono8 and 8-bit samples two bytes apart: most segments need no checks
     constexpr bool kEven = kOut == 2;
