@@ -456,27 +456,29 @@ HWY_INLINE bool mono8_blocks(D16x d16, const SamplePlane& src, hn::Vec<hn::Repar
   return true;
 }
 
-// An affine segment known to fit (affine_fits): each block's origin and whether its taps
-// straddle a row boundary come from the segment's positions in scalars, as tap() rounds them;
-// the same integers as mono8_blocks without its per-lane checks. k0: the step's first pixel.
-template <bool kEven, class D16x>
-HWY_INLINE void mono8_affine_blocks(D16x d16, const SamplePlane& src, const Affine& a, int k0,
-                                    hn::Vec<hn::Repartition<std::int32_t, D16x>> X0, hn::Vec<hn::Repartition<std::int32_t, D16x>> Y0,
-                                    hn::Vec<hn::Repartition<std::int32_t, D16x>> X1, hn::Vec<hn::Repartition<std::int32_t, D16x>> Y1,
-                                    std::uint8_t* out) {
-  constexpr int kB = blocks_of<D16x>();
-  const hn::RebindToUnsigned<D16x> du16;
-  int xa[kB], ya[kB];
-  bool straddle = false;
-  // Running sums from the step's first pixel (rounded: + 128); a block's top taps lie between
-  // its first pixel's and its eighth's, y and y + 7 sy.
+// The window origins of `count` blocks of eight pixels of an affine segment known to fit
+// (affine_fits), the blocks at pixels k0, k0 + 8, ...: the first pixel's left tap and the upper
+// of the first and the eighth pixel's top taps, as tap() rounds them, and whether any block's
+// taps straddle a row boundary. Running sums: the positions of a segment that fits lie inside
+// the image, so they neither wrap nor differ from the lanes'.
+HWY_INLINE void mono8_origins(const Affine& a, int k0, int count, int* xa, int* ya, bool& straddle) {
   const std::int64_t sy7 = 7 * std::int64_t{a.sy}, top = std::min<std::int64_t>(0, sy7), bottom = std::max<std::int64_t>(0, sy7);
   std::int64_t x = a.ax + std::int64_t{k0} * a.sx + 128, y = a.ay + std::int64_t{k0} * a.sy + 128;
-  for (int b = 0; b < kB; ++b, x += 8 * std::int64_t{a.sx}, y += 8 * std::int64_t{a.sy}) {
+  for (int b = 0; b < count; ++b, x += 8 * std::int64_t{a.sx}, y += 8 * std::int64_t{a.sy}) {
     xa[b] = static_cast<int>(x >> 16);
     ya[b] = static_cast<int>((y + top) >> 16);
     straddle |= ((y + bottom) >> 16) != ya[b];
   }
+}
+
+// Blocks of affine segments known to fit, origins given (mono8_origins): the same integers as
+// mono8_blocks without its per-lane checks.
+template <bool kEven, class D16x>
+HWY_INLINE void mono8_affine_blocks(D16x d16, const SamplePlane& src, const int* xa, const int* ya, bool straddle,
+                                    hn::Vec<hn::Repartition<std::int32_t, D16x>> X0, hn::Vec<hn::Repartition<std::int32_t, D16x>> Y0,
+                                    hn::Vec<hn::Repartition<std::int32_t, D16x>> X1, hn::Vec<hn::Repartition<std::int32_t, D16x>> Y1,
+                                    std::uint8_t* out) {
+  const hn::RebindToUnsigned<D16x> du16;
   hn::Vec<decltype(du16)> rx, ry;
   mono8_relative(d16, X0, Y0, X1, Y1, rx, ry);
   mono8_blend<kEven>(d16, src, xa, ya, rx, ry, straddle, out);

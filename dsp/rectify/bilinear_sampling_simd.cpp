@@ -254,8 +254,12 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
     // The merged 16 bytes of a strided block reach the next sample's pair: the last step needs room.
     const int end = kEven && !room_after ? n - 1 : n;
     if (end >= kStep && affine_fits<kEven>(src, a, end / kStep * kStep))
-      for (; i + kStep <= end; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
-        mono8_affine_blocks<kEven>(DW16(), src, a, i, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kOut);
+      for (; i + kStep <= end; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
+        int xa[kBlocks], ya[kBlocks];
+        bool straddle = false;
+        mono8_origins(a, i, kBlocks, xa, ya, straddle);
+        mono8_affine_blocks<kEven>(DW16(), src, xa, ya, straddle, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kOut);
+      }
   } else if constexpr (kAffineBlocks<T, C, kOut>) {  // RGB24, U V pairs: checks per segment, else per block
     if (steps_fit<T, C>(src, a, n)) {
       for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
@@ -283,20 +287,27 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
 
 // Cells of half a wide step (16-sample chroma cells on AVX-512): two per step, the lower blocks
 // from the first, the upper from the second; a last odd or short cell alone.
-template <class T, int C, int kOut>
-HWY_INLINE void paired_cells(const SamplePlane& src, const Affine* a, int total, std::uint8_t* out) {
-  constexpr int kHalf = kStep / 2, kHalfBlocks = kBlocks / 2;
+// The positions of a wide step of two cells of half a step, lo in the lower blocks and hi in the
+// upper ones, in the wide layout (X: pixels 8b..8b+3 of each block, X + X4: 8b+4..8b+7).
+HWY_INLINE void paired_positions(const Affine& lo, const Affine& hi, VW32& X, VW32& Y, VW32& X4, VW32& Y4) {
   const DW32 dw;
   const hn::Half<DW32> dh;
   const auto lanes = hn::Iota(dh, 0), order = hn::Add(lanes, hn::And(lanes, hn::Set(dh, ~3)));  // the wide layout
   auto half = [&](std::int32_t a0, std::int32_t s) { return hn::Add(hn::Set(dh, a0), hn::Mul(order, hn::Set(dh, s))); };
+  X = hn::Combine(dw, half(hi.ax, hi.sx), half(lo.ax, lo.sx));
+  Y = hn::Combine(dw, half(hi.ay, hi.sy), half(lo.ay, lo.sy));
+  X4 = hn::ShiftLeft<2>(hn::Combine(dw, hn::Set(dh, hi.sx), hn::Set(dh, lo.sx)));  // 4 s, wrapping
+  Y4 = hn::ShiftLeft<2>(hn::Combine(dw, hn::Set(dh, hi.sy), hn::Set(dh, lo.sy)));
+}
+
+template <class T, int C, int kOut>
+HWY_INLINE void paired_cells(const SamplePlane& src, const Affine* a, int total, std::uint8_t* out) {
+  constexpr int kHalf = kStep / 2, kHalfBlocks = kBlocks / 2;
   int c0 = 0, k = 0;
   for (; c0 + kStep <= total; c0 += kStep, k += 2) {
     const Affine &lo = a[k], &hi = a[k + 1];
-    const VW32 X = hn::Combine(dw, half(hi.ax, hi.sx), half(lo.ax, lo.sx));
-    const VW32 Y = hn::Combine(dw, half(hi.ay, hi.sy), half(lo.ay, lo.sy));
-    const VW32 X4 = hn::ShiftLeft<2>(hn::Combine(dw, hn::Set(dh, hi.sx), hn::Set(dh, lo.sx)));  // 4 s, wrapping
-    const VW32 Y4 = hn::ShiftLeft<2>(hn::Combine(dw, hn::Set(dh, hi.sy), hn::Set(dh, lo.sy)));
+    VW32 X, Y, X4, Y4;
+    paired_positions(lo, hi, X, Y, X4, Y4);
     if (segment_blocks_fit<C * sizeof(T), kWindowTaps<C>>(src, lo, kHalf) &&
         segment_blocks_fit<C * sizeof(T), kWindowTaps<C>>(src, hi, kHalf)) {
       const std::uint8_t* p[2 * kBlocks];  // the lower blocks' from lo, the upper ones' from hi
@@ -318,6 +329,37 @@ HWY_INLINE void paired_cells(const SamplePlane& src, const Affine* a, int total,
     sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(kHalf, total - c0), c0 + kHalf < total);
 }
 
+// Mono8 (and 8-bit samples two bytes apart) in cells of half a wide step (16-px cells on
+// AVX-512, 16-sample mosaic sites of 32-px cells): two cells a step, each checked to fit
+// (affine_fits); a step that does not, and a merged step at the end of the run (no room after
+// it), through positions, as is the rest.
+template <class T, int C, int kOut>
+HWY_INLINE void paired_mono8_cells(const SamplePlane& src, const Affine* a, int total, std::uint8_t* out) {
+  constexpr int kHalf = kStep / 2, kHalfBlocks = kBlocks / 2;
+  constexpr bool kEven = kOut == 2;
+  alignas(64) std::int32_t xs[kStep], ys[kStep];
+  int c0 = 0, k = 0;
+  for (; c0 + kStep <= total; c0 += kStep, k += 2) {
+    const Affine &lo = a[k], &hi = a[k + 1];
+    if (!(kEven && c0 + kStep == total) && affine_fits<kEven>(src, lo, kHalf) && affine_fits<kEven>(src, hi, kHalf)) {
+      VW32 X, Y, X4, Y4;
+      paired_positions(lo, hi, X, Y, X4, Y4);
+      int xa[kBlocks], ya[kBlocks];
+      bool straddle = false;
+      mono8_origins(lo, 0, kHalfBlocks, xa, ya, straddle);
+      mono8_origins(hi, 0, kHalfBlocks, xa + kHalfBlocks, ya + kHalfBlocks, straddle);
+      mono8_affine_blocks<kEven>(DW16(), src, xa, ya, straddle, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut);
+      continue;
+    }
+    cell_positions(a, kHalf, c0, kStep, xs, ys);
+    sample_row_simd<T, C, kOut>(src, xs, ys, out + c0 * kOut, kStep);
+  }
+  if (c0 < total) {
+    cell_positions(a, kHalf, c0, total - c0, xs, ys);
+    sample_row_simd<T, C, kOut>(src, xs, ys, out + c0 * kOut, total - c0);
+  }
+}
+
 // A run of cells in one call: the constants of the segment code stay in registers. Cells
 // narrower than a wide step (16-sample chroma cells, 16-px cells on AVX-512) would each end in
 // the short tail: their positions go through arrays instead, a chunk of cells at a time, so
@@ -331,6 +373,9 @@ void sample_cells_simd(const SamplePlane& src, const Affine* a, int cell_n, int 
   }
   if constexpr (kAffineBlocks<T, C, kOut> && kBlocks >= 2) {
     if (2 * cell_n == kStep && affine_blocks_fit<C>(src)) return paired_cells<T, C, kOut>(src, a, total, out);
+  }
+  if constexpr (C == 1 && sizeof(T) == 1 && kBlocks >= 2) {
+    if (2 * cell_n == kStep) return paired_mono8_cells<T, C, kOut>(src, a, total, out);
   }
   constexpr int kChunk = 256;
   alignas(64) std::int32_t xs[kChunk + 4], ys[kChunk + 4];
