@@ -456,19 +456,29 @@ HWY_INLINE bool mono8_blocks(D16x d16, const SamplePlane& src, hn::Vec<hn::Repar
   return true;
 }
 
-// The window origins of `count` blocks of eight pixels of an affine segment known to fit
-// (affine_fits), the blocks at pixels k0, k0 + 8, ...: the first pixel's left tap and the upper
-// of the first and the eighth pixel's top taps, as tap() rounds them, and whether any block's
-// taps straddle a row boundary. Running sums: the positions of a segment that fits lie inside
-// the image, so they neither wrap nor differ from the lanes'.
-HWY_INLINE void mono8_origins(const Affine& a, int k0, int count, int* xa, int* ya, bool& straddle) {
-  const std::int64_t sy7 = 7 * std::int64_t{a.sy}, top = std::min<std::int64_t>(0, sy7), bottom = std::max<std::int64_t>(0, sy7);
-  std::int64_t x = a.ax + std::int64_t{k0} * a.sx + 128, y = a.ay + std::int64_t{k0} * a.sy + 128;
-  for (int b = 0; b < count; ++b, x += 8 * std::int64_t{a.sx}, y += 8 * std::int64_t{a.sy}) {
-    xa[b] = static_cast<int>(x >> 16);
-    ya[b] = static_cast<int>((y + top) >> 16);
-    straddle |= ((y + bottom) >> 16) != ya[b];
+// The window origins of `count` blocks of kPerBlock samples of an affine segment known to fit
+// (affine_fits, segment_blocks_fit), the blocks at samples e0, e0 + kPerBlock, ...: each block's
+// first left tap and the upper of its first and last sample's top taps, as tap() rounds them,
+// and whether the taps of the even (straddle[0]) and of the odd blocks (straddle[1]) straddle a
+// row boundary. Running sums: the positions of a segment that fits lie inside the image, so they
+// neither wrap nor differ from the lanes'.
+template <int kPerBlock>
+HWY_INLINE void segment_origins(const Affine& a, int e0, int count, int* xa, int* ya, bool* straddle) {
+  const std::int64_t span = (kPerBlock - 1) * std::int64_t{a.sy};
+  const std::int64_t top = std::min<std::int64_t>(0, span), bottom = std::max<std::int64_t>(0, span);
+  std::int64_t x = a.ax + std::int64_t{e0} * a.sx + 128, y = a.ay + std::int64_t{e0} * a.sy + 128;
+  for (int m = 0; m < count; ++m, x += kPerBlock * std::int64_t{a.sx}, y += kPerBlock * std::int64_t{a.sy}) {
+    xa[m] = static_cast<int>(x >> 16);
+    ya[m] = static_cast<int>((y + top) >> 16);
+    straddle[m & 1] |= ((y + bottom) >> 16) != ya[m];
   }
+}
+
+// Mono8's blocks of eight: origins, and whether any straddles.
+HWY_INLINE void mono8_origins(const Affine& a, int k0, int count, int* xa, int* ya, bool& straddle) {
+  bool s[2] = {false, false};
+  segment_origins<8>(a, k0, count, xa, ya, s);
+  straddle = straddle || s[0] || s[1];
 }
 
 // Blocks of affine segments known to fit, origins given (mono8_origins): the same integers as
@@ -539,20 +549,12 @@ HWY_INLINE unsigned affine_block_windows(const SamplePlane& src, const BlockSegm
   return bad;
 }
 
-// The window origins of `count` blocks of four samples of segment a known to fit
-// (segment_blocks_fit), the blocks at samples e0, e0 + 4, ...: p[m], and whether the taps of
-// the even (straddle[0]) and of the odd blocks (straddle[1]) straddle a row boundary. As
-// affine_block_windows computes them, without its checks, from running sums: the positions of
-// a segment that fits lie inside the image, so they neither wrap nor differ from the lanes'.
+// The windows of `count` blocks of four samples of kBytes each (segment_origins): p[m].
 template <int kBytes>
 HWY_INLINE void fitted_origins(const SamplePlane& src, const Affine& a, int e0, int count, const std::uint8_t** p, bool* straddle) {
-  const std::int64_t sy3 = 3 * std::int64_t{a.sy}, top = std::min<std::int64_t>(0, sy3), bottom = std::max<std::int64_t>(0, sy3);
-  std::int64_t x = a.ax + std::int64_t{e0} * a.sx + 128, y = a.ay + std::int64_t{e0} * a.sy + 128;
-  for (int m = 0; m < count; ++m, x += 4 * std::int64_t{a.sx}, y += 4 * std::int64_t{a.sy}) {
-    const int ya = static_cast<int>((y + top) >> 16);
-    straddle[m & 1] |= ((y + bottom) >> 16) != ya;
-    p[m] = src.row(ya) + kBytes * static_cast<int>(x >> 16);
-  }
+  int xa[2 * kBlocks], ya[2 * kBlocks];  // count: at most a wide step's two halves
+  segment_origins<4>(a, e0, count, xa, ya, straddle);
+  for (int m = 0; m < count; ++m) p[m] = src.row(ya[m]) + kBytes * xa[m];
 }
 
 // Positions relative to each block's window origin in 1/256 px, the origin as mono8_relative

@@ -285,8 +285,6 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
   sample_row_simd<T, C, kOut>(src, xs, ys, out + i * kBytes, n - i);
 }
 
-// Cells of half a wide step (16-sample chroma cells on AVX-512): two per step, the lower blocks
-// from the first, the upper from the second; a last odd or short cell alone.
 // The positions of a wide step of two cells of half a step, lo in the lower blocks and hi in the
 // upper ones, in the wide layout (X: pixels 8b..8b+3 of each block, X + X4: 8b+4..8b+7).
 HWY_INLINE void paired_positions(const Affine& lo, const Affine& hi, VW32& X, VW32& Y, VW32& X4, VW32& Y4) {
@@ -300,6 +298,9 @@ HWY_INLINE void paired_positions(const Affine& lo, const Affine& hi, VW32& X, VW
   Y4 = hn::ShiftLeft<2>(hn::Combine(dw, hn::Set(dh, hi.sy), hn::Set(dh, lo.sy)));
 }
 
+// RGB24 or U V pairs in cells of half a wide step (16-sample chroma cells on AVX-512): two per
+// step, the lower blocks from the first, the upper from the second; a last odd or short cell
+// alone.
 template <class T, int C, int kOut>
 HWY_INLINE void paired_cells(const SamplePlane& src, const Affine* a, int total, std::uint8_t* out) {
   constexpr int kHalf = kStep / 2, kHalfBlocks = kBlocks / 2;
