@@ -271,27 +271,66 @@ HWY_INLINE bool block_windows(D32x d, const SamplePlane& src, hn::Vec<D32x> X, h
   return !(straddle && ya_max > src.height - 3);
 }
 
+// A block's 12 output bytes from A's 8 lanes and B's first 4 (lanes below 256): one lookup of
+// A | B << 8, bytes 12..15 zero.
+alignas(16) constexpr std::uint8_t kRgbBytes[16] = {0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 0x80, 0x80, 0x80, 0x80};
+
+// The windows of rows ya, ya + 1 (r0, r1) of each block at p[b], and ya + 2 (r2) when straddle;
+// p[b] is advanced past the rows read.
+template <class DB>
+HWY_INLINE void window_rows(DB d8, const SamplePlane& src, const std::uint8_t** p, bool straddle, hn::Vec<DB>& r0,
+                            hn::Vec<DB>& r1, hn::Vec<DB>& r2) {
+  r0 = load_windows(d8, p);
+  for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
+  r1 = r2 = load_windows(d8, p);
+  if (!straddle) return;
+  for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
+  r2 = load_windows(d8, p);
+}
+
 // Four RGB24 pixels per block from the windows at p[b] (positions rx, ry relative to them,
-// 1/256 px) to out[b], for the blocks whose bit in `skip` is clear.
+// 1/256 px): their 12 bytes, bytes 0..11 of each block. kSplit: the B half (the third pixel's
+// blue, the fourth pixel) from windows of its own at q[b], on the same rows from the third
+// pixel's left tap, so that A's window needs to hold the taps of three pixels only (their
+// left taps spanning up to 3 px: 2 sx < 3) rather than four (3 sx < 3, a magnification never
+// above 1); B's words are A's less the third pixel's tap column.
+template <bool kSplit = false, class DB>
+HWY_INLINE hn::Vec<DB> rgb8_blend(DB d8, const SamplePlane& src, const std::uint8_t** p,
+                                  hn::Vec<hn::Repartition<std::int32_t, DB>> rx, hn::Vec<hn::Repartition<std::int32_t, DB>> ry,
+                                  bool straddle, const std::uint8_t** q = nullptr) {
+  const hn::Repartition<std::int32_t, DB> d;
+  const auto i = hn::ShiftRight<8>(rx), i3 = hn::Add(i, hn::Add(i, i));
+  const auto w = hn::Or(hn::Or(i3, hn::ShiftLeft<8>(hn::And(rx, hn::Set(d, 255)))), hn::ShiftLeft<16>(ry));
+  hn::Vec<DB> r0, r1, r2;
+  window_rows(d8, src, p, straddle, r0, r1, r2);
+  const auto a = rgb_half(d8, r0, r1, r2, straddle, hn::BitCast(d8, w), kRgbPixelA, kRgbColourA);
+  if constexpr (kSplit) window_rows(d8, src, q, straddle, r0, r1, r2);
+  const auto wb = kSplit ? hn::Sub(w, hn::Broadcast<2>(i3)) : w;  // (pixels 0, 1: unused lanes)
+  const auto b = rgb_half(d8, r0, r1, r2, straddle, hn::BitCast(d8, wb), kRgbPixelB, kRgbColourB);
+  return hn::TableLookupBytesOr0(hn::BitCast(d8, hn::Or(a, hn::ShiftLeft<8>(b))), hn::LoadDup128(d8, kRgbBytes));
+}
+
+// Block b of v (bytes), 16 bytes to out, or only its first 12 unless room (the 4 after them
+// may be written: the next block's store covers them).
+template <class DB>
+HWY_INLINE void store_rgb_block(DB d8, hn::Vec<DB> v, int b, std::uint8_t* out, bool room) {
+  const D8 d16;
+  const auto block16 = part<blocks_of<DB>(), D8>(d8, v, b);
+  if (room) return hn::StoreU(block16, d16, out);
+  const hn::Full64<std::uint8_t> d64;
+  const hn::Full32<std::uint8_t> d32;
+  hn::StoreU(hn::LowerHalf(d64, block16), d64, out);
+  hn::StoreU(hn::LowerHalf(d32, hn::UpperHalf(d64, block16)), d32, out + 8);
+}
+
+// Four RGB24 pixels per block (rgb8_blend) to out[b], for the blocks whose bit in `skip` is clear.
 template <class DB>
 HWY_INLINE void rgb8_window_blend(DB d8, const SamplePlane& src, const std::uint8_t** p,
                                   hn::Vec<hn::Repartition<std::int32_t, DB>> rx, hn::Vec<hn::Repartition<std::int32_t, DB>> ry,
                                   bool straddle, std::uint8_t* const* out, unsigned skip) {
-  const hn::Repartition<std::int32_t, DB> d;
-  const hn::Repartition<std::uint16_t, DB> du16;
-  const auto i = hn::ShiftRight<8>(rx);
-  const auto words = hn::BitCast(d8, hn::Or(hn::Or(hn::Add(i, hn::Add(i, i)), hn::ShiftLeft<8>(hn::And(rx, hn::Set(d, 255)))),
-                                            hn::ShiftLeft<16>(ry)));
-  const auto r0 = load_windows(d8, p);
-  for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
-  const auto r1 = load_windows(d8, p);
-  auto r2 = r1;
-  if (straddle) {
-    for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
-    r2 = load_windows(d8, p);
-  }
-  store_per_block(du16, rgb_half(d8, r0, r1, r2, straddle, words, kRgbPixelA, kRgbColourA), out, 0, 8, skip);
-  store_per_block(du16, rgb_half(d8, r0, r1, r2, straddle, words, kRgbPixelB, kRgbColourB), out, 8, 4, skip);
+  const auto v = rgb8_blend(d8, src, p, rx, ry, straddle);
+  for (int b = 0; b < blocks_of<DB>(); ++b)
+    if (!(skip >> b & 1)) store_rgb_block(d8, v, b, out[b], false);
 }
 
 // ---- U V pairs (NV12's chroma, YUYV's U V), four per block on 16-bit lanes ------------------
@@ -549,12 +588,19 @@ HWY_INLINE unsigned affine_block_windows(const SamplePlane& src, const BlockSegm
   return bad;
 }
 
-// The windows of `count` blocks of four samples of kBytes each (segment_origins): p[m].
-template <int kBytes>
-HWY_INLINE void fitted_origins(const SamplePlane& src, const Affine& a, int e0, int count, const std::uint8_t** p, bool* straddle) {
+// The windows of `count` blocks of four samples of kBytes each (segment_origins): p[m]; with
+// kSplit also q[m], the window of the block's last two samples on the same rows from the third
+// sample's left tap (rgb8_blend).
+template <int kBytes, bool kSplit = false>
+HWY_INLINE void fitted_origins(const SamplePlane& src, const Affine& a, int e0, int count, const std::uint8_t** p, bool* straddle,
+                               const std::uint8_t** q = nullptr) {
   int xa[2 * kBlocks], ya[2 * kBlocks];  // count: at most a wide step's two halves
   segment_origins<4>(a, e0, count, xa, ya, straddle);
   for (int m = 0; m < count; ++m) p[m] = src.row(ya[m]) + kBytes * xa[m];
+  if constexpr (kSplit) {
+    std::int64_t x = a.ax + std::int64_t{e0 + 2} * a.sx + 128;
+    for (int m = 0; m < count; ++m, x += 4 * std::int64_t{a.sx}) q[m] = p[m] + kBytes * (static_cast<int>(x >> 16) - xa[m]);
+  }
 }
 
 // Positions relative to each block's window origin in 1/256 px, the origin as mono8_relative
@@ -580,14 +626,15 @@ HWY_INLINE void store_block_pairs(DU16x, hn::Vec<DU16x> v0, hn::Vec<DU16x> v1, s
 }
 
 // Whether every block of four samples among samples [0, n) of segment a passes
-// affine_block_windows' checks, from the segment's ends: the left taps of four consecutive
-// samples span at most kMaxTap (3 sx < kMaxTap px: their rounded span is at most
-// floor(3 sx) + 1), their top taps at most one row (3 |sy| < 1 row), and the taps are monotone,
-// so the first and last sample bound every origin; rows end 3 before the bottom, so that a
-// straddling block's third row exists.
-template <int kBytes, int kMaxTap>
+// affine_block_windows' checks, from the segment's ends: the left taps of kReach + 1
+// consecutive samples (those one window holds: four, or three for rgb8_blend's split windows)
+// span at most kMaxTap (kReach sx < kMaxTap px: their rounded span is at most
+// floor(kReach sx) + 1), the top taps of four at most one row (3 |sy| < 1 row), and the taps
+// are monotone, so the first and last sample bound every origin; rows end 3 before the bottom,
+// so that a straddling block's third row exists.
+template <int kBytes, int kMaxTap, int kReach = 3>
 inline bool segment_blocks_fit(const SamplePlane& src, const Affine& a, int n) {
-  if (n < 1 || a.sx < 0 || 3 * std::int64_t{a.sx} >= kMaxTap * 65536 || 3 * std::abs(std::int64_t{a.sy}) >= 65536) return false;
+  if (n < 1 || a.sx < 0 || kReach * std::int64_t{a.sx} >= kMaxTap * 65536 || 3 * std::abs(std::int64_t{a.sy}) >= 65536) return false;
   const std::int64_t last = n - 1, x1 = a.ax + last * a.sx, y0 = a.ay, y1 = a.ay + last * a.sy;
   return ((a.ax + 128) >> 16) >= 0 && kBytes * ((x1 + 128) >> 16) + 16 <= kBytes * std::int64_t{src.width} &&
          ((std::min(y0, y1) + 128) >> 16) >= 0 && ((std::max(y0, y1) + 128) >> 16) <= src.height - 3;
