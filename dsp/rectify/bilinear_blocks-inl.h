@@ -271,66 +271,37 @@ HWY_INLINE bool block_windows(D32x d, const SamplePlane& src, hn::Vec<D32x> X, h
   return !(straddle && ya_max > src.height - 3);
 }
 
-// A block's 12 output bytes from A's 8 lanes and B's first 4 (lanes below 256): one lookup of
-// A | B << 8, bytes 12..15 zero.
-alignas(16) constexpr std::uint8_t kRgbBytes[16] = {0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 0x80, 0x80, 0x80, 0x80};
-
-// The windows of rows ya, ya + 1 (r0, r1) of each block at p[b], and ya + 2 (r2) when straddle;
-// p[b] is advanced past the rows read.
-template <class DB>
-HWY_INLINE void window_rows(DB d8, const SamplePlane& src, const std::uint8_t** p, bool straddle, hn::Vec<DB>& r0,
-                            hn::Vec<DB>& r1, hn::Vec<DB>& r2) {
-  r0 = load_windows(d8, p);
-  for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
-  r1 = r2 = load_windows(d8, p);
-  if (!straddle) return;
-  for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
-  r2 = load_windows(d8, p);
-}
-
 // Four RGB24 pixels per block from the windows at p[b] (positions rx, ry relative to them,
-// 1/256 px): their 12 bytes, bytes 0..11 of each block. kSplit: the B half (the third pixel's
-// blue, the fourth pixel) from windows of its own at q[b], on the same rows from the third
-// pixel's left tap, so that A's window needs to hold the taps of three pixels only (their
-// left taps spanning up to 3 px: 2 sx < 3) rather than four (3 sx < 3, a magnification never
-// above 1); B's words are A's less the third pixel's tap column.
-template <bool kSplit = false, class DB>
-HWY_INLINE hn::Vec<DB> rgb8_blend(DB d8, const SamplePlane& src, const std::uint8_t** p,
-                                  hn::Vec<hn::Repartition<std::int32_t, DB>> rx, hn::Vec<hn::Repartition<std::int32_t, DB>> ry,
-                                  bool straddle, const std::uint8_t** q = nullptr) {
-  const hn::Repartition<std::int32_t, DB> d;
-  const auto i = hn::ShiftRight<8>(rx), i3 = hn::Add(i, hn::Add(i, i));
-  const auto w = hn::Or(hn::Or(i3, hn::ShiftLeft<8>(hn::And(rx, hn::Set(d, 255)))), hn::ShiftLeft<16>(ry));
-  hn::Vec<DB> r0, r1, r2;
-  window_rows(d8, src, p, straddle, r0, r1, r2);
-  const auto a = rgb_half(d8, r0, r1, r2, straddle, hn::BitCast(d8, w), kRgbPixelA, kRgbColourA);
-  if constexpr (kSplit) window_rows(d8, src, q, straddle, r0, r1, r2);
-  const auto wb = kSplit ? hn::Sub(w, hn::Broadcast<2>(i3)) : w;  // (pixels 0, 1: unused lanes)
-  const auto b = rgb_half(d8, r0, r1, r2, straddle, hn::BitCast(d8, wb), kRgbPixelB, kRgbColourB);
-  return hn::TableLookupBytesOr0(hn::BitCast(d8, hn::Or(a, hn::ShiftLeft<8>(b))), hn::LoadDup128(d8, kRgbBytes));
-}
-
-// Block b of v (bytes), 16 bytes to out, or only its first 12 unless room (the 4 after them
-// may be written: the next block's store covers them).
-template <class DB>
-HWY_INLINE void store_rgb_block(DB d8, hn::Vec<DB> v, int b, std::uint8_t* out, bool room) {
-  const D8 d16;
-  const auto block16 = part<blocks_of<DB>(), D8>(d8, v, b);
-  if (room) return hn::StoreU(block16, d16, out);
-  const hn::Full64<std::uint8_t> d64;
-  const hn::Full32<std::uint8_t> d32;
-  hn::StoreU(hn::LowerHalf(d64, block16), d64, out);
-  hn::StoreU(hn::LowerHalf(d32, hn::UpperHalf(d64, block16)), d32, out + 8);
-}
-
-// Four RGB24 pixels per block (rgb8_blend) to out[b], for the blocks whose bit in `skip` is clear.
+// 1/256 px) to out[b], for the blocks whose bit in `skip` is clear: 12 bytes, A's 8 and B's
+// first 4, packed by one lookup of A | B << 8 (lanes below 256).
+alignas(16) constexpr std::uint8_t kRgbBytes[16] = {0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 0x80, 0x80, 0x80, 0x80};
 template <class DB>
 HWY_INLINE void rgb8_window_blend(DB d8, const SamplePlane& src, const std::uint8_t** p,
                                   hn::Vec<hn::Repartition<std::int32_t, DB>> rx, hn::Vec<hn::Repartition<std::int32_t, DB>> ry,
                                   bool straddle, std::uint8_t* const* out, unsigned skip) {
-  const auto v = rgb8_blend(d8, src, p, rx, ry, straddle);
-  for (int b = 0; b < blocks_of<DB>(); ++b)
-    if (!(skip >> b & 1)) store_rgb_block(d8, v, b, out[b], false);
+  const hn::Repartition<std::int32_t, DB> d;
+  const auto i = hn::ShiftRight<8>(rx);
+  const auto words = hn::BitCast(d8, hn::Or(hn::Or(hn::Add(i, hn::Add(i, i)), hn::ShiftLeft<8>(hn::And(rx, hn::Set(d, 255)))),
+                                            hn::ShiftLeft<16>(ry)));
+  const auto r0 = load_windows(d8, p);
+  for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
+  const auto r1 = load_windows(d8, p);
+  auto r2 = r1;
+  if (straddle) {
+    for (int b = 0; b < blocks_of<DB>(); ++b) p[b] += src.stride;
+    r2 = load_windows(d8, p);
+  }
+  const auto a = rgb_half(d8, r0, r1, r2, straddle, words, kRgbPixelA, kRgbColourA);
+  const auto c = rgb_half(d8, r0, r1, r2, straddle, words, kRgbPixelB, kRgbColourB);
+  const auto v = hn::TableLookupBytesOr0(hn::BitCast(d8, hn::Or(a, hn::ShiftLeft<8>(c))), hn::LoadDup128(d8, kRgbBytes));
+  const hn::Full64<std::uint8_t> d64;
+  const hn::Full32<std::uint8_t> d32;
+  for (int b = 0; b < blocks_of<DB>(); ++b) {
+    if (skip >> b & 1) continue;
+    const auto block16 = part<blocks_of<DB>(), D8>(d8, v, b);
+    hn::StoreU(hn::LowerHalf(d64, block16), d64, out[b]);
+    hn::StoreU(hn::LowerHalf(d32, hn::UpperHalf(d64, block16)), d32, out[b] + 8);
+  }
 }
 
 // ---- U V pairs (NV12's chroma, YUYV's U V), four per block on 16-bit lanes ------------------
@@ -588,19 +559,12 @@ HWY_INLINE unsigned affine_block_windows(const SamplePlane& src, const BlockSegm
   return bad;
 }
 
-// The windows of `count` blocks of four samples of kBytes each (segment_origins): p[m]; with
-// kSplit also q[m], the window of the block's last two samples on the same rows from the third
-// sample's left tap (rgb8_blend).
-template <int kBytes, bool kSplit = false>
-HWY_INLINE void fitted_origins(const SamplePlane& src, const Affine& a, int e0, int count, const std::uint8_t** p, bool* straddle,
-                               const std::uint8_t** q = nullptr) {
+// The windows of `count` blocks of four samples of kBytes each (segment_origins): p[m].
+template <int kBytes>
+HWY_INLINE void fitted_origins(const SamplePlane& src, const Affine& a, int e0, int count, const std::uint8_t** p, bool* straddle) {
   int xa[2 * kBlocks], ya[2 * kBlocks];  // count: at most a wide step's two halves
   segment_origins<4>(a, e0, count, xa, ya, straddle);
   for (int m = 0; m < count; ++m) p[m] = src.row(ya[m]) + kBytes * xa[m];
-  if constexpr (kSplit) {
-    std::int64_t x = a.ax + std::int64_t{e0 + 2} * a.sx + 128;
-    for (int m = 0; m < count; ++m, x += 4 * std::int64_t{a.sx}) q[m] = p[m] + kBytes * (static_cast<int>(x >> 16) - xa[m]);
-  }
 }
 
 // Positions relative to each block's window origin in 1/256 px, the origin as mono8_relative
@@ -626,18 +590,133 @@ HWY_INLINE void store_block_pairs(DU16x, hn::Vec<DU16x> v0, hn::Vec<DU16x> v1, s
 }
 
 // Whether every block of four samples among samples [0, n) of segment a passes
-// affine_block_windows' checks, from the segment's ends: the left taps of kReach + 1
-// consecutive samples (those one window holds: four, or three for rgb8_blend's split windows)
-// span at most kMaxTap (kReach sx < kMaxTap px: their rounded span is at most
-// floor(kReach sx) + 1), the top taps of four at most one row (3 |sy| < 1 row), and the taps
-// are monotone, so the first and last sample bound every origin; rows end 3 before the bottom,
-// so that a straddling block's third row exists.
-template <int kBytes, int kMaxTap, int kReach = 3>
+// affine_block_windows' checks, from the segment's ends: the left taps of four consecutive
+// samples span at most kMaxTap (3 sx < kMaxTap px: their rounded span is at most
+// floor(3 sx) + 1), their top taps at most one row (3 |sy| < 1 row), and the taps are monotone,
+// so the first and last sample bound every origin; rows end 3 before the bottom, so that a
+// straddling block's third row exists.
+template <int kBytes, int kMaxTap>
 inline bool segment_blocks_fit(const SamplePlane& src, const Affine& a, int n) {
-  if (n < 1 || a.sx < 0 || kReach * std::int64_t{a.sx} >= kMaxTap * 65536 || 3 * std::abs(std::int64_t{a.sy}) >= 65536) return false;
+  if (n < 1 || a.sx < 0 || 3 * std::int64_t{a.sx} >= kMaxTap * 65536 || 3 * std::abs(std::int64_t{a.sy}) >= 65536) return false;
   const std::int64_t last = n - 1, x1 = a.ax + last * a.sx, y0 = a.ay, y1 = a.ay + last * a.sy;
   return ((a.ax + 128) >> 16) >= 0 && kBytes * ((x1 + 128) >> 16) + 16 <= kBytes * std::int64_t{src.width} &&
          ((std::min(y0, y1) + 128) >> 16) >= 0 && ((std::max(y0, y1) + 128) >> 16) <= src.height - 3;
+}
+
+// ---- RGB24 along affine segments, eight pixels per block ---------------------------------
+//
+// A block's eight pixels are 24 output bytes: three vectors of eight 16-bit lanes, A (bytes
+// 0-7: pixels 0, 1 and the red and green of 2), B (bytes 8-15: the blue of 2, pixels 3, 4 and
+// the red of 5) and C (bytes 16-23: the green and blue of 5, pixels 6, 7), each looked up in a
+// 16-byte window of its own on the block's rows, from the left tap of its first pixel (0, 2,
+// 5). B's pixels 2-5 have left taps spanning up to floor(3 sx) + 1 px, so a window holds their
+// taps while 3 sx < 4; A's and C's three pixels while 2 sx < 3. Positions are relative to the
+// block's origin as Mono8's (mono8_relative), so that the eight pixels share one rounding.
+
+// The lookup patterns of window W (0: A, 1: B, 2: C), per lane: its pixel k, colour c.
+struct Rgb8Lanes {
+  alignas(16) std::uint8_t tap[16];     // (2k, 2k): pixel k's 3 i to both bytes
+  alignas(16) std::uint8_t origin[16];  // (2w, 2w): the window's first pixel's
+  alignas(16) std::uint8_t colour[16];  // (c, c + 3): the left and right tap's byte from the pixel's
+  alignas(16) std::uint8_t low[16];     // (2k, 0x80): a pixel's low byte (weight) to the lane
+  alignas(16) std::uint8_t high[16];    // (2k + 1, 0x80): its high byte (the row below)
+};
+constexpr Rgb8Lanes rgb8_lanes(int window) {
+  constexpr int kFirst[3] = {0, 2, 5};
+  Rgb8Lanes l{};
+  for (int lane = 0; lane < 8; ++lane) {
+    const int byte = 8 * window + lane, k = byte / 3, c = byte % 3, w = kFirst[window];
+    const auto u8 = [](int v) { return static_cast<std::uint8_t>(v); };
+    l.tap[2 * lane] = l.tap[2 * lane + 1] = u8(2 * k);
+    l.origin[2 * lane] = l.origin[2 * lane + 1] = u8(2 * w);
+    l.colour[2 * lane] = u8(c), l.colour[2 * lane + 1] = u8(c + 3);
+    l.low[2 * lane] = u8(2 * k), l.low[2 * lane + 1] = 0x80;
+    l.high[2 * lane] = u8(2 * k + 1), l.high[2 * lane + 1] = 0x80;
+  }
+  return l;
+}
+alignas(16) constexpr Rgb8Lanes kRgb8Lanes[3] = {rgb8_lanes(0), rgb8_lanes(1), rgb8_lanes(2)};
+
+// The lanes of window W blended: t holds each pixel's 3 i (i: its left tap's column from pixel
+// 0's), rx and ry its position relative to the block's origin (mono8_relative); p[b]: the
+// block's window on its first row.
+template <int W, class DB, class VU>
+HWY_INLINE VU rgb8_window8(DB d8, const SamplePlane& src, const std::uint8_t* const* p, VU t, VU rx, VU ry, bool straddle) {
+  const hn::DFromV<VU> du16;
+  const Rgb8Lanes& l = kRgb8Lanes[W];
+  const auto t8 = hn::BitCast(d8, t);
+  const auto idx = hn::Add(hn::Sub(hn::TableLookupBytes(t8, hn::LoadDup128(d8, l.tap)), hn::TableLookupBytes(t8, hn::LoadDup128(d8, l.origin))),
+                           hn::LoadDup128(d8, l.colour));
+  const auto low = hn::LoadDup128(d8, l.low);
+  const VU fx = hn::BitCast(du16, hn::TableLookupBytesOr0(hn::BitCast(d8, rx), low));
+  const VU fy = hn::BitCast(du16, hn::TableLookupBytesOr0(hn::BitCast(d8, ry), low));
+  const VU lower = hn::BitCast(du16, hn::TableLookupBytesOr0(hn::BitCast(d8, ry), hn::LoadDup128(d8, l.high)));
+  const std::uint8_t* q[blocks_of<DB>()];
+  for (int b = 0; b < blocks_of<DB>(); ++b) q[b] = p[b];
+  VU up, down;
+  tap_pairs(d8, src, q, idx, straddle, lower, up, down);
+  return lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
+}
+
+// Bytes 0-7 of each block: A's low bytes, 8-15: B's.
+alignas(16) constexpr std::uint8_t kLowThenHigh[16] = {0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 9, 11, 13, 15};
+
+// Eight RGB24 pixels per block of segments known to fit (rgb8_fits), windows at pa, pb, pc
+// (rgb8_origins), positions X0 (pixels 8b..8b+3), X1 (8b+4..8b+7): block b's 24 bytes to
+// out + 24 b, 16-byte stores in order. room: 8 bytes after the last block may be written.
+template <class D16x>
+HWY_INLINE void rgb8_affine_blocks(D16x d16, const SamplePlane& src, const std::uint8_t* const* pa, const std::uint8_t* const* pb,
+                                   const std::uint8_t* const* pc, bool straddle, hn::Vec<hn::Repartition<std::int32_t, D16x>> X0,
+                                   hn::Vec<hn::Repartition<std::int32_t, D16x>> Y0, hn::Vec<hn::Repartition<std::int32_t, D16x>> X1,
+                                   hn::Vec<hn::Repartition<std::int32_t, D16x>> Y1, std::uint8_t* out, bool room) {
+  constexpr int kB = blocks_of<D16x>();
+  const hn::RebindToUnsigned<D16x> du16;
+  const hn::Repartition<std::uint8_t, D16x> d8;
+  hn::Vec<decltype(du16)> rx, ry;
+  mono8_relative(d16, X0, Y0, X1, Y1, rx, ry);
+  const auto i = hn::ShiftRight<8>(rx), t = hn::Add(i, hn::Add(i, i));
+  const auto a = rgb8_window8<0>(d8, src, pa, t, rx, ry, straddle);
+  const auto b = rgb8_window8<1>(d8, src, pb, t, rx, ry, straddle);
+  const auto c = rgb8_window8<2>(d8, src, pc, t, rx, ry, straddle);
+  const auto ab = hn::TableLookupBytes(hn::BitCast(d8, hn::Or(a, hn::ShiftLeft<8>(b))), hn::LoadDup128(d8, kLowThenHigh));
+  const auto cc = hn::TableLookupBytes(hn::BitCast(d8, c), hn::LoadDup128(d8, kLowThenHigh));
+  const D8 w8;
+  const hn::Full64<std::uint8_t> w64;
+  for (int k = 0; k < kB; ++k) {
+    hn::StoreU(part<kB, D8>(d8, ab, k), w8, out + 24 * k);
+    const auto c16 = part<kB, D8>(d8, cc, k);
+    if (room || k + 1 < kB)
+      hn::StoreU(c16, w8, out + 24 * k + 16);
+    else
+      hn::StoreU(hn::LowerHalf(w64, c16), w64, out + 24 * k + 16);
+  }
+}
+
+// Whether every block of eight pixels among pixels [0, n) of segment a fits its windows
+// (rgb8_affine_blocks): 0 <= 3 sx < 4 px, the eight top taps within one row (8 |sy| < 1), the
+// first left tap inside, the last window inside the row (it starts at or before the last left
+// tap), and rows 3 before the bottom (a straddling block's third row).
+inline bool rgb8_fits(const SamplePlane& src, const Affine& a, int n) {
+  if (n < 1 || a.sx < 0 || 3 * std::int64_t{a.sx} >= 4 * 65536 || std::abs(std::int64_t{a.sy}) * 8 >= 65536) return false;
+  const std::int64_t last = n - 1, x1 = a.ax + last * a.sx, y0 = a.ay, y1 = a.ay + last * a.sy;
+  return ((a.ax + 128) >> 16) >= 0 && 3 * ((x1 + 128) >> 16) + 16 <= 3 * std::int64_t{src.width} &&
+         ((std::min(y0, y1) + 128) >> 16) >= 0 && ((std::max(y0, y1) + 128) >> 16) <= src.height - 3;
+}
+
+// The windows of `count` blocks of eight pixels of segment a from pixel e0 on (rgb8_fits): on
+// the block's rows (segment_origins), from the left taps of its pixels 0, 2 and 5.
+HWY_INLINE void rgb8_origins(const SamplePlane& src, const Affine& a, int e0, int count, const std::uint8_t** pa,
+                             const std::uint8_t** pb, const std::uint8_t** pc, bool& straddle) {
+  int xa[kBlocks], ya[kBlocks];
+  bool s[2] = {false, false};
+  segment_origins<8>(a, e0, count, xa, ya, s);
+  straddle = straddle || s[0] || s[1];
+  const std::int64_t step = 8 * std::int64_t{a.sx};
+  std::int64_t x2 = a.ax + std::int64_t{e0 + 2} * a.sx + 128, x5 = x2 + 3 * std::int64_t{a.sx};
+  for (int m = 0; m < count; ++m, x2 += step, x5 += step) {
+    const std::uint8_t* row = src.row(ya[m]);
+    pa[m] = row + 3 * xa[m], pb[m] = row + 3 * static_cast<int>(x2 >> 16), pc[m] = row + 3 * static_cast<int>(x5 >> 16);
+  }
 }
 
 // A window holds 5 RGB24 pixels (left taps 0..3) or 8 U V pairs (left taps 0..6).

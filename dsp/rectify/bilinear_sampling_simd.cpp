@@ -190,57 +190,52 @@ HWY_INLINE void affine_step(const SamplePlane& src, const BlockSegment* s0, cons
   affine_blocks<T, C>(DW8(), src, s1, X1, Y1, o.o1);
 }
 
-// Whether the blocks of whole steps over samples [0, n) of segment a fit (segment_blocks_fit),
-// with RGB24's split windows (kSplit) or without.
-template <class T, int C, bool kSplit = false>
-HWY_INLINE bool steps_fit(const SamplePlane& src, const Affine& a, int n) {
-  return segment_blocks_fit<C * sizeof(T), kWindowTaps<C>, kSplit ? 2 : 3>(src, a, n / kStep * kStep);
+// Whether the blocks over samples [0, n) of segment a (whole blocks) fit: RGB24's blocks of
+// eight (rgb8_fits), U V pairs' of four (segment_blocks_fit).
+template <class T, int C>
+HWY_INLINE bool blocks_fit(const SamplePlane& src, const Affine& a, int n) {
+  if constexpr (C == 3)
+    return rgb8_fits(src, a, n);
+  else
+    return segment_blocks_fit<C * sizeof(T), kWindowTaps<C>>(src, a, n);
 }
 
-// One wide step of blocks known to fit: p[2b] the window origin of block b of X0 (pixels
-// 8b..8b+3), p[2b + 1] of block b of X1, q likewise for RGB24's split windows (kSplit);
-// straddle[0], [1]: theirs (fitted_origins). room: as blend_store's, after the step's last pixel.
-template <class T, int C, bool kSplit = false>
-HWY_INLINE void fitted_step(const SamplePlane& src, const std::uint8_t* const* p, const std::uint8_t* const* q,
-                            const bool* straddle, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1, std::uint8_t* out, bool room) {
+// One wide step of U V pairs known to fit: p[2b] the window origin of block b of X0 (samples
+// 8b..8b+3), p[2b + 1] of block b of X1; straddle[0], [1]: theirs (fitted_origins).
+HWY_INLINE void fitted_pairs_step(const SamplePlane& src, const std::uint8_t* const* p, const bool* straddle, VW32 X0, VW32 Y0,
+                                  VW32 X1, VW32 Y1, std::uint8_t* out) {
   const DW8 d8;
   const DW32 dw;
-  const std::uint8_t *p0[kBlocks], *p1[kBlocks], *q0[kBlocks], *q1[kBlocks];
+  const DWU16 du16;
+  const std::uint8_t *p0[kBlocks], *p1[kBlocks];
   for (int b = 0; b < kBlocks; ++b) p0[b] = p[2 * b], p1[b] = p[2 * b + 1];
-  if constexpr (kSplit)
-    for (int b = 0; b < kBlocks; ++b) q0[b] = q[2 * b], q1[b] = q[2 * b + 1];
   VW32 rx0, ry0, rx1, ry1;
   block_relative(dw, X0, Y0, rx0, ry0);
   block_relative(dw, X1, Y1, rx1, ry1);
-  if constexpr (C == 3) {  // block b's 24 bytes: X0's 12, then X1's; 16-byte stores in order
-    const auto v0 = rgb8_blend<kSplit>(d8, src, p0, rx0, ry0, straddle[0], q0);
-    const auto v1 = rgb8_blend<kSplit>(d8, src, p1, rx1, ry1, straddle[1], q1);
-    for (int b = 0; b < kBlocks; ++b) {
-      store_rgb_block(d8, v0, b, out + 24 * b, true);
-      store_rgb_block(d8, v1, b, out + 24 * b + 12, room || b + 1 < kBlocks);
-    }
-  } else {  // U V pairs: block b's 16 output bytes are X0's 8 and X1's 8
-    const DWU16 du16;
-    store_block_pairs(du16, pairs_blend<false>(d8, src, p0, rx0, ry0, straddle[0]),
-                      pairs_blend<false>(d8, src, p1, rx1, ry1, straddle[1]), out);
-  }
+  // block b's 16 output bytes are X0's 8 and X1's 8
+  store_block_pairs(du16, pairs_blend<false>(d8, src, p0, rx0, ry0, straddle[0]),
+                    pairs_blend<false>(d8, src, p1, rx1, ry1, straddle[1]), out);
 }
 
-// The wide steps of samples [i, n) of segment a whose blocks fit (steps_fit), positions X, Y
-// from sample i on; returns the sample after the last step. room_after: as sample_affine_simd's.
-template <class T, int C, bool kSplit>
-HWY_INLINE int fitted_steps(const SamplePlane& src, const Affine& a, int i, int n, VW32 X, VW32 Y, std::uint8_t* out,
-                            bool room_after) {
-  const VW32 X4 = hn::ShiftLeft<2>(hn::Set(DW32(), a.sx)), Y4 = hn::ShiftLeft<2>(hn::Set(DW32(), a.sy));
-  const VW32 Xs = hn::ShiftLeft<kStepShift - 2>(X4), Ys = hn::ShiftLeft<kStepShift - 2>(Y4);
-  for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
-    const std::uint8_t *p[2 * kBlocks], *q[2 * kBlocks];
-    bool straddle[2] = {false, false};
-    fitted_origins<C * sizeof(T), kSplit>(src, a, i, 2 * kBlocks, p, straddle, q);
-    fitted_step<T, C, kSplit>(src, p, q, straddle, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * C * sizeof(T),
-                              room_after || i + kStep + 2 <= n);
+// One wide step of samples known to fit (blocks_fit), whose blocks come from segment lo from
+// sample e_lo on (blocks below `split`) and from hi from e_hi on (the others): the same segment
+// for a step along one cell, two for two cells of half a step. room: as sample_affine_simd's
+// room_after, after the step.
+template <class T, int C>
+HWY_INLINE void fitted_step(const SamplePlane& src, const Affine& lo, int e_lo, const Affine& hi, int e_hi, int split, VW32 X0,
+                            VW32 Y0, VW32 X1, VW32 Y1, std::uint8_t* out, bool room) {
+  bool straddle[2] = {false, false};
+  if constexpr (C == 3) {
+    const std::uint8_t *pa[kBlocks], *pb[kBlocks], *pc[kBlocks];
+    rgb8_origins(src, lo, e_lo, split, pa, pb, pc, straddle[0]);
+    if (split < kBlocks) rgb8_origins(src, hi, e_hi, kBlocks - split, pa + split, pb + split, pc + split, straddle[0]);
+    rgb8_affine_blocks(DW16(), src, pa, pb, pc, straddle[0], X0, Y0, X1, Y1, out, room);
+  } else {
+    const std::uint8_t* p[2 * kBlocks];
+    fitted_origins<C * sizeof(T)>(src, lo, e_lo, 2 * split, p, straddle);
+    if (split < kBlocks) fitted_origins<C * sizeof(T)>(src, hi, e_hi, 2 * (kBlocks - split), p + 2 * split, straddle);
+    fitted_pairs_step(src, p, straddle, X0, Y0, X1, Y1, out);
   }
-  return i;
 }
 
 // Positions of samples [c0, c0 + n) of a run of cells into xs, ys (n rounded up to 4): a + e s
@@ -261,8 +256,8 @@ HWY_INLINE void cell_positions(const Affine* a, int cell_n, int c0, int n, std::
 
 // Positions generated in registers along an affine cell segment, x_k = ax + k sx: the same
 // integers as the scalar code's running sums (int32 arithmetic wraps alike).
-// room_after: the row goes on at least two samples after the segment (in the same run), so that
-// a store may write 4 bytes past it.
+// room_after: the row goes on at least three samples after the segment (in the same run), so
+// that a store may write 8 bytes past it.
 template <class T, int C, int kOut>
 HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std::uint8_t* out, int n, bool room_after) {
   constexpr int kBytes = kOut;
@@ -285,10 +280,10 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
         mono8_affine_blocks<kEven>(DW16(), src, xa, ya, straddle, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kOut);
       }
   } else if constexpr (kAffineBlocks<T, C, kOut>) {  // RGB24, U V pairs: checks per segment, else per block
-    if (steps_fit<T, C>(src, a, n)) {
-      i = fitted_steps<T, C, false>(src, a, i, n, X, Y, out, room_after);
-    } else if (C == 3 && steps_fit<T, C, true>(src, a, n)) {  // RGB24 magnified: split windows
-      i = fitted_steps<T, C, C == 3>(src, a, i, n, X, Y, out, room_after);
+    if (blocks_fit<T, C>(src, a, n / kStep * kStep)) {
+      for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
+        fitted_step<T, C>(src, a, i, a, i, kBlocks, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes,
+                          room_after || i + kStep + 3 <= n);
     } else if (affine_blocks_fit<C>(src)) {
       for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
         BlockSegment s0[kBlocks], s1[kBlocks];
@@ -319,25 +314,6 @@ HWY_INLINE void paired_positions(const Affine& lo, const Affine& hi, VW32& X, VW
   Y4 = hn::ShiftLeft<2>(hn::Combine(dw, hn::Set(dh, hi.sy), hn::Set(dh, lo.sy)));
 }
 
-// Whether the blocks of two cells of half a wide step, lo and hi, fit (steps_fit).
-template <class T, int C, bool kSplit>
-HWY_INLINE bool pair_fits(const SamplePlane& src, const Affine& lo, const Affine& hi) {
-  constexpr int kReach = kSplit ? 2 : 3;
-  return segment_blocks_fit<C * sizeof(T), kWindowTaps<C>, kReach>(src, lo, kStep / 2) &&
-         segment_blocks_fit<C * sizeof(T), kWindowTaps<C>, kReach>(src, hi, kStep / 2);
-}
-
-// The wide step of two such cells, lo's in the lower blocks and hi's in the upper ones.
-template <class T, int C, bool kSplit>
-HWY_INLINE void fitted_pair(const SamplePlane& src, const Affine& lo, const Affine& hi, VW32 X, VW32 Y, VW32 X4, VW32 Y4,
-                            std::uint8_t* out, bool room) {
-  const std::uint8_t *p[2 * kBlocks], *q[2 * kBlocks];
-  bool straddle[2] = {false, false};
-  fitted_origins<C * sizeof(T), kSplit>(src, lo, 0, kBlocks, p, straddle, q);
-  fitted_origins<C * sizeof(T), kSplit>(src, hi, 0, kBlocks, p + kBlocks, straddle, q + kBlocks);
-  fitted_step<T, C, kSplit>(src, p, q, straddle, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out, room);
-}
-
 // RGB24 or U V pairs in cells of half a wide step (16-sample chroma cells on AVX-512): two per
 // step, the lower blocks from the first, the upper from the second; a last odd or short cell
 // alone.
@@ -349,13 +325,9 @@ HWY_INLINE void paired_cells(const SamplePlane& src, const Affine* a, int total,
     const Affine &lo = a[k], &hi = a[k + 1];
     VW32 X, Y, X4, Y4;
     paired_positions(lo, hi, X, Y, X4, Y4);
-    const bool room = c0 + kStep + 2 <= total;
-    if (pair_fits<T, C, false>(src, lo, hi)) {
-      fitted_pair<T, C, false>(src, lo, hi, X, Y, X4, Y4, out + c0 * kOut, room);
-      continue;
-    }
-    if (C == 3 && pair_fits<T, C, true>(src, lo, hi)) {  // RGB24 magnified: split windows
-      fitted_pair<T, C, C == 3>(src, lo, hi, X, Y, X4, Y4, out + c0 * kOut, room);
+    if (blocks_fit<T, C>(src, lo, kHalf) && blocks_fit<T, C>(src, hi, kHalf)) {
+      fitted_step<T, C>(src, lo, 0, hi, 0, kHalfBlocks, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut,
+                        c0 + kStep + 3 <= total);
       continue;
     }
     BlockSegment s0[kBlocks], s1[kBlocks];
@@ -367,7 +339,7 @@ HWY_INLINE void paired_cells(const SamplePlane& src, const Affine* a, int total,
     affine_step<T, C>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut);
   }
   for (; c0 < total; c0 += kHalf, ++k)
-    sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(kHalf, total - c0), c0 + kHalf + 2 <= total);
+    sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(kHalf, total - c0), c0 + kHalf + 3 <= total);
 }
 
 // Mono8 (and 8-bit samples two bytes apart) in cells of half a wide step (16-px cells on
@@ -409,7 +381,7 @@ template <class T, int C, int kOut>
 void sample_cells_simd(const SamplePlane& src, const Affine* a, int cell_n, int total, std::uint8_t* out) {
   if (cell_n >= kStep || cell_n % 8 != 0) {
     for (int c0 = 0, k = 0; c0 < total; c0 += cell_n, ++k)  // as for_each_cell, with the segment inlined
-      sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(cell_n, total - c0), c0 + cell_n + 2 <= total);
+      sample_affine_simd<T, C, kOut>(src, a[k], out + c0 * kOut, std::min(cell_n, total - c0), c0 + cell_n + 3 <= total);
     return;
   }
   if constexpr (kAffineBlocks<T, C, kOut> && kBlocks >= 2) {

@@ -172,6 +172,31 @@ TEST_F(EveryTarget, AffineSegmentsEqualTheScalarReference) {
   }
 }
 
+// Segments from inside the image at every magnification from 0.5 to 2.5 and slopes up to a
+// tenth of a row a pixel: the limits of the windows (2 px a pixel for Mono8's and the U V pairs',
+// 4/3 for RGB24's blocks of eight) are crossed in small steps, so a fit bound set beyond its
+// window's limit shows as a wrong byte.
+TEST_F(EveryTarget, SegmentsAtEveryMagnificationEqualTheScalarReference) {
+  for (std::int64_t target : simd_targets()) {
+    force_simd_target(target);
+    for (const Kind& f : kPacked) {
+      const Source src = random_source(300, 40, f, 1, 11);
+      const Samplers simd = dispatched_samplers(f.kind), ref = scalar_samplers(f.kind);
+      std::mt19937 rng(31);
+      std::uniform_real_distribution<double> u(0, 1);
+      for (int trial = 0; trial < 600; ++trial) {
+        const double sx = 0.5 + 2.0 * trial / 600.0, sy = 0.2 * (u(rng) - 0.5);
+        const int n = 64 + trial % 65;
+        const Affine a{fixed(1 + 10 * u(rng)), fixed(12 + 16 * u(rng)), fixed(sx), fixed(sy)};
+        std::vector<std::uint8_t> got = guarded(n, f), want = guarded(n, f);
+        affine(simd, src.view, a, got.data(), n);
+        affine(ref, src.view, a, want.data(), n);
+        expect_same(got, want, n, f, target_name(target) + " " + f.name + " sx " + std::to_string(sx) + " trial " + std::to_string(trial));
+      }
+    }
+  }
+}
+
 // A run of cells in one call is its cells one after the other: each kernel against the
 // scalar reference, and the reference against its cells sampled one call each.
 TEST_F(EveryTarget, RunsOfCellsAreTheirSegmentsInTurn) {
