@@ -6,6 +6,10 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <cstdlib>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -21,6 +25,38 @@ struct Tally {
   explicit Tally(int parts) : runs(parts) {}
   static void part(void* ctx, int p) { static_cast<Tally*>(ctx)->runs[p].fetch_add(1); }
 };
+
+// Aborts the test binary, naming `what`, unless disarmed (destroyed) within `limit`: a run()
+// that never returns (a part lost or run twice, so the count it waits for is never seen) fails
+// within a minute, not at the test driver's timeout.
+class Watchdog {
+ public:
+  Watchdog(const char* what, std::chrono::seconds limit) : thread_([this, what, limit] {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!done_cv_.wait_for(lock, limit, [this] { return done_; })) {
+      std::fprintf(stderr, "%s: still running after %lld s (a part was lost or repeated)\n", what,
+                   static_cast<long long>(limit.count()));
+      std::abort();
+    }
+  }) {}
+  ~Watchdog() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    done_cv_.notify_one();
+    thread_.join();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable done_cv_;
+  bool done_ = false;
+  std::thread thread_;
+};
+
+// Every test of this binary, in well under a second when the pool is right.
+const Watchdog kWatchdog("test_worker_pool", std::chrono::seconds(60));
 
 }  // namespace
 
