@@ -559,14 +559,6 @@ HWY_INLINE unsigned affine_block_windows(const SamplePlane& src, const BlockSegm
   return bad;
 }
 
-// The windows of `count` blocks of four samples of kBytes each (segment_origins): p[m].
-template <int kBytes>
-HWY_INLINE void fitted_origins(const SamplePlane& src, const Affine& a, int e0, int count, const std::uint8_t** p, bool* straddle) {
-  int xa[2 * kBlocks], ya[2 * kBlocks];  // count: at most a wide step's two halves
-  segment_origins<4>(a, e0, count, xa, ya, straddle);
-  for (int m = 0; m < count; ++m) p[m] = src.row(ya[m]) + kBytes * xa[m];
-}
-
 // Positions relative to each block's window origin in 1/256 px, the origin as mono8_relative
 // takes it (the first sample's left tap, the upper of the first and fourth sample's top taps).
 template <class D32x>
@@ -577,73 +569,57 @@ HWY_INLINE void block_relative(D32x d, hn::Vec<D32x> X, hn::Vec<D32x> Y, hn::Vec
   ry = hn::Sub(y8, hn::And(hn::Min(hn::Broadcast<0>(y8), hn::Broadcast<3>(y8)), whole));
 }
 
-// The low bytes of the 16-bit lanes of v0 and v1 (each block: 8 bytes of each), as block b of
-// the output: those of v0's block b, then v1's; one store of a whole vector (16 bytes a block).
-alignas(16) constexpr std::uint8_t kLowBytesFirst[16] = {0, 2, 4, 6, 8, 10, 12, 14, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80};
-alignas(16) constexpr std::uint8_t kLowBytesSecond[16] = {0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0, 2, 4, 6, 8, 10, 12, 14};
-template <class DU16x>
-HWY_INLINE void store_block_pairs(DU16x, hn::Vec<DU16x> v0, hn::Vec<DU16x> v1, std::uint8_t* out) {
-  const hn::Repartition<std::uint8_t, DU16x> d8;
-  const auto first = hn::TableLookupBytesOr0(hn::BitCast(d8, v0), hn::LoadDup128(d8, kLowBytesFirst));
-  const auto second = hn::TableLookupBytesOr0(hn::BitCast(d8, v1), hn::LoadDup128(d8, kLowBytesSecond));
-  hn::StoreU(hn::Or(first, second), d8, out);
-}
-
-// Whether every block of four samples among samples [0, n) of segment a passes
-// affine_block_windows' checks, from the segment's ends: the left taps of four consecutive
-// samples span at most kMaxTap (3 sx < kMaxTap px: their rounded span is at most
-// floor(3 sx) + 1), their top taps at most one row (3 |sy| < 1 row), and the taps are monotone,
-// so the first and last sample bound every origin; rows end 3 before the bottom, so that a
-// straddling block's third row exists.
-template <int kBytes, int kMaxTap>
-inline bool segment_blocks_fit(const SamplePlane& src, const Affine& a, int n) {
-  if (n < 1 || a.sx < 0 || 3 * std::int64_t{a.sx} >= kMaxTap * 65536 || 3 * std::abs(std::int64_t{a.sy}) >= 65536) return false;
-  const std::int64_t last = n - 1, x1 = a.ax + last * a.sx, y0 = a.ay, y1 = a.ay + last * a.sy;
-  return ((a.ax + 128) >> 16) >= 0 && kBytes * ((x1 + 128) >> 16) + 16 <= kBytes * std::int64_t{src.width} &&
-         ((std::min(y0, y1) + 128) >> 16) >= 0 && ((std::max(y0, y1) + 128) >> 16) <= src.height - 3;
-}
-
-// ---- RGB24 along affine segments, eight pixels per block ---------------------------------
+// ---- RGB24 and U V pairs along affine segments, eight samples per block ----------------
 //
-// A block's eight pixels are 24 output bytes: three vectors of eight 16-bit lanes, A (bytes
-// 0-7: pixels 0, 1 and the red and green of 2), B (bytes 8-15: the blue of 2, pixels 3, 4 and
-// the red of 5) and C (bytes 16-23: the green and blue of 5, pixels 6, 7), each looked up in a
-// 16-byte window of its own on the block's rows, from the left tap of its first pixel (0, 2,
-// 5). B's pixels 2-5 have left taps spanning up to floor(3 sx) + 1 px, so a window holds their
-// taps while 3 sx < 4; A's and C's three pixels while 2 sx < 3. Positions are relative to the
-// block's origin as Mono8's (mono8_relative), so that the eight pixels share one rounding.
+// A block's eight samples of kBytes bytes are 8 kBytes output bytes: kBytes vectors of eight
+// 16-bit lanes, each looked up in a 16-byte window of its own on the block's rows, from the
+// left tap of its first sample. RGB24: A (bytes 0-7: pixels 0, 1 and the red and green of 2),
+// B (bytes 8-15: the blue of 2, pixels 3, 4 and the red of 5), C (bytes 16-23: the green and
+// blue of 5, pixels 6, 7), windows from pixels 0, 2 and 5; B's pixels 2-5 have left taps
+// spanning up to floor(3 sx) + 1 px, so a window holds their taps while 3 sx < 4 (A's and C's
+// three pixels while 2 sx < 3). U V pairs: samples 0-3 and 4-7, windows of eight pairs from
+// samples 0 and 4 (3 sx < 6). Positions are relative to the block's origin as Mono8's
+// (mono8_relative), so that the eight samples share one set of position lanes.
 
-// The lookup patterns of window W (0: A, 1: B, 2: C), per lane: its pixel k, colour c.
-struct Rgb8Lanes {
-  alignas(16) std::uint8_t tap[16];     // (2k, 2k): pixel k's 3 i to both bytes
-  alignas(16) std::uint8_t origin[16];  // (2w, 2w): the window's first pixel's
-  alignas(16) std::uint8_t colour[16];  // (c, c + 3): the left and right tap's byte from the pixel's
-  alignas(16) std::uint8_t low[16];     // (2k, 0x80): a pixel's low byte (weight) to the lane
+template <int kBytes>
+constexpr int kWindows8 = kBytes;  // the vectors (and windows) of a block
+template <int kBytes>
+constexpr int kWindowFirst[3] = {0, kBytes == 3 ? 2 : 4, 5};  // each window's first sample
+template <int kBytes>
+constexpr int kMaxSpan8 = kBytes == 3 ? 4 : 6;  // 3 sx below this many px: every window fits
+
+// The lookup patterns of window W, per lane: its sample k, component c (colour, or U / V).
+struct Lanes8 {
+  alignas(16) std::uint8_t tap[16];     // (2k, 2k): sample k's first tap byte to both bytes
+  alignas(16) std::uint8_t origin[16];  // (2w, 2w): the window's first sample's
+  alignas(16) std::uint8_t colour[16];  // (c, c + kBytes): the left and right tap's byte from it
+  alignas(16) std::uint8_t low[16];     // (2k, 0x80): a sample's low byte (weight) to the lane
   alignas(16) std::uint8_t high[16];    // (2k + 1, 0x80): its high byte (the row below)
 };
-constexpr Rgb8Lanes rgb8_lanes(int window) {
-  constexpr int kFirst[3] = {0, 2, 5};
-  Rgb8Lanes l{};
+template <int kBytes>
+constexpr Lanes8 lanes8(int window) {
+  Lanes8 l{};
   for (int lane = 0; lane < 8; ++lane) {
-    const int byte = 8 * window + lane, k = byte / 3, c = byte % 3, w = kFirst[window];
+    const int byte = 8 * window + lane, k = byte / kBytes, c = byte % kBytes, w = kWindowFirst<kBytes>[window];
     const auto u8 = [](int v) { return static_cast<std::uint8_t>(v); };
     l.tap[2 * lane] = l.tap[2 * lane + 1] = u8(2 * k);
     l.origin[2 * lane] = l.origin[2 * lane + 1] = u8(2 * w);
-    l.colour[2 * lane] = u8(c), l.colour[2 * lane + 1] = u8(c + 3);
+    l.colour[2 * lane] = u8(c), l.colour[2 * lane + 1] = u8(c + kBytes);
     l.low[2 * lane] = u8(2 * k), l.low[2 * lane + 1] = 0x80;
     l.high[2 * lane] = u8(2 * k + 1), l.high[2 * lane + 1] = 0x80;
   }
   return l;
 }
-alignas(16) constexpr Rgb8Lanes kRgb8Lanes[3] = {rgb8_lanes(0), rgb8_lanes(1), rgb8_lanes(2)};
+template <int kBytes>
+alignas(16) constexpr Lanes8 kLanes8[3] = {lanes8<kBytes>(0), lanes8<kBytes>(1), lanes8<kBytes>(2)};
 
-// The lanes of window W blended: t holds each pixel's 3 i (i: its left tap's column from pixel
-// 0's), rx and ry its position relative to the block's origin (mono8_relative); p[b]: the
-// block's window on its first row.
-template <int W, class DB, class VU>
-HWY_INLINE VU rgb8_window8(DB d8, const SamplePlane& src, const std::uint8_t* const* p, VU t, VU rx, VU ry, bool straddle) {
+// The lanes of window W blended: t holds each sample's first tap byte (kBytes i, i: its left
+// tap's column from sample 0's), rx and ry its position relative to the block's origin
+// (mono8_relative); p[b]: the block's window on its first row.
+template <int kBytes, int W, class DB, class VU>
+HWY_INLINE VU window8(DB d8, const SamplePlane& src, const std::uint8_t* const* p, VU t, VU rx, VU ry, bool straddle) {
   const hn::DFromV<VU> du16;
-  const Rgb8Lanes& l = kRgb8Lanes[W];
+  const Lanes8& l = kLanes8<kBytes>[W];
   const auto t8 = hn::BitCast(d8, t);
   const auto idx = hn::Add(hn::Sub(hn::TableLookupBytes(t8, hn::LoadDup128(d8, l.tap)), hn::TableLookupBytes(t8, hn::LoadDup128(d8, l.origin))),
                            hn::LoadDup128(d8, l.colour));
@@ -658,64 +634,76 @@ HWY_INLINE VU rgb8_window8(DB d8, const SamplePlane& src, const std::uint8_t* co
   return lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
 }
 
-// Bytes 0-7 of each block: A's low bytes, 8-15: B's.
+// Bytes 0-7 of each block: the low bytes of v's lanes, 8-15: w's (lanes below 256).
 alignas(16) constexpr std::uint8_t kLowThenHigh[16] = {0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 9, 11, 13, 15};
+template <class DB, class VU>
+HWY_INLINE hn::Vec<DB> low_bytes(DB d8, VU v, VU w) {
+  return hn::TableLookupBytes(hn::BitCast(d8, hn::Or(v, hn::ShiftLeft<8>(w))), hn::LoadDup128(d8, kLowThenHigh));
+}
 
-// Eight RGB24 pixels per block of segments known to fit (rgb8_fits), windows at pa, pb, pc
-// (rgb8_origins), positions X0 (pixels 8b..8b+3), X1 (8b+4..8b+7): block b's 24 bytes to
-// out + 24 b, 16-byte stores in order. room: 8 bytes after the last block may be written.
-template <class D16x>
-HWY_INLINE void rgb8_affine_blocks(D16x d16, const SamplePlane& src, const std::uint8_t* const* pa, const std::uint8_t* const* pb,
-                                   const std::uint8_t* const* pc, bool straddle, hn::Vec<hn::Repartition<std::int32_t, D16x>> X0,
-                                   hn::Vec<hn::Repartition<std::int32_t, D16x>> Y0, hn::Vec<hn::Repartition<std::int32_t, D16x>> X1,
-                                   hn::Vec<hn::Repartition<std::int32_t, D16x>> Y1, std::uint8_t* out, bool room) {
+// Eight samples per block of segments known to fit (blocks8_fit), windows p[W][b]
+// (block8_origins), positions X0 (samples 8b..8b+3), X1 (8b+4..8b+7): block b's 8 kBytes
+// bytes to out + 8 kBytes b, 16-byte stores in order. room: 8 bytes after the last block may be
+// written (RGB24's last store).
+template <int kBytes, class D16x>
+HWY_INLINE void affine_blocks8(D16x d16, const SamplePlane& src, const std::uint8_t* const (*p)[kBlocks], bool straddle,
+                               hn::Vec<hn::Repartition<std::int32_t, D16x>> X0, hn::Vec<hn::Repartition<std::int32_t, D16x>> Y0,
+                               hn::Vec<hn::Repartition<std::int32_t, D16x>> X1, hn::Vec<hn::Repartition<std::int32_t, D16x>> Y1,
+                               std::uint8_t* out, bool room) {
   constexpr int kB = blocks_of<D16x>();
   const hn::RebindToUnsigned<D16x> du16;
   const hn::Repartition<std::uint8_t, D16x> d8;
   hn::Vec<decltype(du16)> rx, ry;
   mono8_relative(d16, X0, Y0, X1, Y1, rx, ry);
-  const auto i = hn::ShiftRight<8>(rx), t = hn::Add(i, hn::Add(i, i));
-  const auto a = rgb8_window8<0>(d8, src, pa, t, rx, ry, straddle);
-  const auto b = rgb8_window8<1>(d8, src, pb, t, rx, ry, straddle);
-  const auto c = rgb8_window8<2>(d8, src, pc, t, rx, ry, straddle);
-  const auto ab = hn::TableLookupBytes(hn::BitCast(d8, hn::Or(a, hn::ShiftLeft<8>(b))), hn::LoadDup128(d8, kLowThenHigh));
-  const auto cc = hn::TableLookupBytes(hn::BitCast(d8, c), hn::LoadDup128(d8, kLowThenHigh));
+  const auto i = hn::ShiftRight<8>(rx), t = kBytes == 3 ? hn::Add(i, hn::Add(i, i)) : hn::Add(i, i);
+  const auto a = window8<kBytes, 0>(d8, src, p[0], t, rx, ry, straddle);
+  const auto b = window8<kBytes, 1>(d8, src, p[1], t, rx, ry, straddle);
+  const auto ab = low_bytes(d8, a, b);
   const D8 w8;
-  const hn::Full64<std::uint8_t> w64;
-  for (int k = 0; k < kB; ++k) {
-    hn::StoreU(part<kB, D8>(d8, ab, k), w8, out + 24 * k);
-    const auto c16 = part<kB, D8>(d8, cc, k);
-    if (room || k + 1 < kB)
-      hn::StoreU(c16, w8, out + 24 * k + 16);
-    else
-      hn::StoreU(hn::LowerHalf(w64, c16), w64, out + 24 * k + 16);
+  if constexpr (kBytes == 2) {
+    for (int k = 0; k < kB; ++k) hn::StoreU(part<kB, D8>(d8, ab, k), w8, out + 16 * k);
+  } else {
+    const auto c = window8<kBytes, 2>(d8, src, p[2], t, rx, ry, straddle);
+    const auto cc = low_bytes(d8, c, c);
+    const hn::Full64<std::uint8_t> w64;
+    for (int k = 0; k < kB; ++k) {
+      hn::StoreU(part<kB, D8>(d8, ab, k), w8, out + 24 * k);
+      const auto c16 = part<kB, D8>(d8, cc, k);
+      if (room || k + 1 < kB)
+        hn::StoreU(c16, w8, out + 24 * k + 16);
+      else
+        hn::StoreU(hn::LowerHalf(w64, c16), w64, out + 24 * k + 16);
+    }
   }
 }
 
-// Whether every block of eight pixels among pixels [0, n) of segment a fits its windows
-// (rgb8_affine_blocks): 0 <= 3 sx < 4 px, the eight top taps within one row (8 |sy| < 1), the
-// first left tap inside, the last window inside the row (it starts at or before the last left
-// tap), and rows 3 before the bottom (a straddling block's third row).
-inline bool rgb8_fits(const SamplePlane& src, const Affine& a, int n) {
-  if (n < 1 || a.sx < 0 || 3 * std::int64_t{a.sx} >= 4 * 65536 || std::abs(std::int64_t{a.sy}) * 8 >= 65536) return false;
+// Whether every block of eight samples among samples [0, n) of segment a fits its windows
+// (affine_blocks8): 0 <= 3 sx < kMaxSpan8 px, the eight top taps within one row (8 |sy| < 1),
+// the first left tap inside, the last window inside the row (it starts at or before the last
+// left tap), and rows 3 before the bottom (a straddling block's third row).
+template <int kBytes>
+inline bool blocks8_fit(const SamplePlane& src, const Affine& a, int n) {
+  if (n < 1 || a.sx < 0 || 3 * std::int64_t{a.sx} >= kMaxSpan8<kBytes> * 65536 || std::abs(std::int64_t{a.sy}) * 8 >= 65536)
+    return false;
   const std::int64_t last = n - 1, x1 = a.ax + last * a.sx, y0 = a.ay, y1 = a.ay + last * a.sy;
-  return ((a.ax + 128) >> 16) >= 0 && 3 * ((x1 + 128) >> 16) + 16 <= 3 * std::int64_t{src.width} &&
+  return ((a.ax + 128) >> 16) >= 0 && kBytes * ((x1 + 128) >> 16) + 16 <= kBytes * std::int64_t{src.width} &&
          ((std::min(y0, y1) + 128) >> 16) >= 0 && ((std::max(y0, y1) + 128) >> 16) <= src.height - 3;
 }
 
-// The windows of `count` blocks of eight pixels of segment a from pixel e0 on (rgb8_fits): on
-// the block's rows (segment_origins), from the left taps of its pixels 0, 2 and 5.
-HWY_INLINE void rgb8_origins(const SamplePlane& src, const Affine& a, int e0, int count, const std::uint8_t** pa,
-                             const std::uint8_t** pb, const std::uint8_t** pc, bool& straddle) {
+// The windows of `count` blocks of eight samples of segment a from sample e0 on (blocks8_fit),
+// to p[W][b0 + m]: on the block's rows (segment_origins), from the left tap of window W's first
+// sample.
+template <int kBytes>
+HWY_INLINE void block8_origins(const SamplePlane& src, const Affine& a, int e0, int count, const std::uint8_t* (*p)[kBlocks],
+                               int b0, bool& straddle) {
   int xa[kBlocks], ya[kBlocks];
   bool s[2] = {false, false};
   segment_origins<8>(a, e0, count, xa, ya, s);
   straddle = straddle || s[0] || s[1];
-  const std::int64_t step = 8 * std::int64_t{a.sx};
-  std::int64_t x2 = a.ax + std::int64_t{e0 + 2} * a.sx + 128, x5 = x2 + 3 * std::int64_t{a.sx};
-  for (int m = 0; m < count; ++m, x2 += step, x5 += step) {
-    const std::uint8_t* row = src.row(ya[m]);
-    pa[m] = row + 3 * xa[m], pb[m] = row + 3 * static_cast<int>(x2 >> 16), pc[m] = row + 3 * static_cast<int>(x5 >> 16);
+  for (int m = 0; m < count; ++m) p[0][b0 + m] = src.row(ya[m]) + kBytes * xa[m];
+  for (int w = 1; w < kWindows8<kBytes>; ++w) {
+    std::int64_t x = a.ax + std::int64_t{e0 + kWindowFirst<kBytes>[w]} * a.sx + 128;
+    for (int m = 0; m < count; ++m, x += 8 * std::int64_t{a.sx}) p[w][b0 + m] = src.row(ya[m]) + kBytes * static_cast<int>(x >> 16);
   }
 }
 

@@ -18,8 +18,10 @@
 //   16-bit halves of each pixel's lane (four_blocks<kPairs>); YUYV's U V alike from the even
 //   bytes of 32, merged around the luma (four_blocks<kYuyvUV>);
 // - along affine segments: Mono8 (and its strided kind) with the checks once per segment
-//   (affine_fits), RGB24 and U V pairs too when the segment's ends show that every block fits
-//   (segment_blocks_fit), else with per-block checks in scalars (affine_blocks);
+//   (affine_fits); RGB24 and U V pairs, when the segment's ends show that every block fits
+//   (blocks8_fit), 8 samples per block sharing one set of position lanes, their output bytes
+//   in 16-bit lanes of three (RGB24) or two (U V) vectors, each vector through a window of its
+//   own (affine_blocks8), else 4 per block with per-block checks in scalars (affine_blocks);
 // - otherwise (Mono16, steps whose taps do not fit a window) 4 pixels on 32-bit lanes: windows
 //   where the taps fit, else a gather of the 32-bit word at each left tap (it holds the right tap
 //   too: bytes 0..1 for Mono8, both halves for Mono16 and U V; RGB24 gathers again at +3), only
@@ -190,31 +192,10 @@ HWY_INLINE void affine_step(const SamplePlane& src, const BlockSegment* s0, cons
   affine_blocks<T, C>(DW8(), src, s1, X1, Y1, o.o1);
 }
 
-// Whether the blocks over samples [0, n) of segment a (whole blocks) fit: RGB24's blocks of
-// eight (rgb8_fits), U V pairs' of four (segment_blocks_fit).
+// Whether the blocks of eight over samples [0, n) of segment a (whole blocks) fit (blocks8_fit).
 template <class T, int C>
 HWY_INLINE bool blocks_fit(const SamplePlane& src, const Affine& a, int n) {
-  if constexpr (C == 3)
-    return rgb8_fits(src, a, n);
-  else
-    return segment_blocks_fit<C * sizeof(T), kWindowTaps<C>>(src, a, n);
-}
-
-// One wide step of U V pairs known to fit: p[2b] the window origin of block b of X0 (samples
-// 8b..8b+3), p[2b + 1] of block b of X1; straddle[0], [1]: theirs (fitted_origins).
-HWY_INLINE void fitted_pairs_step(const SamplePlane& src, const std::uint8_t* const* p, const bool* straddle, VW32 X0, VW32 Y0,
-                                  VW32 X1, VW32 Y1, std::uint8_t* out) {
-  const DW8 d8;
-  const DW32 dw;
-  const DWU16 du16;
-  const std::uint8_t *p0[kBlocks], *p1[kBlocks];
-  for (int b = 0; b < kBlocks; ++b) p0[b] = p[2 * b], p1[b] = p[2 * b + 1];
-  VW32 rx0, ry0, rx1, ry1;
-  block_relative(dw, X0, Y0, rx0, ry0);
-  block_relative(dw, X1, Y1, rx1, ry1);
-  // block b's 16 output bytes are X0's 8 and X1's 8
-  store_block_pairs(du16, pairs_blend<false>(d8, src, p0, rx0, ry0, straddle[0]),
-                    pairs_blend<false>(d8, src, p1, rx1, ry1, straddle[1]), out);
+  return blocks8_fit<C * sizeof(T)>(src, a, n);
 }
 
 // One wide step of samples known to fit (blocks_fit), whose blocks come from segment lo from
@@ -224,18 +205,12 @@ HWY_INLINE void fitted_pairs_step(const SamplePlane& src, const std::uint8_t* co
 template <class T, int C>
 HWY_INLINE void fitted_step(const SamplePlane& src, const Affine& lo, int e_lo, const Affine& hi, int e_hi, int split, VW32 X0,
                             VW32 Y0, VW32 X1, VW32 Y1, std::uint8_t* out, bool room) {
-  bool straddle[2] = {false, false};
-  if constexpr (C == 3) {
-    const std::uint8_t *pa[kBlocks], *pb[kBlocks], *pc[kBlocks];
-    rgb8_origins(src, lo, e_lo, split, pa, pb, pc, straddle[0]);
-    if (split < kBlocks) rgb8_origins(src, hi, e_hi, kBlocks - split, pa + split, pb + split, pc + split, straddle[0]);
-    rgb8_affine_blocks(DW16(), src, pa, pb, pc, straddle[0], X0, Y0, X1, Y1, out, room);
-  } else {
-    const std::uint8_t* p[2 * kBlocks];
-    fitted_origins<C * sizeof(T)>(src, lo, e_lo, 2 * split, p, straddle);
-    if (split < kBlocks) fitted_origins<C * sizeof(T)>(src, hi, e_hi, 2 * (kBlocks - split), p + 2 * split, straddle);
-    fitted_pairs_step(src, p, straddle, X0, Y0, X1, Y1, out);
-  }
+  constexpr int kBytes = C * sizeof(T);
+  const std::uint8_t* p[kWindows8<kBytes>][kBlocks];
+  bool straddle = false;
+  block8_origins<kBytes>(src, lo, e_lo, split, p, 0, straddle);
+  if (split < kBlocks) block8_origins<kBytes>(src, hi, e_hi, kBlocks - split, p, split, straddle);
+  affine_blocks8<kBytes>(DW16(), src, p, straddle, X0, Y0, X1, Y1, out, room);
 }
 
 // Positions of samples [c0, c0 + n) of a run of cells into xs, ys (n rounded up to 4): a + e s
