@@ -289,6 +289,15 @@ class Samples {
       samples_[r.run_name.function_name + "/" + r.run_name.args].push_back(s);
     }
   }
+  // The fastest repetition's ns/px: what the code does when nothing else takes the CPU (on a
+  // shared machine noise only ever adds time); NaN if the benchmark did not run.
+  double best(const std::string& key) const {
+    const auto it = samples_.find(key);
+    if (it == samples_.end() || it->second.empty()) return std::nan("");
+    double b = it->second.front().ns_px;
+    for (const auto& s : it->second) b = std::min(b, s.ns_px);
+    return b;
+  }
   // Median over the repetitions of a counter; NaN if the benchmark did not run (filtered out).
   double median(const std::string& key, double Sample::*field = &Sample::ns_px) const {
     const auto it = samples_.find(key);
@@ -365,19 +374,20 @@ void print_summary(const Samples& rep, std::FILE* out) {
       }
     }
   std::fprintf(out, "\nEvery core (map rebuilt every frame, rows in bands over the worker pool, wall clock; infinite depth)\n");
-  std::fprintf(out, "%-10s %-6s %10s %10s %8s %12s %9s\n", "size", "format", "1 thread", "2 threads", "speedup", "ms/frame (2)",
-              "30 fps");
+  std::fprintf(out, "%-10s %-6s %10s %10s %8s %12s %9s %13s\n", "size", "format", "1 thread", "2 threads", "speedup", "ms/frame (2)",
+              "30 fps", "best speedup");
   for (int s = 0; s < 2; ++s)
     for (int rgb = 0; rgb < 2; ++rgb) {
       const std::string a = "BM_RectifyThreads/" + std::to_string(s) + "/" + std::to_string(rgb) + "/";
       const double one = rep.median(a + "1"), two = rep.median(a + "2");
       if (std::isnan(one) || std::isnan(two)) continue;
       const double ms = two * kThreadSizes[s].w * kThreadSizes[s].h * 1e-6;
-      std::fprintf(out, "%4dx%-5d %-6s %10.3f %10.3f %7.2fx %12.2f %8.0f%%\n", kThreadSizes[s].w, kThreadSizes[s].h,
-                  format_name(rgb), one, two, one / two, ms, 100 * (1 - ms / (1000.0 / 30)));
+      std::fprintf(out, "%4dx%-5d %-6s %10.3f %10.3f %7.2fx %12.2f %8.0f%% %12.2fx\n", kThreadSizes[s].w, kThreadSizes[s].h,
+                  format_name(rgb), one, two, one / two, ms, 100 * (1 - ms / (1000.0 / 30)), rep.best(a + "1") / rep.best(a + "2"));
     }
   std::fprintf(out, "goals: two threads >= 1.8x one at 1920x1080; 3840x2160 rgb24 at 30 fps on two cores with 30%% headroom "
-              "(<= 23.3 ms a frame); the 30 fps column is the headroom\n");
+              "(<= 23.3 ms a frame); the 30 fps column is the headroom; speedup: of the medians, best speedup: of the "
+              "fastest repetitions (a shared machine's noise only adds time, and more to two threads than to one)\n");
   std::fprintf(out, "\nGrid spacing (1280x720 mono8, map rebuilt every frame; tolerance 0.05 px)\n");
   std::fprintf(out, "%-8s %-9s %8s %10s %s\n", "spacing", "depth", "ns/px", "bound_px", "within 0.05 px");
   for (int sp : {4, 8, 16, 32, 64})
