@@ -700,10 +700,12 @@ HWY_INLINE void block8_origins(const SamplePlane& src, const Affine& a, int e0, 
   bool s[2] = {false, false};
   segment_origins<8>(a, e0, count, xa, ya, s);
   straddle = straddle || s[0] || s[1];
-  for (int m = 0; m < count; ++m) p[0][b0 + m] = src.row(ya[m]) + kBytes * xa[m];
-  for (int w = 1; w < kWindows8<kBytes>; ++w) {
-    std::int64_t x = a.ax + std::int64_t{e0 + kWindowFirst<kBytes>[w]} * a.sx + 128;
-    for (int m = 0; m < count; ++m, x += 8 * std::int64_t{a.sx}) p[w][b0 + m] = src.row(ya[m]) + kBytes * static_cast<int>(x >> 16);
+  std::int64_t x[kWindows8<kBytes>];  // the later windows' first samples, running sums
+  for (int w = 1; w < kWindows8<kBytes>; ++w) x[w] = a.ax + std::int64_t{e0 + kWindowFirst<kBytes>[w]} * a.sx + 128;
+  for (int m = 0; m < count; ++m) {
+    const std::uint8_t* row = src.row(ya[m]);
+    p[0][b0 + m] = row + kBytes * xa[m];
+    for (int w = 1; w < kWindows8<kBytes>; ++w, x[w - 1] += 8 * std::int64_t{a.sx}) p[w][b0 + m] = row + kBytes * static_cast<int>(x[w] >> 16);
   }
 }
 
