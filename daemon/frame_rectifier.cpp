@@ -13,7 +13,7 @@ FrameRectifier::FrameRectifier(const RectifyConfig& cfg, const dsp::CameraModel&
     : cfg_(cfg), cam_(cam), timing_(timing) {
   dsp::RectifierConfig rc;
   rc.initial_spacing = cfg.grid_px;
-  rc.max_bands = pool ? pool->concurrency() : 1;
+  rc.max_bands = pool ? dsp::RectifierConfig::bands_for(pool->concurrency()) : 1;
   rect_ = std::make_unique<dsp::Rectifier>(cam, timing, fmt.format, rc);
   rect_->set_executor(pool);
 }

@@ -222,7 +222,9 @@ double Rectifier::solve_columns(Branch& b, bool plane_branch, int i0, int i1) {
 // them go to the executor's threads as the rows of the remap do; the result is the same.
 void Rectifier::solve_branch(Branch& b, bool plane_branch) {
   const int nx = levels_[level_].nx;
-  const int parts = executor_ ? std::clamp(std::min(executor_->concurrency(), nx), 1, static_cast<int>(bands_.size())) : 1;
+  const int parts = executor_ ? std::clamp(std::min(RectifierConfig::bands_for(executor_->concurrency()), nx), 1,
+                                           static_cast<int>(bands_.size()))
+                              : 1;
   if (parts == 1) {
     gain_max_ = std::max(gain_max_, solve_columns(b, plane_branch, 0, nx));
   } else {

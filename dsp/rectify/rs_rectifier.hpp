@@ -12,6 +12,7 @@
 // Nothing is allocated after construction: the daemon's hot path calls rectify() per frame.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -51,8 +52,14 @@ struct RectifierConfig {
   int table_step_rows = 8;      // pose table step (rows); halved while its error share is large
   bool use_simd = true;         // SIMD kernels of the CPU's best instruction set (same output bit for bit)
   // Row bands resampled at once through the executor (set_executor); scratch for this many is
-  // allocated at construction. 1: the calling thread does every row.
+  // allocated at construction. 1: the calling thread does every row. bands_for(threads) gives
+  // an executor's threads their bands.
   int max_bands = 1;
+  // The bands for an executor of `threads`: kBandsPerThread each (at most 256), claimed by the
+  // threads as they come free, so that one the system takes away for a while leaves most of
+  // its share to the others rather than holding the frame up by half of it.
+  static constexpr int kBandsPerThread = 4;
+  static int bands_for(int threads) { return threads > 1 ? std::min(256, kBandsPerThread * threads) : 1; }
 };
 
 struct RectifyReport {
@@ -98,9 +105,10 @@ class Rectifier {
   // positions the sampler uses, to 1/65536 px); NaN where the output is black by construction.
   void map_row(int y, double* sx, double* sy);
 
-  // Solve the map's node columns and resample the rows in up to min(executor->concurrency(),
-  // cfg.max_bands) bands, one per thread (nullptr: all on the calling thread). The map and the
-  // output are the same byte for byte.
+  // Solve the map's node columns and resample the rows in up to
+  // min(RectifierConfig::bands_for(executor->concurrency()), cfg.max_bands) bands, which the
+  // executor's threads share (nullptr: all on the calling thread). The map and the output are
+  // the same byte for byte.
   void set_executor(RowExecutor* executor) { executor_ = executor; }
 
   bool uses_simd() const { return simd_; }

@@ -189,7 +189,7 @@ void Rectifier::remap(const ImageView& src, const ImageView& dst) {
   } job{this, {}, {}, 0, 0};
   job.planes = sample_planes(src, job.src);
   sample_planes(dst, job.dst);
-  job.bands = executor_ ? std::clamp(executor_->concurrency(), 1, static_cast<int>(bands_.size())) : 1;
+  job.bands = executor_ ? std::clamp(RectifierConfig::bands_for(executor_->concurrency()), 1, static_cast<int>(bands_.size())) : 1;
   auto band = [](void* ctx, int b) {
     const Job& j = *static_cast<const Job*>(ctx);
     for (int p = 0; p < j.planes; ++p) {

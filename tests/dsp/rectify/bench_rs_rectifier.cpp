@@ -250,7 +250,7 @@ void BM_RectifyThreads(benchmark::State& state) {
   const RowTiming timing = RowTiming::full_frame(sz.h, 30);
   rsd::daemon::WorkerPool pool(threads);
   RectifierConfig cfg;
-  cfg.max_bands = threads;
+  cfg.max_bands = RectifierConfig::bands_for(threads);
   Rectifier rect(cam, timing, f, cfg);
   rect.set_executor(&pool);
   Image src = noise_image(sz.w, sz.h, f), dst(sz.w, sz.h, f);

@@ -312,8 +312,8 @@ struct ThreadExecutor : RowExecutor {
 
 TEST(RsRectifier, BandsOfRowsOnOtherThreadsGiveTheSameImage) {
   // A rotation and the ground plane (cells the horizon crosses), every format: byte for byte the
-  // single-threaded image, in 2 bands on threads and in 3 out of order (max_bands 4; 5 asked of
-  // a rectifier allowed 4 use 4).
+  // single-threaded image, in bands on threads and out of order (max_bands 4: executors of 2, 3
+  // and 5 threads, asking for 8, 12 and 20 bands, use 4).
   const std::vector<Case> all = cases();
   for (const Case& c : {all[0], all[3]})
     for (PixelFormat f : {PixelFormat::Mono8, PixelFormat::Rgb8, PixelFormat::Mono16}) {
