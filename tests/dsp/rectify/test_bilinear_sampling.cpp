@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <initializer_list>
 #include <random>
 #include <string>
 #include <vector>
@@ -113,6 +114,30 @@ void affine(const Samplers& k, const SamplePlane& src, const Affine& a, std::uin
   k.cells(src, &a, n, n, out);
 }
 
+// One segment of n samples through the SIMD and the reference samplers, compared byte for byte
+// (and the guard bytes after it).
+void expect_segment_same(const Samplers& simd, const Samplers& ref, const SamplePlane& src, const Affine& a, int n,
+                         const Kind& f, const std::string& what) {
+  std::vector<std::uint8_t> got = guarded(n, f), want = guarded(n, f);
+  affine(simd, src, a, got.data(), n);
+  affine(ref, src, a, want.data(), n);
+  expect_same(got, want, n, f, what);
+}
+
+// fn(f, src, simd, ref, what) for every SIMD target the CPU runs, every packed kind f and every
+// pad: a w x h random source (seed) for each; what names the target and the kind.
+template <class Fn>
+void for_every_target_and_kind(int w, int h, std::initializer_list<int> pads, unsigned seed, Fn fn) {
+  for (std::int64_t target : simd_targets()) {
+    force_simd_target(target);
+    for (const Kind& f : kPacked)
+      for (int pad : pads) {
+        const Source src = random_source(w, h, f, pad, seed);
+        fn(f, src.view, dispatched_samplers(f.kind), scalar_samplers(f.kind), target_name(target) + " " + f.name);
+      }
+  }
+}
+
 class EveryTarget : public ::testing::Test {
  protected:
   void TearDown() override { force_simd_target(0); }
@@ -133,43 +158,30 @@ TEST(SimdTargets, TheBestCompiledTargetIsTheOneUsed) {
 }
 
 TEST_F(EveryTarget, RowPositionsEqualTheScalarReference) {
-  for (std::int64_t target : simd_targets()) {
-    force_simd_target(target);
-    for (const Kind& f : kPacked)
-      for (int pad : {0, 5}) {
-        const Source src = random_source(61, 23, f, pad, 3);
-        const Samplers simd = dispatched_samplers(f.kind), ref = scalar_samplers(f.kind);
-        std::mt19937 rng(17);
-        for (int trial = 0; trial < 400; ++trial) {
-          const int n = trial % 53;
-          const Positions p = random_positions(rng, n, src.view.width, src.view.height);
-          std::vector<std::uint8_t> a = guarded(n, f), b = guarded(n, f);
-          simd.row(src.view, p.xs.data(), p.ys.data(), a.data(), n);
-          ref.row(src.view, p.xs.data(), p.ys.data(), b.data(), n);
-          expect_same(a, b, n, f, target_name(target) + " " + f.name + " row trial " + std::to_string(trial));
-        }
-      }
-  }
+  for_every_target_and_kind(61, 23, {0, 5}, 3, [](const Kind& f, const SamplePlane& src, const Samplers& simd, const Samplers& ref,
+                                                  const std::string& what) {
+    std::mt19937 rng(17);
+    for (int trial = 0; trial < 400; ++trial) {
+      const int n = trial % 53;
+      const Positions p = random_positions(rng, n, src.width, src.height);
+      std::vector<std::uint8_t> a = guarded(n, f), b = guarded(n, f);
+      simd.row(src, p.xs.data(), p.ys.data(), a.data(), n);
+      ref.row(src, p.xs.data(), p.ys.data(), b.data(), n);
+      expect_same(a, b, n, f, what + " row trial " + std::to_string(trial));
+    }
+  });
 }
 
 TEST_F(EveryTarget, AffineSegmentsEqualTheScalarReference) {
-  for (std::int64_t target : simd_targets()) {
-    force_simd_target(target);
-    for (const Kind& f : kPacked)
-      for (int pad : {0, 3}) {
-        const Source src = random_source(77, 31, f, pad, 5);
-        const Samplers simd = dispatched_samplers(f.kind), ref = scalar_samplers(f.kind);
-        std::mt19937 rng(23);
-        for (int trial = 0; trial < 600; ++trial) {
-          const int n = trial % 71;
-          const Affine a = random_affine(rng, src.view.width, src.view.height);
-          std::vector<std::uint8_t> got = guarded(n, f), want = guarded(n, f);
-          affine(simd, src.view, a, got.data(), n);
-          affine(ref, src.view, a, want.data(), n);
-          expect_same(got, want, n, f, target_name(target) + " " + f.name + " affine trial " + std::to_string(trial));
-        }
-      }
-  }
+  for_every_target_and_kind(77, 31, {0, 3}, 5, [](const Kind& f, const SamplePlane& src, const Samplers& simd, const Samplers& ref,
+                                                  const std::string& what) {
+    std::mt19937 rng(23);
+    for (int trial = 0; trial < 600; ++trial) {
+      const int n = trial % 71;
+      const Affine a = random_affine(rng, src.width, src.height);
+      expect_segment_same(simd, ref, src, a, n, f, what + " affine trial " + std::to_string(trial));
+    }
+  });
 }
 
 // Segments from inside the image at every magnification from 0.5 to 2.5 and slopes up to a
@@ -177,51 +189,40 @@ TEST_F(EveryTarget, AffineSegmentsEqualTheScalarReference) {
 // 4/3 for RGB24's blocks of eight) are crossed in small steps, so a fit bound set beyond its
 // window's limit shows as a wrong byte.
 TEST_F(EveryTarget, SegmentsAtEveryMagnificationEqualTheScalarReference) {
-  for (std::int64_t target : simd_targets()) {
-    force_simd_target(target);
-    for (const Kind& f : kPacked) {
-      const Source src = random_source(300, 40, f, 1, 11);
-      const Samplers simd = dispatched_samplers(f.kind), ref = scalar_samplers(f.kind);
-      std::mt19937 rng(31);
-      std::uniform_real_distribution<double> u(0, 1);
-      for (int trial = 0; trial < 600; ++trial) {
-        const double sx = 0.5 + 2.0 * trial / 600.0, sy = 0.2 * (u(rng) - 0.5);
-        const int n = 64 + trial % 65;
-        const Affine a{fixed(1 + 10 * u(rng)), fixed(12 + 16 * u(rng)), fixed(sx), fixed(sy)};
-        std::vector<std::uint8_t> got = guarded(n, f), want = guarded(n, f);
-        affine(simd, src.view, a, got.data(), n);
-        affine(ref, src.view, a, want.data(), n);
-        expect_same(got, want, n, f, target_name(target) + " " + f.name + " sx " + std::to_string(sx) + " trial " + std::to_string(trial));
-      }
+  for_every_target_and_kind(300, 40, {1}, 11, [](const Kind& f, const SamplePlane& src, const Samplers& simd, const Samplers& ref,
+                                                 const std::string& what) {
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int trial = 0; trial < 600; ++trial) {
+      const double sx = 0.5 + 2.0 * trial / 600.0, sy = 0.2 * (u(rng) - 0.5);
+      const int n = 64 + trial % 65;
+      const Affine a{fixed(1 + 10 * u(rng)), fixed(12 + 16 * u(rng)), fixed(sx), fixed(sy)};
+      expect_segment_same(simd, ref, src, a, n, f, what + " sx " + std::to_string(sx) + " trial " + std::to_string(trial));
     }
-  }
+  });
 }
 
 // A run of cells in one call is its cells one after the other: each kernel against the
 // scalar reference, and the reference against its cells sampled one call each.
 TEST_F(EveryTarget, RunsOfCellsAreTheirSegmentsInTurn) {
-  for (std::int64_t target : simd_targets()) {
-    force_simd_target(target);
-    for (const Kind& f : kPacked) {
-      const Source src = random_source(90, 40, f, 2, 7);
-      const Samplers simd = dispatched_samplers(f.kind), ref = scalar_samplers(f.kind);
-      std::mt19937 rng(29);
-      for (int trial = 0; trial < 120; ++trial) {
-        const int cell_n = 8 << (trial % 3), cells = 1 + trial % 5;
-        const int total = cells * cell_n - (trial % 4 == 0 ? cell_n / 2 + 1 : 0);  // a short last cell
-        std::vector<Affine> a(cells);
-        for (Affine& c : a) c = random_affine(rng, src.view.width, src.view.height);
-        std::vector<std::uint8_t> got = guarded(total, f), want = guarded(total, f), one_by_one = guarded(total, f);
-        simd.cells(src.view, a.data(), cell_n, total, got.data());
-        ref.cells(src.view, a.data(), cell_n, total, want.data());
-        for (int k = 0; k * cell_n < total; ++k)
-          affine(ref, src.view, a[k], one_by_one.data() + k * cell_n * f.pixel_bytes(), std::min(cell_n, total - k * cell_n));
-        const std::string what = target_name(target) + " " + f.name + " run trial " + std::to_string(trial);
-        expect_same(got, want, total, f, what);
-        expect_same(want, one_by_one, total, f, what + " (reference, cell by cell)");
-      }
+  for_every_target_and_kind(90, 40, {2}, 7, [](const Kind& f, const SamplePlane& src, const Samplers& simd, const Samplers& ref,
+                                               const std::string& kind) {
+    std::mt19937 rng(29);
+    for (int trial = 0; trial < 120; ++trial) {
+      const int cell_n = 8 << (trial % 3), cells = 1 + trial % 5;
+      const int total = cells * cell_n - (trial % 4 == 0 ? cell_n / 2 + 1 : 0);  // a short last cell
+      std::vector<Affine> a(cells);
+      for (Affine& c : a) c = random_affine(rng, src.width, src.height);
+      std::vector<std::uint8_t> got = guarded(total, f), want = guarded(total, f), one_by_one = guarded(total, f);
+      simd.cells(src, a.data(), cell_n, total, got.data());
+      ref.cells(src, a.data(), cell_n, total, want.data());
+      for (int k = 0; k * cell_n < total; ++k)
+        affine(ref, src, a[k], one_by_one.data() + k * cell_n * f.pixel_bytes(), std::min(cell_n, total - k * cell_n));
+      const std::string what = kind + " run trial " + std::to_string(trial);
+      expect_same(got, want, total, f, what);
+      expect_same(want, one_by_one, total, f, what + " (reference, cell by cell)");
     }
-  }
+  });
 }
 
 TEST_F(EveryTarget, ATranslationInsideTheImageIsTheBilinearBlend) {
