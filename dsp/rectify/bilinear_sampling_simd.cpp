@@ -28,8 +28,9 @@
 //   when all four taps are at least 3 px inside the right edge so that the reads never leave the
 //   row.
 // Steps entirely outside the image store the plane's fill (0, or 128 for chroma); the rest (near
-// the borders) go to the scalar pixel code. The parts live in bilinear_four-inl.h (32-bit lanes)
-// and bilinear_blocks-inl.h (blocks on 16-bit lanes). Pixels are little-endian in memory.
+// the borders) go to the scalar pixel code. The parts live in bilinear_four-inl.h (32-bit lanes),
+// bilinear_blocks-inl.h (blocks on 16-bit lanes) and bilinear_eight-inl.h (blocks of eight along
+// segments). Pixels are little-endian in memory.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "dsp/rectify/bilinear_sampling_simd.cpp"
 #include "hwy/foreach_target.h"  // IWYU pragma: keep (before highway.h)
@@ -44,6 +45,7 @@
 
 #include "dsp/rectify/bilinear_four-inl.h"
 #include "dsp/rectify/bilinear_blocks-inl.h"
+#include "dsp/rectify/bilinear_eight-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace rsd::dsp::rectify_detail {
