@@ -467,32 +467,23 @@ HWY_INLINE bool mono8_blocks(D16x d16, const SamplePlane& src, hn::Vec<hn::Repar
   return true;
 }
 
-// The window origins of `count` blocks of kPerBlock samples of an affine segment known to fit
-// (affine_fits, segment_blocks_fit), the blocks at samples e0, e0 + kPerBlock, ...: each block's
-// first left tap and the upper of its first and last sample's top taps, as tap() rounds them,
-// and whether the taps of the even (straddle[0]) and of the odd blocks (straddle[1]) straddle a
-// row boundary. Running sums: the positions of a segment that fits lie inside the image, so they
-// neither wrap nor differ from the lanes'.
-template <int kPerBlock>
-HWY_INLINE void segment_origins(const Affine& a, int e0, int count, int* xa, int* ya, bool* straddle) {
-  const std::int64_t span = (kPerBlock - 1) * std::int64_t{a.sy};
+// The window origins of `count` blocks of eight samples of an affine segment known to fit
+// (affine_fits, blocks8_fit), the blocks at samples e0, e0 + 8, ...: each block's first left
+// tap and the upper of its first and last sample's top taps, as tap() rounds them; straddle is
+// set when some block's taps straddle a row boundary. Running sums: the positions of a segment
+// that fits lie inside the image, so they neither wrap nor differ from the lanes'.
+HWY_INLINE void segment_origins(const Affine& a, int e0, int count, int* xa, int* ya, bool& straddle) {
+  const std::int64_t span = 7 * std::int64_t{a.sy};
   const std::int64_t top = std::min<std::int64_t>(0, span), bottom = std::max<std::int64_t>(0, span);
   std::int64_t x = a.ax + std::int64_t{e0} * a.sx + 128, y = a.ay + std::int64_t{e0} * a.sy + 128;
-  for (int m = 0; m < count; ++m, x += kPerBlock * std::int64_t{a.sx}, y += kPerBlock * std::int64_t{a.sy}) {
+  for (int m = 0; m < count; ++m, x += 8 * std::int64_t{a.sx}, y += 8 * std::int64_t{a.sy}) {
     xa[m] = static_cast<int>(x >> 16);
     ya[m] = static_cast<int>((y + top) >> 16);
-    straddle[m & 1] |= ((y + bottom) >> 16) != ya[m];
+    straddle = straddle || ((y + bottom) >> 16) != ya[m];
   }
 }
 
-// Mono8's blocks of eight: origins, and whether any straddles.
-HWY_INLINE void mono8_origins(const Affine& a, int k0, int count, int* xa, int* ya, bool& straddle) {
-  bool s[2] = {false, false};
-  segment_origins<8>(a, k0, count, xa, ya, s);
-  straddle = straddle || s[0] || s[1];
-}
-
-// Blocks of affine segments known to fit, origins given (mono8_origins): the same integers as
+// Blocks of affine segments known to fit, origins given (segment_origins): the same integers as
 // mono8_blocks without its per-lane checks.
 template <bool kEven, class D16x>
 HWY_INLINE void mono8_affine_blocks(D16x d16, const SamplePlane& src, const int* xa, const int* ya, bool straddle,

@@ -149,9 +149,7 @@ template <int kBytes>
 HWY_INLINE void block8_origins(const SamplePlane& src, const Affine& a, int e0, int count, const std::uint8_t* (*p)[kBlocks],
                                int b0, bool& straddle) {
   int xa[kBlocks], ya[kBlocks];
-  bool s[2] = {false, false};
-  segment_origins<8>(a, e0, count, xa, ya, s);
-  straddle = straddle || s[0] || s[1];
+  segment_origins(a, e0, count, xa, ya, straddle);
   std::int64_t x[kWindows8<kBytes>];  // the later windows' first samples, running sums
   for (int w = 1; w < kWindows8<kBytes>; ++w) x[w] = a.ax + std::int64_t{e0 + kWindowFirst<kBytes>[w]} * a.sx + 128;
   for (int m = 0; m < count; ++m) {

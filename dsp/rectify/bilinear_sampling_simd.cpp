@@ -253,7 +253,7 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
       for (; i + kStep <= end; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
         int xa[kBlocks], ya[kBlocks];
         bool straddle = false;
-        mono8_origins(a, i, kBlocks, xa, ya, straddle);
+        segment_origins(a, i, kBlocks, xa, ya, straddle);
         mono8_affine_blocks<kEven>(DW16(), src, xa, ya, straddle, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kOut);
       }
   } else if constexpr (kAffineBlocks<T, C, kOut>) {  // RGB24, U V pairs: checks per segment, else per block
@@ -336,8 +336,8 @@ HWY_INLINE void paired_mono8_cells(const SamplePlane& src, const Affine* a, int 
       paired_positions(lo, hi, X, Y, X4, Y4);
       int xa[kBlocks], ya[kBlocks];
       bool straddle = false;
-      mono8_origins(lo, 0, kHalfBlocks, xa, ya, straddle);
-      mono8_origins(hi, 0, kHalfBlocks, xa + kHalfBlocks, ya + kHalfBlocks, straddle);
+      segment_origins(lo, 0, kHalfBlocks, xa, ya, straddle);
+      segment_origins(hi, 0, kHalfBlocks, xa + kHalfBlocks, ya + kHalfBlocks, straddle);
       mono8_affine_blocks<kEven>(DW16(), src, xa, ya, straddle, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut);
       continue;
     }
