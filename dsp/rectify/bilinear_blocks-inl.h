@@ -43,6 +43,24 @@ constexpr int kStep = 8 * kBlocks;
 constexpr int kStepShift = kBlocks == 1 ? 3 : kBlocks == 2 ? 4 : 5;  // kStep = 1 << kStepShift
 static_assert(kBlocks == 1 || kBlocks == 2 || kBlocks == 4, "one, two or four 128-bit blocks per step");
 
+// A 16-byte lookup pattern, the same in every 128-bit block, laid out over the widest step (four
+// blocks): one full-width load gives it to every block, and the lookup that uses it takes the
+// load as its memory operand. (A 16-byte pattern broadcast by LoadDup128 was hoisted out of the
+// loops as 16 bytes and broadcast again by a shuffle in every step: ~5 % of the U V pairs
+// kernel's time on AVX-512, whose shuffles are its bottleneck.)
+struct alignas(64) Pattern {
+  std::uint8_t b[64] = {};
+};
+constexpr Pattern per_block(const std::uint8_t (&p)[16]) {
+  Pattern r;
+  for (int i = 0; i < 64; ++i) r.b[i] = p[i % 16];
+  return r;
+}
+template <class D>
+HWY_INLINE hn::Vec<D> load_pattern(D d8, const Pattern& p) {
+  return hn::Load(d8, p.b);
+}
+
 // The helpers below take a vector of 1, 2 or 4 blocks (tag D) and recurse on its halves; they
 // are templates on the tag, so that `if constexpr` discards the branches of other widths.
 template <class D>
@@ -126,12 +144,12 @@ HWY_INLINE V blend_pairs(V pairs, V f) {
 // samples are two bytes apart (YUYV's luma, an 8-bit mosaic's sites: 16 samples), or YUYV's U V
 // from a sample's U (its V two bytes on, the next sample's U four: eight U V pairs, the layout
 // of an NV12 chroma window). Two 16-byte loads per block.
-alignas(16) constexpr std::uint8_t kEvenBytes[16] = {0, 2, 4, 6, 8, 10, 12, 14, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80};
+constexpr Pattern kEvenBytes = per_block({0, 2, 4, 6, 8, 10, 12, 14, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80});
 template <class D>
 HWY_INLINE hn::Vec<D> load_even_windows(D d8, const std::uint8_t* const* p) {
   const std::uint8_t* q[blocks_of<D>()];
   for (int b = 0; b < blocks_of<D>(); ++b) q[b] = p[b] + 16;
-  const auto even = hn::LoadDup128(d8, kEvenBytes);
+  const auto even = load_pattern(d8, kEvenBytes);
   const hn::Repartition<std::uint64_t, D> d64;
   return hn::BitCast(d8, hn::InterleaveLower(d64, hn::BitCast(d64, hn::TableLookupBytesOr0(load_windows(d8, p), even)),
                                              hn::BitCast(d64, hn::TableLookupBytesOr0(load_windows(d8, q), even))));
@@ -194,28 +212,28 @@ HWY_INLINE void tap_pairs(DB d8, const SamplePlane& src, const std::uint8_t** p,
 
 // Per output lane of A and B: its pixel's word byte (4 k) twice, and the colour's byte
 // offsets (c, c + 3) of the left and right taps.
-alignas(16) constexpr std::uint8_t kRgbPixelA[16] = {0, 0, 0, 0, 0, 0, 4, 4, 4, 4, 4, 4, 8, 8, 8, 8};
-alignas(16) constexpr std::uint8_t kRgbPixelB[16] = {8, 8, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12};
-alignas(16) constexpr std::uint8_t kRgbColourA[16] = {0, 3, 1, 4, 2, 5, 0, 3, 1, 4, 2, 5, 0, 3, 1, 4};
-alignas(16) constexpr std::uint8_t kRgbColourB[16] = {2, 5, 0, 3, 1, 4, 2, 5, 0, 3, 0, 3, 0, 3, 0, 3};
+constexpr Pattern kRgbPixelA = per_block({0, 0, 0, 0, 0, 0, 4, 4, 4, 4, 4, 4, 8, 8, 8, 8});
+constexpr Pattern kRgbPixelB = per_block({8, 8, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12, 12});
+constexpr Pattern kRgbColourA = per_block({0, 3, 1, 4, 2, 5, 0, 3, 1, 4, 2, 5, 0, 3, 1, 4});
+constexpr Pattern kRgbColourB = per_block({2, 5, 0, 3, 1, 4, 2, 5, 0, 3, 0, 3, 0, 3, 0, 3});
 
 // Byte `offset` of each lane's pixel word into the lane's low byte (high byte zero).
 template <class DB>
-HWY_INLINE hn::Vec<hn::Repartition<std::uint16_t, DB>> spread(DB d8, hn::Vec<DB> words, const std::uint8_t* pixel,
+HWY_INLINE hn::Vec<hn::Repartition<std::uint16_t, DB>> spread(DB d8, hn::Vec<DB> words, const Pattern& pixel,
                                                             int offset) {
   const hn::Repartition<std::uint16_t, DB> du16;
-  const auto sel = hn::Add(hn::LoadDup128(d8, pixel), hn::BitCast(d8, hn::Set(du16, static_cast<std::uint16_t>(offset | 0x8000))));
+  const auto sel = hn::Add(load_pattern(d8, pixel), hn::BitCast(d8, hn::Set(du16, static_cast<std::uint16_t>(offset | 0x8000))));
   return hn::BitCast(du16, hn::TableLookupBytesOr0(words, sel));
 }
 
 // The blend of A or B (by its lookup patterns) in every block.
 template <class DB>
 HWY_INLINE hn::Vec<hn::Repartition<std::uint16_t, DB>> rgb_half(DB d8, hn::Vec<DB> r0, hn::Vec<DB> r1, hn::Vec<DB> r2,
-                                                              bool straddle, hn::Vec<DB> words, const std::uint8_t* pixel,
-                                                              const std::uint8_t* colour) {
+                                                              bool straddle, hn::Vec<DB> words, const Pattern& pixel,
+                                                              const Pattern& colour) {
   const hn::Repartition<std::uint16_t, DB> du16;
   using VU = hn::Vec<decltype(du16)>;
-  const auto idx = hn::Add(hn::TableLookupBytes(words, hn::LoadDup128(d8, pixel)), hn::LoadDup128(d8, colour));
+  const auto idx = hn::Add(hn::TableLookupBytes(words, load_pattern(d8, pixel)), load_pattern(d8, colour));
   const VU fx = spread(d8, words, pixel, 1), fy = spread(d8, words, pixel, 2);
   VU up = hn::BitCast(du16, hn::TableLookupBytes(r0, idx)), down = hn::BitCast(du16, hn::TableLookupBytes(r1, idx));
   if (straddle) {
@@ -275,7 +293,7 @@ HWY_INLINE bool block_windows(D32x d, const SamplePlane& src, hn::Vec<D32x> X, h
 // Four RGB24 pixels per block from the windows at p[b] (positions rx, ry relative to them,
 // 1/256 px) to out[b], for the blocks whose bit in `skip` is clear: 12 bytes, A's 8 and B's
 // first 4, packed by one lookup of A | B << 8 (lanes below 256).
-alignas(16) constexpr std::uint8_t kRgbBytes[16] = {0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 0x80, 0x80, 0x80, 0x80};
+constexpr Pattern kRgbBytes = per_block({0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 0x80, 0x80, 0x80, 0x80});
 template <class DB>
 HWY_INLINE void rgb8_window_blend(DB d8, const SamplePlane& src, const std::uint8_t** p,
                                   hn::Vec<hn::Repartition<std::int32_t, DB>> rx, hn::Vec<hn::Repartition<std::int32_t, DB>> ry,
@@ -294,7 +312,7 @@ HWY_INLINE void rgb8_window_blend(DB d8, const SamplePlane& src, const std::uint
   }
   const auto a = rgb_half(d8, r0, r1, r2, straddle, words, kRgbPixelA, kRgbColourA);
   const auto c = rgb_half(d8, r0, r1, r2, straddle, words, kRgbPixelB, kRgbColourB);
-  const auto v = hn::TableLookupBytesOr0(hn::BitCast(d8, hn::Or(a, hn::ShiftLeft<8>(c))), hn::LoadDup128(d8, kRgbBytes));
+  const auto v = hn::TableLookupBytesOr0(hn::BitCast(d8, hn::Or(a, hn::ShiftLeft<8>(c))), load_pattern(d8, kRgbBytes));
   const hn::Full64<std::uint8_t> d64;
   const hn::Full32<std::uint8_t> d32;
   for (int b = 0; b < blocks_of<DB>(); ++b) {

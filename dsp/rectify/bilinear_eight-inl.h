@@ -42,55 +42,55 @@ constexpr int kMaxSpan8 = kBytes == 3 ? 4 : 6;  // 3 sx below this many px: ever
 
 // The lookup patterns of window W, per lane: its sample k, component c (colour, or U / V).
 struct Lanes8 {
-  alignas(16) std::uint8_t tap[16];     // (2k, 2k): sample k's first tap byte to both bytes
-  alignas(16) std::uint8_t origin[16];  // (2w, 2w): the window's first sample's
-  alignas(16) std::uint8_t colour[16];  // (c, c + kBytes): the left and right tap's byte from it
-  alignas(16) std::uint8_t low[16];     // (2k, 0x80): a sample's low byte (weight) to the lane
-  alignas(16) std::uint8_t high[16];    // (2k + 1, 0x80): its high byte (the row below)
+  Pattern sample;  // (2k, 2k + 1): sample k's 16-bit lane
+  Pattern origin;  // (2w + 1, 0x80): the high byte (tap column) of the window's first sample w
+  Pattern colour;  // (c, c + kBytes): the left and right tap's byte from the sample's first
 };
 template <int kBytes>
 constexpr Lanes8 lanes8(int window) {
-  Lanes8 l{};
+  std::uint8_t sample[16]{}, origin[16]{}, colour[16]{};
   for (int lane = 0; lane < 8; ++lane) {
     const int byte = 8 * window + lane, k = byte / kBytes, c = byte % kBytes, w = kWindowFirst<kBytes>[window];
     const auto u8 = [](int v) { return static_cast<std::uint8_t>(v); };
-    l.tap[2 * lane] = l.tap[2 * lane + 1] = u8(2 * k);
-    l.origin[2 * lane] = l.origin[2 * lane + 1] = u8(2 * w);
-    l.colour[2 * lane] = u8(c), l.colour[2 * lane + 1] = u8(c + kBytes);
-    l.low[2 * lane] = u8(2 * k), l.low[2 * lane + 1] = 0x80;
-    l.high[2 * lane] = u8(2 * k + 1), l.high[2 * lane + 1] = 0x80;
+    sample[2 * lane] = u8(2 * k), sample[2 * lane + 1] = u8(2 * k + 1);
+    origin[2 * lane] = u8(2 * w + 1), origin[2 * lane + 1] = 0x80;
+    colour[2 * lane] = u8(c), colour[2 * lane + 1] = u8(c + kBytes);
   }
-  return l;
+  return {per_block(sample), per_block(origin), per_block(colour)};
 }
 template <int kBytes>
-alignas(16) constexpr Lanes8 kLanes8[3] = {lanes8<kBytes>(0), lanes8<kBytes>(1), lanes8<kBytes>(2)};
+constexpr Lanes8 kLanes8[3] = {lanes8<kBytes>(0), lanes8<kBytes>(1), lanes8<kBytes>(2)};
 
-// The lanes of window W blended: t holds each sample's first tap byte (kBytes i, i: its left
-// tap's column from sample 0's), rx and ry its position relative to the block's origin
-// (mono8_relative); p[b]: the block's window on its first row.
+// The lanes of window W blended: rx and ry hold each sample's position relative to the block's
+// origin (mono8_relative: tap column i in the high byte, weight in the low), p[b] the block's
+// window on its first row. Two lookups bring each lane its sample's rx and ry (the shuffles are
+// the kernel's bottleneck: the rest is arithmetic); a lane's left tap is byte kBytes (i - i_w) + c
+// of the window (i_w: the column of the window's first sample, 0 for window 0), its right tap
+// kBytes bytes on.
 template <int kBytes, int W, class DB, class VU>
-HWY_INLINE VU window8(DB d8, const SamplePlane& src, const std::uint8_t* const* p, VU t, VU rx, VU ry, bool straddle) {
+HWY_INLINE VU window8(DB d8, const SamplePlane& src, const std::uint8_t* const* p, VU rx, VU ry, bool straddle) {
   const hn::DFromV<VU> du16;
   const Lanes8& l = kLanes8<kBytes>[W];
-  const auto t8 = hn::BitCast(d8, t);
-  const auto idx = hn::Add(hn::Sub(hn::TableLookupBytes(t8, hn::LoadDup128(d8, l.tap)), hn::TableLookupBytes(t8, hn::LoadDup128(d8, l.origin))),
-                           hn::LoadDup128(d8, l.colour));
-  const auto low = hn::LoadDup128(d8, l.low);
-  const VU fx = hn::BitCast(du16, hn::TableLookupBytesOr0(hn::BitCast(d8, rx), low));
-  const VU fy = hn::BitCast(du16, hn::TableLookupBytesOr0(hn::BitCast(d8, ry), low));
-  const VU lower = hn::BitCast(du16, hn::TableLookupBytesOr0(hn::BitCast(d8, ry), hn::LoadDup128(d8, l.high)));
+  const auto sample = load_pattern(d8, l.sample);
+  const VU x = hn::BitCast(du16, hn::TableLookupBytes(hn::BitCast(d8, rx), sample));
+  const VU y = hn::BitCast(du16, hn::TableLookupBytes(hn::BitCast(d8, ry), sample));
+  const VU byte = hn::Set(du16, 0xFF);
+  VU column = hn::ShiftRight<8>(x);
+  if constexpr (W > 0) column = hn::Sub(column, hn::BitCast(du16, hn::TableLookupBytesOr0(hn::BitCast(d8, rx), load_pattern(d8, l.origin))));
+  const auto idx = hn::BitCast(d8, hn::Add(hn::Mul(column, hn::Set(du16, kBytes * 0x0101)), hn::BitCast(du16, load_pattern(d8, l.colour))));
   const std::uint8_t* q[blocks_of<DB>()];
   for (int b = 0; b < blocks_of<DB>(); ++b) q[b] = p[b];
   VU up, down;
-  tap_pairs(d8, src, q, idx, straddle, lower, up, down);
-  return lerp16(blend_pairs(up, fx), blend_pairs(down, fx), fy);
+  tap_pairs(d8, src, q, idx, straddle, hn::ShiftRight<8>(y), up, down);
+  const VU fx = hn::And(x, byte);
+  return lerp16(blend_pairs(up, fx), blend_pairs(down, fx), hn::And(y, byte));
 }
 
 // Bytes 0-7 of each block: the low bytes of v's lanes, 8-15: w's (lanes below 256).
-alignas(16) constexpr std::uint8_t kLowThenHigh[16] = {0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 9, 11, 13, 15};
+constexpr Pattern kLowThenHigh = per_block({0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 9, 11, 13, 15});
 template <class DB, class VU>
 HWY_INLINE hn::Vec<DB> low_bytes(DB d8, VU v, VU w) {
-  return hn::TableLookupBytes(hn::BitCast(d8, hn::Or(v, hn::ShiftLeft<8>(w))), hn::LoadDup128(d8, kLowThenHigh));
+  return hn::TableLookupBytes(hn::BitCast(d8, hn::Or(v, hn::ShiftLeft<8>(w))), load_pattern(d8, kLowThenHigh));
 }
 
 // Eight samples per block of segments known to fit (blocks8_fit), windows p[W][b]
@@ -107,15 +107,14 @@ HWY_INLINE void affine_blocks8(D16x d16, const SamplePlane& src, const std::uint
   const hn::Repartition<std::uint8_t, D16x> d8;
   hn::Vec<decltype(du16)> rx, ry;
   mono8_relative(d16, X0, Y0, X1, Y1, rx, ry);
-  const auto i = hn::ShiftRight<8>(rx), t = kBytes == 3 ? hn::Add(i, hn::Add(i, i)) : hn::Add(i, i);
-  const auto a = window8<kBytes, 0>(d8, src, p[0], t, rx, ry, straddle);
-  const auto b = window8<kBytes, 1>(d8, src, p[1], t, rx, ry, straddle);
+  const auto a = window8<kBytes, 0>(d8, src, p[0], rx, ry, straddle);
+  const auto b = window8<kBytes, 1>(d8, src, p[1], rx, ry, straddle);
   const auto ab = low_bytes(d8, a, b);
-  const D8 w8;
   if constexpr (kBytes == 2) {
-    for (int k = 0; k < kB; ++k) hn::StoreU(part<kB, D8>(d8, ab, k), w8, out + 16 * k);
+    hn::StoreU(ab, d8, out);  // block k's 16 bytes belong at out + 16 k: one store
   } else {
-    const auto c = window8<kBytes, 2>(d8, src, p[2], t, rx, ry, straddle);
+    const D8 w8;
+    const auto c = window8<kBytes, 2>(d8, src, p[2], rx, ry, straddle);
     const auto cc = low_bytes(d8, c, c);
     const hn::Full64<std::uint8_t> w64;
     for (int k = 0; k < kB; ++k) {
