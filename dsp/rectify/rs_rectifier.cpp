@@ -105,7 +105,7 @@ void Rectifier::allocate_levels() {
   for (RowScratch& b : bands_) {
     for (auto* v : {&b.px, &b.py, &b.ix, &b.iy, &b.rho}) v->resize(widest);
     for (auto* v : {&b.fpx, &b.fpy, &b.fix, &b.fiy}) v->resize(widest);
-    b.cells.resize(widest);
+    b.plane_cells.resize(widest), b.inf_cells.resize(widest);
   }
 }
 

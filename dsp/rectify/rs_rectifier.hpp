@@ -135,7 +135,7 @@ class Rectifier {
     std::vector<double> px, py, ix, iy, rho;
     std::vector<std::int32_t> fpx, fpy, fix, fiy;  // the same in 16.16, rounded once per node
     std::vector<std::int32_t> xs, ys;
-    std::vector<Affine> cells;           // a run of the row's cells, for the kernels
+    std::vector<Affine> plane_cells, inf_cells;  // the row's cells of each branch (cell_affines.hpp)
     double gain = 0;                     // its node columns' largest table-error gain
   };
 
@@ -153,8 +153,6 @@ class Rectifier {
   static double fixed_point_error(int spacing);
   std::size_t next_level(std::size_t level, double bound) const;
   int interpolate_row(double y, RowScratch& s) const;
-  Affine cell_affine(int i, std::uint8_t mode, const RowScratch& s) const;
-  Affine plane_affine(int i, std::uint8_t mode, const SamplePlane& g, const RowScratch& s) const;
   void cell_columns(int i, const SamplePlane& g, int& c0, int& c1) const;
   void generate_row(double y, const SamplePlane& g, RowScratch& s) const;
   void kink_segment(int i, int c0, int c1, const SamplePlane& g, RowScratch& s) const;

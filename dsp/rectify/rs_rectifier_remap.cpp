@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "dsp/rectify/bilinear_sampling.hpp"
+#include "dsp/rectify/cell_affines.hpp"
 #include "dsp/rectify/fixed_point.hpp"
 #include "dsp/rectify/node_row_lerp.hpp"
 #include "dsp/rectify/rs_rectifier.hpp"
@@ -42,17 +43,6 @@ int Rectifier::interpolate_row(double y, RowScratch& s) const {
   return j;
 }
 
-// 16.16 start and per-pixel step of cell i of a unit plane, from its two end nodes (one cell
-// apart), rounded to nearest. A linear cell's nodes lie within kLimit px, so that their
-// differences and the rounding fit int32.
-Rectifier::Affine Rectifier::cell_affine(int i, std::uint8_t mode, const RowScratch& s) const {
-  const std::int32_t* X = mode == kPlane ? s.fpx.data() : s.fix.data();
-  const std::int32_t* Y = mode == kPlane ? s.fpy.data() : s.fiy.data();
-  const int shift = levels_[level_].shift;
-  const std::int32_t half = (1 << shift) >> 1;
-  return {X[i], Y[i], (X[i + 1] - X[i] + half) >> shift, (Y[i + 1] - Y[i] + half) >> shift};
-}
-
 // The samples [c0, c1) of plane g whose image positions lie in cell i (a cell spans an even
 // number of pixels, so every half-resolution plane has half of them in each).
 void Rectifier::cell_columns(int i, const SamplePlane& g, int& c0, int& c1) const {
@@ -61,40 +51,12 @@ void Rectifier::cell_columns(int i, const SamplePlane& g, int& c0, int& c1) cons
   c0 = (i * sp) >> shift, c1 = std::min(((i + 1) * sp) >> shift, g.width);
 }
 
-// A cell's affine segment (cell_affine, image pixels) at plane g's samples, in the plane's own
-// coordinates: the cell's first sample c0 = i spacing / scale_x sits at image position
-// x = scale_x c0 + offset_x, offset_x into the cell, and a source position P in image pixels is
-// sample (P - offset) / scale of the source plane. In integers (offsets are whole or half
-// pixels, scales 1 or 2), rounded to nearest: this runs per cell of every chroma or mosaic row.
-namespace {
-// to_plane's constants for one plane, once per call rather than per cell.
-struct PlaneScale {
-  std::int64_t ox2, oy2;  // twice the offsets (whole numbers)
-  int scale_x, scale_y;   // 1 or 2: floor((num + d / 2) / d) for d = 2 scale is (num + scale) >> scale
-  std::int32_t sy_factor; // a step along the row is scale_x image pixels, sy in plane rows of scale_y
-  explicit PlaneScale(const SamplePlane& g)
-      : ox2(static_cast<std::int64_t>(2 * g.offset_x)), oy2(static_cast<std::int64_t>(2 * g.offset_y)),
-        scale_x(g.scale_x), scale_y(g.scale_y), sy_factor(g.scale_x / g.scale_y) {}
-};
-
-void to_plane(Rectifier::Affine& a, const PlaneScale& g) {
-  a.ax = static_cast<std::int32_t>((2 * std::int64_t{a.ax} + g.ox2 * a.sx - g.ox2 * 65536 + g.scale_x) >> g.scale_x);
-  a.ay = static_cast<std::int32_t>((2 * std::int64_t{a.ay} + g.ox2 * a.sy - g.oy2 * 65536 + g.scale_y) >> g.scale_y);
-  a.sy *= g.sy_factor;
-}
-}  // namespace
-
-Rectifier::Affine Rectifier::plane_affine(int i, std::uint8_t mode, const SamplePlane& g, const RowScratch& s) const {
-  Affine a = cell_affine(i, mode, s);
-  if (g.scale_x != 1 || g.scale_y != 1) to_plane(a, PlaneScale(g));  // (unit planes have no offset)
-  return a;
-}
-
 // Source positions of plane g's samples on image row y into s.xs, s.ys (16.16 in the plane's
 // coordinates; kSentinel where the output is black).
 void Rectifier::generate_row(double y, const SamplePlane& g, RowScratch& s) const {
   const Level& L = levels_[level_];
   const std::uint8_t* modes = &cell_mode_[static_cast<std::size_t>(interpolate_row(y, s)) * (L.nx - 1)];
+  const PlaneScale scale(g);
   for (int i = 0; i + 1 < L.nx; ++i) {
     int c0, c1;
     cell_columns(i, g, c0, c1);
@@ -104,7 +66,9 @@ void Rectifier::generate_row(double y, const SamplePlane& g, RowScratch& s) cons
     else if (modes[i] == kKink)
       kink_segment(i, c0, c1, g, s);
     else
-      linear_segment(plane_affine(i, modes[i], g, s), &s.xs[c0], &s.ys[c0], c1 - c0);
+      linear_segment(modes[i] == kPlane ? cell_affine(s.fpx.data(), s.fpy.data(), i, L.shift, scale)
+                                        : cell_affine(s.fix.data(), s.fiy.data(), i, L.shift, scale),
+                     &s.xs[c0], &s.ys[c0], c1 - c0);
   }
 }
 
@@ -123,17 +87,16 @@ void Rectifier::kink_segment(int i, int c0, int c1, const SamplePlane& g, RowScr
 }
 
 // Sample rows [j0, j1) of one plane with one band's scratch. Cells of 16 px and more are sampled
-// straight from their affine positions, each run of consecutive such cells in one kernel call;
-// narrower cells go through the row arrays, so that the kernels still see runs of 16 pixels.
+// straight from their affine segments (cell_affines, a row's cells at once), each run of
+// consecutive cells of one branch in one kernel call; narrower cells go through the row arrays,
+// so that the kernels still see runs of 16 pixels.
 void Rectifier::remap_rows(const SamplePlane& src, const SamplePlane& dst, int j0, int j1, RowScratch& s) const {
   const Level& L = levels_[level_];
   const int kind = static_cast<int>(sample_kind(src));
   const auto row = sample_row_[kind];
   const auto cells = sample_cells_[kind];
   const int cell_n = L.spacing >> (dst.scale_x - 1);  // samples per cell (spacings are even)
-  const bool unit = dst.scale_x == 1 && dst.scale_y == 1;
   const int n_cells = std::min(L.nx - 1, (dst.width + cell_n - 1) / cell_n);  // those with samples of this plane
-  const std::int32_t half = (1 << L.shift) >> 1;                             // cell_affine's rounding
   const PlaneScale scale(dst);
   for (int j = j0; j < j1; ++j) {
     std::uint8_t* out = dst.row(j);
@@ -144,22 +107,22 @@ void Rectifier::remap_rows(const SamplePlane& src, const SamplePlane& dst, int j
       continue;
     }
     const std::uint8_t* modes = &cell_mode_[static_cast<std::size_t>(interpolate_row(y, s)) * (L.nx - 1)];
-    int run = 0;  // cells [i - run, i) are affine and not yet sampled
+    if (plane_) cell_affines(s.fpx.data(), s.fpy.data(), n_cells, L.shift, scale, s.plane_cells.data());
+    if (need_infinite_) cell_affines(s.fix.data(), s.fiy.data(), n_cells, L.shift, scale, s.inf_cells.data());
+    int run = 0;  // cells [i - run, i) are affine, of branch run_mode, and not yet sampled
+    std::uint8_t run_mode = kZero;
     auto flush = [&](int i) {
       if (run == 0) return;
       const int c0 = (i - run) * cell_n, c1 = std::min(i * cell_n, dst.width);
-      cells(src, s.cells.data(), cell_n, c1 - c0, out + c0 * dst.step);
+      cells(src, (run_mode == kPlane ? s.plane_cells : s.inf_cells).data() + (i - run), cell_n, c1 - c0, out + c0 * dst.step);
       run = 0;
     };
     int i = 0;
     for (; i < n_cells; ++i) {
       const std::uint8_t m = modes[i];
-      if (m == kPlane || m == kInfinite) {  // the common case: cell_affine inline (a call measured 2 % slower)
-        const std::int32_t* X = m == kPlane ? s.fpx.data() : s.fix.data();
-        const std::int32_t* Y = m == kPlane ? s.fpy.data() : s.fiy.data();
-        Affine& a = s.cells[run++];
-        a.ax = X[i], a.ay = Y[i], a.sx = (X[i + 1] - X[i] + half) >> L.shift, a.sy = (Y[i + 1] - Y[i] + half) >> L.shift;
-        if (!unit) to_plane(a, scale);
+      if (m == kPlane || m == kInfinite) {  // the common case
+        if (m != run_mode) flush(i), run_mode = m;
+        ++run;
         continue;
       }
       flush(i);
