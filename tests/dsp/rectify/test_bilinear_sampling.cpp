@@ -15,9 +15,11 @@
 #include <vector>
 
 #include "dsp/rectify/bilinear_sampling.hpp"
+#include "tests/dsp/rectify/simd_targets.hpp"
 
 using namespace rsd::dsp;
 using namespace rsd::dsp::rectify_detail;
+using namespace rsd::dsp::test;
 
 namespace {
 
@@ -128,20 +130,14 @@ void expect_segment_same(const Samplers& simd, const Samplers& ref, const Sample
 // pad: a w x h random source (seed) for each; what names the target and the kind.
 template <class Fn>
 void for_every_target_and_kind(int w, int h, std::initializer_list<int> pads, unsigned seed, Fn fn) {
-  for (std::int64_t target : simd_targets()) {
-    force_simd_target(target);
+  for_every_target([&](std::int64_t target) {
     for (const Kind& f : kPacked)
       for (int pad : pads) {
         const Source src = random_source(w, h, f, pad, seed);
         fn(f, src.view, dispatched_samplers(f.kind), scalar_samplers(f.kind), target_name(target) + " " + f.name);
       }
-  }
+  });
 }
-
-class EveryTarget : public ::testing::Test {
- protected:
-  void TearDown() override { force_simd_target(0); }
-};
 
 }  // namespace
 
@@ -229,8 +225,7 @@ TEST_F(EveryTarget, ATranslationInsideTheImageIsTheBilinearBlend) {
   // Independent of the reference: a Mono8 ramp 3x + 5y sampled at (x + 0.25, 3.5). Rows 3 and
   // 4 blend to (768 x + 4160) >> 8 = 3x + 16 and (768 x + 5440) >> 8 = 3x + 21, then
   // (3x + 16 + 3x + 21 + 1) >> 1 = 3x + 19 (exact: 3x + 18.25; one rounding per direction).
-  for (std::int64_t target : simd_targets()) {
-    force_simd_target(target);
+  for_every_target([](std::int64_t target) {
     Source src = random_source(64, 16, kPacked[0], 0, 1);
     for (int y = 0; y < 16; ++y)
       for (int x = 0; x < 64; ++x) src.bytes[y * 64 + x] = static_cast<std::uint8_t>(3 * x + 5 * y);
@@ -238,14 +233,13 @@ TEST_F(EveryTarget, ATranslationInsideTheImageIsTheBilinearBlend) {
     std::vector<std::uint8_t> out(32);
     affine(k, src.view, {fixed(2.25), fixed(3.5), fixed(1), 0}, out.data(), 32);
     for (int i = 0; i < 32; ++i) EXPECT_EQ(out[i], 3 * (2 + i) + 19) << target_name(target) << " pixel " << i;
-  }
+  });
 }
 
 TEST_F(EveryTarget, ChromaOutsideThePlaneIsNeutralGrey) {
   // U V pairs read 128 outside the plane (so that a border does not turn green): all four taps
   // outside (the SIMD kernels' zero path), and half outside (blended with 128).
-  for (std::int64_t target : simd_targets()) {
-    force_simd_target(target);
+  for_every_target([](std::int64_t target) {
     Source src = random_source(40, 12, kPacked[1], 0, 9);
     std::fill(src.bytes.begin(), src.bytes.end(), std::uint8_t{200});
     const Samplers k = dispatched_samplers(SampleKind::U8x2);
@@ -254,7 +248,7 @@ TEST_F(EveryTarget, ChromaOutsideThePlaneIsNeutralGrey) {
     for (int i = 0; i < 32; ++i) EXPECT_EQ(out[i], 128) << target_name(target) << " byte " << i;
     affine(k, src.view, {fixed(-0.5), fixed(3), 0, 0}, out.data(), 16);  // halfway between fill and 200
     for (int i = 0; i < 32; ++i) EXPECT_EQ(out[i], 164) << target_name(target) << " byte " << i;
-  }
+  });
 }
 
 // A strided plane (a Bayer site: every other sample of every other row, starting at byte 0 or
@@ -275,8 +269,7 @@ TEST_F(EveryTarget, StridedPlanesSampleLikeThePackedPlaneOfTheirSamples) {
                         {kPacked[3], 4, 2, 2, SampleKind::StridedU16},
                         {kPacked[1], 4, 2, 1, SampleKind::StridedUV4},
                         {kPacked[0], 3, 1, 0, SampleKind::StridedU8}};
-  for (std::int64_t target : simd_targets()) {
-    force_simd_target(target);
+  for_every_target([&](std::int64_t target) {
     for (const Case& c : cases) {
       const int w = 61, h = 15, b = c.packed.bytes, ch = c.packed.channels;
       const Source packed = random_source(w, h, c.packed, 0, 11);
@@ -329,5 +322,5 @@ TEST_F(EveryTarget, StridedPlanesSampleLikeThePackedPlaneOfTheirSamples) {
         }
       }
     }
-  }
+  });
 }

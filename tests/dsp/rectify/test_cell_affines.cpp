@@ -12,9 +12,11 @@
 #include "dsp/rectify/bilinear_sampling.hpp"
 #include "dsp/rectify/cell_affines.hpp"
 #include "dsp/rectify/fixed_point.hpp"
+#include "tests/dsp/rectify/simd_targets.hpp"
 
 using namespace rsd::dsp;
 using namespace rsd::dsp::rectify_detail;
+using namespace rsd::dsp::test;
 
 namespace {
 
@@ -50,18 +52,10 @@ bool operator==(const Rectifier::Affine& a, const Rectifier::Affine& b) {
   return a.ax == b.ax && a.ay == b.ay && a.sx == b.sx && a.sy == b.sy;
 }
 
-class Targets : public ::testing::Test {
- protected:
-  void TearDown() override { force_simd_target(0); }
-};
-
-TEST_F(Targets, EveryTargetComputesTheReferenceIntegers) {
+TEST_F(EveryTarget, ComputesTheReferenceIntegers) {
   std::mt19937 rng(11);
-  const std::vector<std::int64_t> targets = simd_targets();
-  ASSERT_FALSE(targets.empty());
   std::vector<std::int32_t> X, Y;
-  for (std::int64_t target : targets) {
-    force_simd_target(target);
+  for_every_target([&](std::int64_t target) {
     for (const SamplePlane& g : planes())
       for (int shift : {2, 3, 4, 5, 6})
         for (int n : {1, 3, 4, 7, 8, 9, 15, 16, 17, 30, 61}) {
@@ -77,7 +71,7 @@ TEST_F(Targets, EveryTargetComputesTheReferenceIntegers) {
                                            << " vs " << want[i].ax << " " << want[i].ay << " " << want[i].sx << " " << want[i].sy;
           EXPECT_TRUE(got[n] == (Rectifier::Affine{7, 7, 7, 7})) << target_name(target) << ": wrote past the cells, n " << n;
         }
-  }
+  });
 }
 
 // Sample k of a cell's segment in plane g lies at image x = scale_x (c0 + k) + offset_x, a

@@ -12,8 +12,10 @@
 
 #include "dsp/rectify/bilinear_sampling.hpp"
 #include "dsp/rectify/node_row_lerp.hpp"
+#include "tests/dsp/rectify/simd_targets.hpp"
 
 using namespace rsd::dsp::rectify_detail;
+using namespace rsd::dsp::test;
 
 namespace {
 
@@ -32,17 +34,9 @@ Row random_row(std::mt19937& rng, int n) {
   return r;
 }
 
-class Targets : public ::testing::Test {
- protected:
-  void TearDown() override { force_simd_target(0); }
-};
-
-TEST_F(Targets, EveryTargetComputesTheReferenceDoublesAndFixedValues) {
+TEST_F(EveryTarget, ComputesTheReferenceDoublesAndFixedValues) {
   std::mt19937 rng(5);
-  const std::vector<std::int64_t> targets = simd_targets();
-  ASSERT_FALSE(targets.empty());
-  for (std::int64_t target : targets) {
-    force_simd_target(target);
+  for_every_target([&](std::int64_t target) {
     for (int n : {1, 2, 3, 7, 8, 9, 16, 31, 61, 121}) {
       const Row r = random_row(rng, n);
       const double w = std::uniform_real_distribution<double>(0, 1)(rng);
@@ -63,7 +57,7 @@ TEST_F(Targets, EveryTargetComputesTheReferenceDoublesAndFixedValues) {
       lerp_node_row(r.top.data(), r.bot.data(), w, n, only.data(), nullptr);
       EXPECT_EQ(std::memcmp(only.data(), want.data(), n * sizeof(double)), 0) << target_name(target);
     }
-  }
+  });
 }
 
 TEST(Reference, IsTheLinearInterpolationRoundedHalfAwayFromZero) {

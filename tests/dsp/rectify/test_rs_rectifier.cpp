@@ -20,6 +20,7 @@
 #include "dsp/rectify/bilinear_sampling.hpp"
 #include "dsp/rectify/rs_rectifier.hpp"
 #include "tests/dsp/rectify/exact_map.hpp"
+#include "tests/dsp/rectify/simd_targets.hpp"
 #include "tests/support/allocation_counter.hpp"  // every C++ allocation of this process, counted
 
 using namespace rsd::dsp;
@@ -202,13 +203,12 @@ TEST(RsRectifier, ZeroMotionIsTheIdentity) {
     }
 }
 
-TEST(RsRectifier, SimdEqualsScalarBitForBit) {
+TEST_F(EveryTarget, SimdRectifierEqualsScalarBitForBit) {
   // Every case: spacings 8 (positions through the row arrays) to 32 (generated per cell);
   // every instruction set compiled in that this CPU runs.
   RectifierConfig scalar_cfg;
   scalar_cfg.use_simd = false;
-  for (std::int64_t target : rectify_detail::simd_targets()) {
-    rectify_detail::force_simd_target(target);
+  for_every_target([&](std::int64_t target) {
     for (const Case& c : cases())
       for (PixelFormat f : {PixelFormat::Mono8, PixelFormat::Mono16, PixelFormat::Rgb8}) {
         Rectifier simd(c.cam, c.timing, f), scalar(c.cam, c.timing, f, scalar_cfg);
@@ -219,8 +219,7 @@ TEST(RsRectifier, SimdEqualsScalarBitForBit) {
         EXPECT_EQ(a.data, b.data) << rectify_detail::target_name(target) << " " << c.name << ", format "
                                   << static_cast<int>(f);
       }
-  }
-  rectify_detail::force_simd_target(0);
+  });
 }
 
 TEST(RsRectifier, SamplingIsBilinearWithABlackBorder) {
