@@ -39,12 +39,18 @@ void cell_affines_simd(const std::int32_t* X, const std::int32_t* Y, int n, int 
                 "an Affine is four int32 in a row: the cells are stored interleaved");
   const hn::ScalableTag<std::int32_t> d;
   const int lanes = static_cast<int>(hn::Lanes(d));
-  if (n < lanes) {
-    for (int i = 0; i < n; ++i) out[i] = cell_affine(X, Y, i, shift, g);
+  if (n < lanes) {  // a row of fewer cells than lanes: through a copy padded with its last node
+    constexpr int kMost = HWY_MAX_BYTES / sizeof(std::int32_t);
+    HWY_ALIGN std::int32_t x[kMost + 1], y[kMost + 1];
+    HWY_ALIGN Rectifier::Affine cells[kMost];
+    for (int i = 0; i <= lanes; ++i) x[i] = X[std::min(i, n)], y[i] = Y[std::min(i, n)];
+    cells_from(d, x, y, 0, shift, g, reinterpret_cast<std::int32_t*>(cells));
+    std::copy(cells, cells + n, out);
     return;
   }
   // When n is not a multiple of the lanes, the last vector overlaps the one before it: its first
-  // cells are computed twice, to the same values.
+  // cells are computed twice, to the same values. (Not through cell_affine, either way: the
+  // cells that are not affine may hold any values, whose differences would overflow its int32.)
   auto* o = reinterpret_cast<std::int32_t*>(out);
   for (int i = 0;; i = std::min(i + lanes, n - lanes)) {
     cells_from(d, X, Y, i, shift, g, o);

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -48,6 +49,19 @@ void random_nodes(std::mt19937& rng, int n, std::vector<std::int32_t>& X, std::v
   if (n > 2) X[1] = to_fixed(kLimit), X[2] = to_fixed(-kLimit), Y[2] = to_fixed(kLimit);  // the range's ends, a jump of 2 kLimit
 }
 
+// Nodes with no solution, as the map's rows hold them (any int32: a NaN or a far value
+// converted), at every third node from `first` on; returns whether cell i has both its nodes.
+std::vector<bool> unsolve(std::vector<std::int32_t>& X, std::vector<std::int32_t>& Y, int first) {
+  const int n = static_cast<int>(X.size()) - 1;
+  std::vector<bool> solved(X.size(), true), affine(n);
+  for (int k = first; k <= n; k += 3) {
+    X[k] = k % 2 ? std::numeric_limits<std::int32_t>::min() : std::numeric_limits<std::int32_t>::max();
+    Y[k] = -X[k] - 1, solved[k] = false;
+  }
+  for (int i = 0; i < n; ++i) affine[i] = solved[i] && solved[i + 1];
+  return affine;
+}
+
 bool operator==(const Rectifier::Affine& a, const Rectifier::Affine& b) {
   return a.ax == b.ax && a.ay == b.ay && a.sx == b.sx && a.sy == b.sy;
 }
@@ -62,13 +76,18 @@ TEST_F(EveryTarget, ComputesTheReferenceIntegers) {
           random_nodes(rng, n, X, Y);
           const PlaneScale scale(g);
           std::vector<Rectifier::Affine> got(n + 1, {7, 7, 7, 7}), want(n);
-          cell_affines(X.data(), Y.data(), n, shift, scale, got.data());
           cell_affines_scalar(X.data(), Y.data(), n, shift, scale, want.data());
-          for (int i = 0; i < n; ++i)
+          // Unsolved nodes beside them (some rows): their cells are not compared, but computing
+          // them must not disturb the others (nor, in the sanitizer tree, overflow an int).
+          const std::vector<bool> affine = n > 2 && shift % 2 ? unsolve(X, Y, n % 3) : std::vector<bool>(n, true);
+          cell_affines(X.data(), Y.data(), n, shift, scale, got.data());
+          for (int i = 0; i < n; ++i) {
+            if (!affine[i]) continue;
             EXPECT_TRUE(got[i] == want[i]) << target_name(target) << " scale " << g.scale_x << "x" << g.scale_y << " offset "
                                            << g.offset_x << "," << g.offset_y << " shift " << shift << " n " << n << " cell " << i
                                            << ": " << got[i].ax << " " << got[i].ay << " " << got[i].sx << " " << got[i].sy
                                            << " vs " << want[i].ax << " " << want[i].ay << " " << want[i].sx << " " << want[i].sy;
+          }
           EXPECT_TRUE(got[n] == (Rectifier::Affine{7, 7, 7, 7})) << target_name(target) << ": wrote past the cells, n " << n;
         }
   });
