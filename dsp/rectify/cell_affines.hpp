@@ -17,7 +17,6 @@ struct PlaneScale {
   std::int32_t ox2 = 0, oy2 = 0;  // twice the offsets
   int scale_x = 1, scale_y = 1;
   std::int32_t sy_factor = 1;  // a step along the plane's row is scale_x image pixels, sy in its rows of scale_y
-  PlaneScale() = default;
   explicit PlaneScale(const SamplePlane& g)
       : ox2(static_cast<std::int32_t>(2 * g.offset_x)), oy2(static_cast<std::int32_t>(2 * g.offset_y)),
         scale_x(g.scale_x), scale_y(g.scale_y), sy_factor(g.scale_x / g.scale_y) {}
