@@ -520,11 +520,7 @@ HWY_INLINE void mono8_affine_blocks(D16x d16, const SamplePlane& src, const int*
 // tap of the segment lies at least 16 px from the right edge and 3 rows from the bottom.
 template <bool kEven>
 inline bool affine_fits(const SamplePlane& src, const Affine& a, int n) {
-  if (a.sx < 0 || a.sx > 7 * 65536 / 4 || std::abs(std::int64_t{a.sy}) * 8 >= 65536 || n < 1) return false;
-  const std::int64_t last = n - 1;
-  const std::int64_t x0 = a.ax, x1 = a.ax + last * a.sx, y0 = a.ay, y1 = a.ay + last * a.sy;
-  return ((x0 + 128) >> 16) >= 0 && ((x1 + 128) >> 16) <= last_origin<kEven>(src) && ((std::min(y0, y1) + 128) >> 16) >= 0 &&
-         ((std::max(y0, y1) + 128) >> 16) <= src.height - 3;
+  return segment_within(a, n, 7 * 65536 / 4 + 1, last_origin<kEven>(src), src.height - 3);
 }
 
 // ---- Affine blocks of four samples: origins and checks in scalars ----------------------

@@ -1,6 +1,7 @@
 // The bilinear sampler's SIMD kernels, part 3: RGB24 and U V pairs along affine segments that
-// fit, eight samples per block. Included by bilinear_sampling_simd.cpp once per Highway target,
-// after bilinear_blocks-inl.h (whose wide steps, Mono8 origins and blends it uses).
+// fit, eight samples per block; and on AVX-512 with VBMI, a wide step per window.
+// Included by bilinear_sampling_simd.cpp once per Highway target, after bilinear_blocks-inl.h
+// (whose wide steps, Mono8 origins and blends it uses).
 #if defined(RSD_DSP_RECTIFY_BILINEAR_EIGHT_INL_H_) == defined(HWY_TARGET_TOGGLE)
 #ifdef RSD_DSP_RECTIFY_BILINEAR_EIGHT_INL_H_
 #undef RSD_DSP_RECTIFY_BILINEAR_EIGHT_INL_H_
@@ -134,11 +135,8 @@ HWY_INLINE void affine_blocks8(D16x d16, const SamplePlane& src, const std::uint
 // left tap), and rows 3 before the bottom (a straddling block's third row).
 template <int kBytes>
 inline bool blocks8_fit(const SamplePlane& src, const Affine& a, int n) {
-  if (n < 1 || a.sx < 0 || 3 * std::int64_t{a.sx} >= kMaxSpan8<kBytes> * 65536 || std::abs(std::int64_t{a.sy}) * 8 >= 65536)
-    return false;
-  const std::int64_t last = n - 1, x1 = a.ax + last * a.sx, y0 = a.ay, y1 = a.ay + last * a.sy;
-  return ((a.ax + 128) >> 16) >= 0 && kBytes * ((x1 + 128) >> 16) + 16 <= kBytes * std::int64_t{src.width} &&
-         ((std::min(y0, y1) + 128) >> 16) >= 0 && ((std::max(y0, y1) + 128) >> 16) <= src.height - 3;
+  // 3 sx < kMaxSpan8 px; the last window's 16 bytes end in the row: kBytes x + 16 <= kBytes width.
+  return segment_within(a, n, (kMaxSpan8<kBytes> * 65536 + 2) / 3, src.width - (16 + kBytes - 1) / kBytes, src.height - 3);
 }
 
 // The windows of `count` blocks of eight samples of segment a from sample e0 on (blocks8_fit),
@@ -157,6 +155,183 @@ HWY_INLINE void block8_origins(const SamplePlane& src, const Affine& a, int e0, 
     for (int w = 1; w < kWindows8<kBytes>; ++w, x[w - 1] += 8 * std::int64_t{a.sx}) p[w][b0 + m] = row + kBytes * static_cast<int>(x[w] >> 16);
   }
 }
+
+#if HWY_TARGET == HWY_AVX3_DL
+// ---- RGB24 and U V pairs along affine segments, a wide step per 128-byte window (VBMI) ----
+//
+// AVX-512 VBMI looks bytes up across two whole vectors (vpermi2b: a 128-byte table), so a wide
+// step's 32 samples need no per-block windows: one window of 128 bytes per row from the step's
+// first left tap (42 RGB24 pixels, 64 U V pairs; two 64-byte loads a row) and one origin per
+// step instead of eight. A lane per output byte, as the blocks have them: U V pairs split each
+// sample's 32-bit lane into its U and V lanes (pairs_blend); RGB24's three vectors of 32 lanes
+// take their pixels' positions by a 16-bit lookup (vpermw) from the step's 32 positions, which
+// the wide layout narrowed block by block puts in pixel order. A step fits while its last left
+// tap lies at most N - 2 samples right of its first (31 sx <= N - 2 px, N = 128 / kBytes), its
+// top taps span at most one row boundary (31 |sy| < 1 row) and lie above the last row, and its
+// window ends in the row; a segment's steps go this way until one does not fit.
+constexpr bool kWindow128 = true;
+
+// The byte of the 128 in lo, hi that each byte of idx names (bits 0-6).
+HWY_INLINE hn::Vec<DW8> lookup128(hn::Vec<DW8> lo, hn::Vec<DW8> hi, hn::Vec<DW8> idx) {
+  return hn::Vec<DW8>{_mm512_permutex2var_epi8(lo.raw, idx.raw, hi.raw)};
+}
+
+template <int kBytes>
+constexpr int kWindowSamples = 128 / kBytes;
+
+// The slopes a window of 128 bytes per step takes (the rest is checked per step).
+template <int kBytes>
+inline bool window128_slopes(const Affine& a) {
+  constexpr std::uint32_t kMaxSx = (kWindowSamples<kBytes> - 2) * 65536u / 31;
+  return static_cast<std::uint32_t>(a.sx) <= kMaxSx && std::abs(std::int64_t{a.sy}) * 31 < 65536;
+}
+
+// A step's window: the rows (two, three when its top taps straddle a row boundary) from its
+// origin (xa, ya) in samples.
+struct Step128 {
+  struct Row {
+    hn::Vec<DW8> lo, hi;
+  } rows[3];
+  bool straddle;
+  int xa, ya;
+};
+
+// The window of samples [e, e + 32) of segment a (window128_slopes); false when its top taps
+// leave the rows [0, height - 2] (the rows below them must exist) or its 128 bytes would leave
+// the row. Checked per step: a chroma cell is one step, and a check per segment cost as much as
+// the step's own scalars.
+template <int kBytes>
+HWY_INLINE bool step128(const SamplePlane& src, const Affine& a, int e, Step128& s) {
+  const std::int64_t x = a.ax + std::int64_t{e} * a.sx + 128, y = a.ay + std::int64_t{e} * a.sy + 128;
+  const std::int64_t y31 = y + 31 * std::int64_t{a.sy}, top = std::min(y, y31), bottom = std::max(y, y31);
+  const auto below = [](std::int64_t v, int n) {  // 0 <= v >> 16 < n
+    return static_cast<std::uint64_t>(v) < static_cast<std::uint64_t>(std::max(n, 0)) << 16;
+  };
+  constexpr int kRoom = (128 + kBytes - 1) / kBytes;  // kBytes xa + 128 <= kBytes width
+  if (!(below(x, src.width - kRoom + 1) & below(top, src.height - 1) & below(bottom, src.height - 1))) return false;
+  s.xa = static_cast<int>(x >> 16), s.ya = static_cast<int>(top >> 16), s.straddle = (bottom >> 16) != s.ya;
+  const DW8 d8;
+  const std::uint8_t* p = src.row(s.ya) + kBytes * s.xa;
+  for (int r = 0; r < (s.straddle ? 3 : 2); ++r, p += src.stride) s.rows[r] = {hn::LoadU(d8, p), hn::LoadU(d8, p + 64)};
+  return true;
+}
+
+// One vector of 32 lanes blended: idx their tap pairs' bytes in the window, x16 and y16 their
+// positions relative to it (1/256 px: the weights in the low bytes, y16's high byte the row).
+HWY_INLINE hn::Vec<DWU16> blend128(const Step128& s, hn::Vec<DW8> idx, hn::Vec<DWU16> x16, hn::Vec<DWU16> y16) {
+  const DWU16 du16;
+  auto pick = [&](const Step128::Row& r) { return hn::BitCast(du16, lookup128(r.lo, r.hi, idx)); };
+  auto up = pick(s.rows[0]), down = pick(s.rows[1]);
+  if (s.straddle) {
+    const auto m = hn::Eq(hn::ShiftRight<8>(y16), hn::Set(du16, 1));
+    up = hn::IfThenElse(m, down, up);
+    down = hn::IfThenElse(m, pick(s.rows[2]), down);
+  }
+  const auto byte = hn::Set(du16, 0xFF);
+  return lerp16(blend_pairs(up, hn::And(x16, byte)), blend_pairs(down, hn::And(x16, byte)), hn::And(y16, byte));
+}
+
+// Positions X (in the wide layout) relative to the step's origin, in 1/256 px.
+HWY_INLINE VW32 relative128(VW32 X, int origin) {
+  const DW32 d32;
+  return hn::Sub(hn::ShiftRight<8>(hn::Add(X, hn::Set(d32, 128))), hn::Set(d32, origin * 256));
+}
+
+// U V pairs: output byte 2s + c (sample s, U or V) from the lanes: sample s sits in lane s % 4
+// of block s / 8 of X0 (s % 8 < 4) or X1, its U in the low byte of the lane's low half, V of
+// the high.
+constexpr Pattern pairs_order128() {
+  Pattern r;
+  for (int s = 0; s < 32; ++s)
+    for (int c = 0; c < 2; ++c)
+      r.b[2 * s + c] = static_cast<std::uint8_t>((s % 8 < 4 ? 0 : 64) + 16 * (s / 8) + 4 * (s % 4) + 2 * c);
+  return r;
+}
+constexpr Pattern kPairsOrder128 = pairs_order128();
+
+HWY_INLINE void pairs_step128(const Step128& s, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1, std::uint8_t* out) {
+  const DWU16 du16;
+  const DW8 d8;
+  const DW32 d32;
+  auto lanes = [&](VW32 X, VW32 Y) {
+    const auto rx = relative128(X, s.xa), ry = relative128(Y, s.ya);
+    const auto x16 = hn::BitCast(du16, hn::Or(rx, hn::ShiftLeft<16>(rx))), y16 = hn::BitCast(du16, hn::Or(ry, hn::ShiftLeft<16>(ry)));
+    const auto i2 = hn::ShiftLeft<1>(hn::ShiftRight<8>(x16));  // the left tap's U byte, V one on
+    const auto idx = hn::BitCast(d8, hn::Add(hn::Or(i2, hn::ShiftLeft<8>(i2)), hn::BitCast(du16, hn::Set(d32, 0x03010200))));
+    return hn::BitCast(d8, blend128(s, idx, x16, y16));
+  };
+  hn::StoreU(lookup128(lanes(X0, Y0), lanes(X1, Y1), load_pattern(d8, kPairsOrder128)), d8, out);
+}
+
+// RGB24: lane j of vector v is output byte 32 v + j, the colour c = (32 v + j) % 3 of pixel
+// (32 v + j) / 3: its pixel (a 16-bit lookup) and the bytes c and c + 3 of its pixel's taps.
+struct alignas(64) Pixels16 {
+  std::uint16_t w[32] = {};
+};
+constexpr Pixels16 rgb_pixels128(int v) {
+  Pixels16 r;
+  for (int j = 0; j < 32; ++j) r.w[j] = static_cast<std::uint16_t>((32 * v + j) / 3);
+  return r;
+}
+constexpr Pattern rgb_colours128(int v) {
+  Pattern r;
+  for (int j = 0; j < 32; ++j) {
+    const int c = (32 * v + j) % 3;
+    r.b[2 * j] = static_cast<std::uint8_t>(c), r.b[2 * j + 1] = static_cast<std::uint8_t>(c + 3);
+  }
+  return r;
+}
+constexpr Pixels16 kRgbPixels128[3] = {rgb_pixels128(0), rgb_pixels128(1), rgb_pixels128(2)};
+constexpr Pattern kRgbColours128[3] = {rgb_colours128(0), rgb_colours128(1), rgb_colours128(2)};
+// Bytes 0-63 of a step: the low bytes of vectors 0 and 1.
+constexpr Pattern even_bytes128() {
+  Pattern r;
+  for (int j = 0; j < 64; ++j) r.b[j] = static_cast<std::uint8_t>(2 * j);
+  return r;
+}
+constexpr Pattern kEvenBytes128 = even_bytes128();
+
+HWY_INLINE void rgb_step128(const Step128& s, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1, std::uint8_t* out) {
+  const DWU16 du16;
+  const DW8 d8;
+  const DW32 d32;
+  // The 32 positions in pixel order (below 42 px: no saturation).
+  const auto x16 = hn::BitCast(du16, narrow_blocks(d32, relative128(X0, s.xa), relative128(X1, s.xa)));
+  const auto y16 = hn::BitCast(du16, narrow_blocks(d32, relative128(Y0, s.ya), relative128(Y1, s.ya)));
+  auto vector = [&](int v) {
+    const auto pixel = hn::Load(du16, kRgbPixels128[v].w);
+    const auto px = hn::Vec<DWU16>{_mm512_permutexvar_epi16(pixel.raw, x16.raw)};
+    const auto py = hn::Vec<DWU16>{_mm512_permutexvar_epi16(pixel.raw, y16.raw)};
+    const auto col = hn::ShiftRight<8>(px);  // the left tap's pixel: bytes 3 col + c and + 3
+    const auto idx = hn::BitCast(d8, hn::Add(hn::Mul(col, hn::Set(du16, 0x0303)), hn::BitCast(du16, load_pattern(d8, kRgbColours128[v]))));
+    return hn::BitCast(d8, blend128(s, idx, px, py));
+  };
+  hn::StoreU(lookup128(vector(0), vector(1), load_pattern(d8, kEvenBytes128)), d8, out);
+  const hn::Rebind<std::uint8_t, DWU16> d8n;  // 32 bytes
+  hn::StoreU(hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<DWU16>(), vector(2))), d8n, out + 64);
+}
+
+// A wide step of samples [e, e + 32) of segment a (window128_slopes), positions X0 .. Y1 in the
+// wide layout, to out (32 kBytes bytes); false (nothing written) when it does not fit (step128).
+template <int kBytes>
+HWY_INLINE bool window128_step(const SamplePlane& src, const Affine& a, int e, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1,
+                               std::uint8_t* out) {
+  Step128 s;
+  if (!step128<kBytes>(src, a, e, s)) return false;
+  if constexpr (kBytes == 2)
+    pairs_step128(s, X0, Y0, X1, Y1, out);
+  else
+    rgb_step128(s, X0, Y0, X1, Y1, out);
+  return true;
+}
+#else
+constexpr bool kWindow128 = false;
+// Declared for the callers' discarded `if constexpr (kWindow128)` branches; never defined.
+template <int kBytes>
+bool window128_slopes(const Affine& a);
+template <int kBytes>
+bool window128_step(const SamplePlane& src, const Affine& a, int e, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1, std::uint8_t* out);
+#endif  // HWY_TARGET == HWY_AVX3_DL
 
 #endif  // HWY_TARGET != HWY_SCALAR
 // NOLINTNEXTLINE(google-readability-namespace-comments)

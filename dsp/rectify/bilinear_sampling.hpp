@@ -138,6 +138,22 @@ inline void sample_affine_strided(const SamplePlane& src, const Affine& a, std::
     sample_pixel_strided<T>(src, static_cast<std::int32_t>(x), static_cast<std::int32_t>(y), out + i * src.step);
 }
 
+// Whether the taps of samples [0, n) of segment a, as tap() rounds them, lie in columns
+// [0, last_x] and rows [0, last_y], with 0 <= sx < sx_end and |sy| below 1/8 row (a block of
+// eight samples then spans at most two rows): the SIMD kernels' test, once per cell, that a
+// segment's blocks need no checks of their own. The positions are monotone along a segment,
+// so its ends bound every tap. Without branches (64-bit compares combined by &): it runs for
+// every cell, and a chroma cell is a single step of the kernels on AVX-512.
+inline bool segment_within(const Affine& a, int n, std::int32_t sx_end, int last_x, int last_y) {
+  const std::int64_t last = n - 1, x1 = a.ax + last * a.sx, y1 = a.ay + last * a.sy;
+  const auto in = [](std::int64_t v, int last_tap) {  // 0 <= (v + 128) >> 16 <= last_tap
+    return static_cast<std::uint64_t>(v + 128) < static_cast<std::uint64_t>(std::max(last_tap + 1, 0)) << 16;
+  };
+  return (n >= 1) & (static_cast<std::uint32_t>(a.sx) < static_cast<std::uint32_t>(sx_end)) &
+         (static_cast<std::uint64_t>(std::int64_t{a.sy} + 8191) < 16383) & in(a.ax, last_x) & in(x1, last_x) &
+         in(a.ay, last_y) & in(y1, last_y);
+}
+
 // A run of consecutive cells of one row: cell k covers the output samples
 // [k cell_n, min((k + 1) cell_n, total)) and its positions are affine, a[k] from its first
 // sample on. One call per run (not per cell) keeps the per-call set-up out of every cell.

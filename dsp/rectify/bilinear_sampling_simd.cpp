@@ -1,6 +1,7 @@
 // The SIMD kernels of the bilinear sampler, one source for every instruction set: Google
-// Highway compiles this file once per target (SSSE3, SSE4, AVX2, AVX-512 and its portable
-// EMU128 on x86-64; NEON, SVE and SVE2 on arm64) and picks the best the CPU runs at run time.
+// Highway compiles this file once per target (SSSE3, SSE4, AVX2, AVX-512, AVX-512 with VBMI
+// and its portable EMU128 on x86-64; NEON, SVE and SVE2 on arm64) and picks the best the CPU
+// runs at run time.
 // Every kernel computes the integers of the scalar reference (bilinear_sampling.hpp) bit for
 // bit; tests/dsp/rectify/test_bilinear_sampling.cpp compares each target with it.
 //
@@ -22,6 +23,8 @@
 //   (blocks8_fit), 8 samples per block sharing one set of position lanes, their output bytes
 //   in 16-bit lanes of three (RGB24) or two (U V) vectors, each vector through a window of its
 //   own (affine_blocks8), else 4 per block with per-block checks in scalars (affine_blocks);
+//   on AVX-512 with VBMI (Highway's AVX3_DL) both first try a wide step of 32 samples through
+//   one 128-byte window per row, looked up across two vectors (window128_step);
 // - otherwise (Mono16, steps whose taps do not fit a window) 4 pixels on 32-bit lanes: windows
 //   where the taps fit, else a gather of the 32-bit word at each left tap (it holds the right tap
 //   too: bytes 0..1 for Mono8, both halves for Mono16 and U V; RGB24 gathers again at +3), only
@@ -257,7 +260,14 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
         mono8_affine_blocks<kEven>(DW16(), src, xa, ya, straddle, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kOut);
       }
   } else if constexpr (kAffineBlocks<T, C, kOut>) {  // RGB24, U V pairs: checks per segment, else per block
-    if (blocks_fit<T, C>(src, a, n / kStep * kStep)) {
+    if constexpr (kWindow128) {  // with VBMI: one window per step, while they fit
+      if (window128_slopes<kBytes>(a))
+        for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
+          if (!window128_step<kBytes>(src, a, i, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes)) break;
+    }
+    if (i + kStep > n) {
+      // no whole step left
+    } else if (blocks_fit<T, C>(src, a, n / kStep * kStep)) {
       for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
         fitted_step<T, C>(src, a, i, a, i, kBlocks, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes,
                           room_after || i + kStep + 3 <= n);

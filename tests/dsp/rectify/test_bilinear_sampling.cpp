@@ -141,6 +141,35 @@ void for_every_target_and_kind(int w, int h, std::initializer_list<int> pads, un
 
 }  // namespace
 
+// segment_within, the kernels' test once per segment that its blocks need no checks, against
+// every sample's taps as tap() rounds them, one by one (and no segment of no samples).
+TEST(SegmentWithin, HoldsWhenEverySampleTapLiesInsideTheBounds) {
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> u(0, 1);
+  int inside = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const int n = trial % 41, last_x = 20 + trial % 7, last_y = 5 + trial % 3;
+    const std::int32_t sx_end = 65536 + trial % 5 * 10000;
+    Affine a{fixed(34 * u(rng) - 4), fixed(10 * u(rng) - 2), fixed(2.4 * u(rng) - 0.2), fixed(0.3 * (u(rng) - 0.5))};
+    if (trial % 2) {  // on the edges, to the unit: a tap's rounding (m - 1/512 px), the slopes' limits
+      const int d = static_cast<int>(rng() % 5) - 2;
+      auto edge = [&](std::int32_t v) { return (v + 128) / 65536 * 65536 - 128 + d; };
+      a.ax = edge(a.ax), a.ay = edge(a.ay);
+      if (trial % 3 == 0) a.sy = (a.sy < 0 ? -8192 : 8192) + d;
+      if (trial % 5 == 0) a.sx = sx_end + d;
+    }
+    bool want = n >= 1 && a.sx >= 0 && a.sx < sx_end && std::abs(a.sy) < 8192;  // |sy| below 1/8 row
+    for (int k = 0; k < n && want; ++k) {
+      const Tap t = tap(a.ax + k * a.sx, a.ay + k * a.sy);
+      want = t.x0 >= 0 && t.x0 <= last_x && t.y0 >= 0 && t.y0 <= last_y;
+    }
+    ASSERT_EQ(segment_within(a, n, sx_end, last_x, last_y), want)
+        << "trial " << trial << ": n " << n << " a " << a.ax << " " << a.ay << " " << a.sx << " " << a.sy;
+    inside += want;
+  }
+  EXPECT_GT(inside, 1000);  // both answers are common
+}
+
 TEST(SimdTargets, TheBestCompiledTargetIsTheOneUsed) {
   const std::vector<std::int64_t> targets = simd_targets();
   ASSERT_FALSE(targets.empty());
@@ -194,6 +223,28 @@ TEST_F(EveryTarget, SegmentsAtEveryMagnificationEqualTheScalarReference) {
       const int n = 64 + trial % 65;
       const Affine a{fixed(1 + 10 * u(rng)), fixed(12 + 16 * u(rng)), fixed(sx), fixed(sy)};
       expect_segment_same(simd, ref, src, a, n, f, what + " sx " + std::to_string(sx) + " trial " + std::to_string(trial));
+    }
+  });
+}
+
+// Segments at the limits of what the windows hold (AVX-512 VBMI's steps of 32 samples through
+// 128 bytes: 31 sx <= 62 px for U V pairs, 40 px for RGB24; 31 |sy| < 1 row; the window ending
+// at the row's end; top taps down to the last row but one): slopes either side of each limit,
+// and segments whose first steps fit and whose later ones leave the window (the right edge, the
+// bottom rows).
+TEST_F(EveryTarget, SegmentsAtTheWindowLimitsEqualTheScalarReference) {
+  for_every_target_and_kind(200, 24, {0}, 13, [](const Kind& f, const SamplePlane& src, const Samplers& simd, const Samplers& ref,
+                                                 const std::string& what) {
+    std::mt19937 rng(37);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int trial = 0; trial < 1200; ++trial) {
+      const int family = trial % 3;  // around 62 / 31 = 2 px, around 40 / 31 = 1.29 px, near 1 px at the right edge
+      const double sx = family == 0 ? 1.95 + 0.1 * u(rng) : family == 1 ? 1.25 + 0.08 * u(rng) : 0.95 + 0.1 * u(rng);
+      const double sy = (trial % 4 < 2 ? 1 : -1) * 0.036 * u(rng);  // either side of 1 / 31 = 0.0323
+      const int n = 96;
+      const double x = family < 2 ? 12 * u(rng) : src.width - n * sx - 20 + 40 * u(rng), y = (src.height + 1) * u(rng) - 1;
+      const Affine a{fixed(x), fixed(y), fixed(sx), fixed(sy)};
+      expect_segment_same(simd, ref, src, a, n, f, what + " trial " + std::to_string(trial));
     }
   });
 }
