@@ -1,5 +1,6 @@
 // The bilinear sampler's SIMD kernels, part 3: RGB24 and U V pairs along affine segments that
-// fit, eight samples per block; and on AVX-512 with VBMI, a wide step per window.
+// fit, eight samples per block; and on AVX-512 with VBMI, Mono8, RGB24 and U V pairs a wide step
+// per window.
 // Included by bilinear_sampling_simd.cpp once per Highway target, after bilinear_blocks-inl.h
 // (whose wide steps, Mono8 origins and blends it uses).
 #if defined(RSD_DSP_RECTIFY_BILINEAR_EIGHT_INL_H_) == defined(HWY_TARGET_TOGGLE)
@@ -157,12 +158,13 @@ HWY_INLINE void block8_origins(const SamplePlane& src, const Affine& a, int e0, 
 }
 
 #if HWY_TARGET == HWY_AVX3_DL
-// ---- RGB24 and U V pairs along affine segments, a wide step per 128-byte window (VBMI) ----
+// ---- Mono8, RGB24 and U V pairs along affine segments, a wide step per 128-byte window (VBMI) ----
 //
 // AVX-512 VBMI looks bytes up across two whole vectors (vpermi2b: a 128-byte table), so a wide
 // step's 32 samples need no per-block windows: one window of 128 bytes per row from the step's
-// first left tap (42 RGB24 pixels, 64 U V pairs; two 64-byte loads a row) and one origin per
-// step instead of eight. A lane per output byte, as the blocks have them: U V pairs split each
+// first left tap (128 Mono8 pixels, 42 RGB24 pixels, 64 U V pairs; two 64-byte loads a row) and
+// one origin per step instead of one per block. A lane per output byte, as the blocks have
+// them: Mono8's 32 lanes are the step's pixels in order; U V pairs split each
 // sample's 32-bit lane into its U and V lanes (pairs_blend); RGB24's three vectors of 32 lanes
 // take their pixels' positions by a 16-bit lookup (vpermw) from the step's 32 positions, which
 // the wide layout narrowed block by block puts in pixel order. A step fits while its last left
@@ -311,6 +313,19 @@ HWY_INLINE void rgb_step128(const Step128& s, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1
   hn::StoreU(hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<DWU16>(), vector(2))), d8n, out + 64);
 }
 
+// Mono8: the 32 lanes are the step's pixels, in order; each looks up its two taps (bytes col,
+// col + 1 of the window).
+HWY_INLINE void mono8_step128(const Step128& s, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1, std::uint8_t* out) {
+  const DWU16 du16;
+  const DW8 d8;
+  const DW32 d32;
+  const auto x16 = hn::BitCast(du16, narrow_blocks(d32, relative128(X0, s.xa), relative128(X1, s.xa)));
+  const auto y16 = hn::BitCast(du16, narrow_blocks(d32, relative128(Y0, s.ya), relative128(Y1, s.ya)));
+  const auto idx = hn::BitCast(d8, hn::Add(hn::Mul(hn::ShiftRight<8>(x16), hn::Set(du16, 0x0101)), hn::Set(du16, 0x0100)));
+  const hn::Rebind<std::uint8_t, DWU16> d8n;  // 32 bytes
+  hn::StoreU(hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<DWU16>(), blend128(s, idx, x16, y16))), d8n, out);
+}
+
 // A wide step of samples [e, e + 32) of segment a (window128_slopes), positions X0 .. Y1 in the
 // wide layout, to out (32 kBytes bytes); false (nothing written) when it does not fit (step128).
 template <int kBytes>
@@ -318,7 +333,9 @@ HWY_INLINE bool window128_step(const SamplePlane& src, const Affine& a, int e, V
                                std::uint8_t* out) {
   Step128 s;
   if (!step128<kBytes>(src, a, e, s)) return false;
-  if constexpr (kBytes == 2)
+  if constexpr (kBytes == 1)
+    mono8_step128(s, X0, Y0, X1, Y1, out);
+  else if constexpr (kBytes == 2)
     pairs_step128(s, X0, Y0, X1, Y1, out);
   else
     rgb_step128(s, X0, Y0, X1, Y1, out);

@@ -23,8 +23,8 @@
 //   (blocks8_fit), 8 samples per block sharing one set of position lanes, their output bytes
 //   in 16-bit lanes of three (RGB24) or two (U V) vectors, each vector through a window of its
 //   own (affine_blocks8), else 4 per block with per-block checks in scalars (affine_blocks);
-//   on AVX-512 with VBMI (Highway's AVX3_DL) both first try a wide step of 32 samples through
-//   one 128-byte window per row, looked up across two vectors (window128_step);
+//   on AVX-512 with VBMI (Highway's AVX3_DL) these and Mono8 first try a wide step of 32
+//   samples through one 128-byte window per row, looked up across two vectors (window128_step);
 // - otherwise (Mono16, steps whose taps do not fit a window) 4 pixels on 32-bit lanes: windows
 //   where the taps fit, else a gather of the 32-bit word at each left tap (it holds the right tap
 //   too: bytes 0..1 for Mono8, both halves for Mono16 and U V; RGB24 gathers again at +3), only
@@ -252,7 +252,12 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
     constexpr bool kEven = kOut == 2;
     // The merged 16 bytes of a strided block reach the next sample's pair: the last step needs room.
     const int end = kEven && !room_after ? n - 1 : n;
-    if (end >= kStep && affine_fits<kEven>(src, a, end / kStep * kStep))
+    if constexpr (kWindow128 && !kEven) {  // with VBMI: one window per step, while they fit
+      if (window128_slopes<1>(a))
+        for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
+          if (!window128_step<1>(src, a, i, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i)) break;
+    }
+    if (i + kStep <= end && affine_fits<kEven>(src, a, end / kStep * kStep))
       for (; i + kStep <= end; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys)) {
         int xa[kBlocks], ya[kBlocks];
         bool straddle = false;

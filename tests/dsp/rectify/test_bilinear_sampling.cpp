@@ -228,21 +228,25 @@ TEST_F(EveryTarget, SegmentsAtEveryMagnificationEqualTheScalarReference) {
 }
 
 // Segments at the limits of what the windows hold (AVX-512 VBMI's steps of 32 samples through
-// 128 bytes: 31 sx <= 62 px for U V pairs, 40 px for RGB24; 31 |sy| < 1 row; the window ending
-// at the row's end; top taps down to the last row but one): slopes either side of each limit,
-// and segments whose first steps fit and whose later ones leave the window (the right edge, the
-// bottom rows).
+// 128 bytes: 31 sx <= 62 px for U V pairs, 40 px for RGB24, 126 px for Mono8; 31 |sy| < 1 row;
+// the window ending at the row's end; top taps down to the last row but one): slopes either
+// side of each limit, and segments whose first steps fit and whose later ones leave the window
+// (the right edge, the bottom rows).
 TEST_F(EveryTarget, SegmentsAtTheWindowLimitsEqualTheScalarReference) {
   for_every_target_and_kind(200, 24, {0}, 13, [](const Kind& f, const SamplePlane& src, const Samplers& simd, const Samplers& ref,
                                                  const std::string& what) {
     std::mt19937 rng(37);
     std::uniform_real_distribution<double> u(0, 1);
-    for (int trial = 0; trial < 1200; ++trial) {
-      const int family = trial % 3;  // around 62 / 31 = 2 px, around 40 / 31 = 1.29 px, near 1 px at the right edge
-      const double sx = family == 0 ? 1.95 + 0.1 * u(rng) : family == 1 ? 1.25 + 0.08 * u(rng) : 0.95 + 0.1 * u(rng);
+    for (int trial = 0; trial < 1600; ++trial) {
+      // around 62 / 31 = 2 px, 40 / 31 = 1.29 px, 126 / 31 = 4.06 px; near 1 px at the right edge
+      const int family = trial % 4;
+      const double sx = family == 0   ? 1.95 + 0.1 * u(rng)
+                        : family == 1 ? 1.25 + 0.08 * u(rng)
+                        : family == 2 ? 3.95 + 0.2 * u(rng)
+                                      : 0.95 + 0.1 * u(rng);
       const double sy = (trial % 4 < 2 ? 1 : -1) * 0.036 * u(rng);  // either side of 1 / 31 = 0.0323
       const int n = 96;
-      const double x = family < 2 ? 12 * u(rng) : src.width - n * sx - 20 + 40 * u(rng), y = (src.height + 1) * u(rng) - 1;
+      const double x = family < 3 ? 12 * u(rng) : src.width - n * sx - 20 + 40 * u(rng), y = (src.height + 1) * u(rng) - 1;
       const Affine a{fixed(x), fixed(y), fixed(sx), fixed(sy)};
       expect_segment_same(simd, ref, src, a, n, f, what + " trial " + std::to_string(trial));
     }
