@@ -239,6 +239,21 @@ HWY_INLINE VW32 relative128(VW32 X, int origin) {
   return hn::Sub(hn::ShiftRight<8>(hn::Add(X, hn::Set(d32, 128))), hn::Set(d32, origin * 256));
 }
 
+// The step's 32 positions relative to its origin, narrowed to 16-bit lanes in pixel order (the
+// wide layout narrowed block by block); below 128 px, so nothing saturates. Mono8 and RGB24.
+HWY_INLINE void pixel_order128(const Step128& s, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1, hn::Vec<DWU16>& x16, hn::Vec<DWU16>& y16) {
+  const DWU16 du16;
+  const DW32 d32;
+  x16 = hn::BitCast(du16, narrow_blocks(d32, relative128(X0, s.xa), relative128(X1, s.xa)));
+  y16 = hn::BitCast(du16, narrow_blocks(d32, relative128(Y0, s.ya), relative128(Y1, s.ya)));
+}
+
+// The low bytes of 32 lanes to out (32 bytes).
+HWY_INLINE void store_low_bytes32(hn::Vec<DWU16> v, std::uint8_t* out) {
+  const hn::Rebind<std::uint8_t, DWU16> d8n;
+  hn::StoreU(hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<DWU16>(), v)), d8n, out);
+}
+
 // U V pairs: output byte 2s + c (sample s, U or V) from the lanes: sample s sits in lane s % 4
 // of block s / 8 of X0 (s % 8 < 4) or X1, its U in the low byte of the lane's low half, V of
 // the high.
@@ -296,21 +311,18 @@ constexpr Pattern kEvenBytes128 = even_bytes128();
 HWY_INLINE void rgb_step128(const Step128& s, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1, std::uint8_t* out) {
   const DWU16 du16;
   const DW8 d8;
-  const DW32 d32;
-  // The 32 positions in pixel order (below 42 px: no saturation).
-  const auto x16 = hn::BitCast(du16, narrow_blocks(d32, relative128(X0, s.xa), relative128(X1, s.xa)));
-  const auto y16 = hn::BitCast(du16, narrow_blocks(d32, relative128(Y0, s.ya), relative128(Y1, s.ya)));
+  hn::Vec<DWU16> x16, y16;
+  pixel_order128(s, X0, Y0, X1, Y1, x16, y16);
   auto vector = [&](int v) {
     const auto pixel = hn::Load(du16, kRgbPixels128[v].w);
     const auto px = hn::Vec<DWU16>{_mm512_permutexvar_epi16(pixel.raw, x16.raw)};
     const auto py = hn::Vec<DWU16>{_mm512_permutexvar_epi16(pixel.raw, y16.raw)};
     const auto col = hn::ShiftRight<8>(px);  // the left tap's pixel: bytes 3 col + c and + 3
     const auto idx = hn::BitCast(d8, hn::Add(hn::Mul(col, hn::Set(du16, 0x0303)), hn::BitCast(du16, load_pattern(d8, kRgbColours128[v]))));
-    return hn::BitCast(d8, blend128(s, idx, px, py));
+    return blend128(s, idx, px, py);
   };
-  hn::StoreU(lookup128(vector(0), vector(1), load_pattern(d8, kEvenBytes128)), d8, out);
-  const hn::Rebind<std::uint8_t, DWU16> d8n;  // 32 bytes
-  hn::StoreU(hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<DWU16>(), vector(2))), d8n, out + 64);
+  hn::StoreU(lookup128(hn::BitCast(d8, vector(0)), hn::BitCast(d8, vector(1)), load_pattern(d8, kEvenBytes128)), d8, out);
+  store_low_bytes32(vector(2), out + 64);
 }
 
 // Mono8: the 32 lanes are the step's pixels, in order; each looks up its two taps (bytes col,
@@ -318,12 +330,10 @@ HWY_INLINE void rgb_step128(const Step128& s, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1
 HWY_INLINE void mono8_step128(const Step128& s, VW32 X0, VW32 Y0, VW32 X1, VW32 Y1, std::uint8_t* out) {
   const DWU16 du16;
   const DW8 d8;
-  const DW32 d32;
-  const auto x16 = hn::BitCast(du16, narrow_blocks(d32, relative128(X0, s.xa), relative128(X1, s.xa)));
-  const auto y16 = hn::BitCast(du16, narrow_blocks(d32, relative128(Y0, s.ya), relative128(Y1, s.ya)));
+  hn::Vec<DWU16> x16, y16;
+  pixel_order128(s, X0, Y0, X1, Y1, x16, y16);
   const auto idx = hn::BitCast(d8, hn::Add(hn::Mul(hn::ShiftRight<8>(x16), hn::Set(du16, 0x0101)), hn::Set(du16, 0x0100)));
-  const hn::Rebind<std::uint8_t, DWU16> d8n;  // 32 bytes
-  hn::StoreU(hn::DemoteTo(d8n, hn::BitCast(hn::RebindToSigned<DWU16>(), blend128(s, idx, x16, y16))), d8n, out);
+  store_low_bytes32(blend128(s, idx, x16, y16), out);
 }
 
 // A wide step of samples [e, e + 32) of segment a (window128_slopes), positions X0 .. Y1 in the

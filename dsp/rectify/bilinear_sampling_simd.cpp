@@ -270,8 +270,7 @@ HWY_INLINE void sample_affine_simd(const SamplePlane& src, const Affine& a, std:
         for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
           if (!window128_step<kBytes>(src, a, i, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes)) break;
     }
-    if (i + kStep > n) {
-      // no whole step left
+    if (i + kStep > n) {  // every whole step taken above
     } else if (blocks_fit<T, C>(src, a, n / kStep * kStep)) {
       for (; i + kStep <= n; i += kStep, X = hn::Add(X, Xs), Y = hn::Add(Y, Ys))
         fitted_step<T, C>(src, a, i, a, i, kBlocks, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + i * kBytes,
