@@ -1,4 +1,4 @@
-// The bilinear sampler's SIMD kernels, part 3: RGB24 and U V pairs along affine segments that
+// The bilinear sampler's SIMD kernels, part 4: RGB24 and U V pairs along affine segments that
 // fit, eight samples per block; and on AVX-512 with VBMI, Mono8, RGB24 and U V pairs a wide step
 // per window.
 // Included by bilinear_sampling_simd.cpp once per Highway target, after bilinear_blocks-inl.h

@@ -32,8 +32,9 @@
 //   row.
 // Steps entirely outside the image store the plane's fill (0, or 128 for chroma); the rest (near
 // the borders) go to the scalar pixel code. The parts live in bilinear_four-inl.h (32-bit lanes),
-// bilinear_blocks-inl.h (blocks on 16-bit lanes) and bilinear_eight-inl.h (blocks of eight along
-// segments). Pixels are little-endian in memory.
+// bilinear_blocks-inl.h (wide steps, Mono8's blocks on 16-bit lanes), bilinear_four_blocks-inl.h
+// (RGB24's and U V pairs' blocks of four on 16-bit lanes) and bilinear_eight-inl.h (blocks of
+// eight along segments). Pixels are little-endian in memory.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "dsp/rectify/bilinear_sampling_simd.cpp"
 #include "hwy/foreach_target.h"  // IWYU pragma: keep (before highway.h)
@@ -48,6 +49,7 @@
 
 #include "dsp/rectify/bilinear_four-inl.h"
 #include "dsp/rectify/bilinear_blocks-inl.h"
+#include "dsp/rectify/bilinear_four_blocks-inl.h"
 #include "dsp/rectify/bilinear_eight-inl.h"
 
 HWY_BEFORE_NAMESPACE();
@@ -178,7 +180,7 @@ void sample_row_simd(const SamplePlane& src, const std::int32_t* xs, const std::
   scalar_rest<T, C, kOut>(src, xs + i, ys + i, out + i * kBytes, n - i);
 }
 
-// The kinds whose affine segments go through affine_blocks (bilinear_blocks-inl.h).
+// The kinds whose affine segments go through affine_blocks (bilinear_four_blocks-inl.h).
 template <class T, int C, int kOut>
 constexpr bool kAffineBlocks = sizeof(T) == 1 && (C == 3 || C == 2) && kOut == C;
 
