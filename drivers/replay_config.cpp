@@ -2,6 +2,7 @@
 #include <filesystem>
 
 #include "drivers/replay_source.hpp"
+#include "formats/number_text.hpp"
 
 namespace rsd::drivers {
 
@@ -10,7 +11,7 @@ void visit_replay_path(formats::ConfigSection& c, const char* key, std::string& 
 }
 
 void visit_replay_speed(formats::ConfigSection& c, double& speed) {
-  std::string text = speed == 0 ? "fast" : formats::config_number(speed);
+  std::string text = speed == 0 ? "fast" : formats::number_text(speed);
   c.value("speed", text, "1: real time, N: N times faster, fast: no waiting and no drops");
   if (c.has("speed")) c.check(parse_speed(text, speed), "speed", "must be a positive factor (1: real time) or fast");
 }

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "formats/config_section.hpp"
+#include "formats/number_text.hpp"
 #include "formats/intrinsics_file.hpp"
 #include "formats/yaml_map.hpp"
 
@@ -75,7 +76,7 @@ void read_rsd(YamlMap r, Calibration& c) {
 
 // ---------------------------------------------------------------- writing
 
-YAML::Node number(double x) { return YAML::Node(config_number(x)); }
+YAML::Node number(double x) { return YAML::Node(number_text(x)); }
 
 YAML::Node flow(const double* v, int n) {
   YAML::Node s(YAML::NodeType::Sequence);

@@ -2,15 +2,9 @@
 
 #include <filesystem>
 
-#include <charconv>
+#include "formats/number_text.hpp"
 
 namespace rsd::formats {
-
-std::string config_number(double x) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, x);
-  return std::string(buf, r.ptr);
-}
 
 // ---------------------------------------------------------------- reading
 
@@ -79,7 +73,7 @@ constexpr size_t kCommentColumn = 31;  // comments line up here, as in a hand-wr
 
 std::string numbers(const double* v, int n) {
   std::string s = "[";
-  for (int i = 0; i < n; ++i) s += (i ? ", " : "") + config_number(v[i]);
+  for (int i = 0; i < n; ++i) s += (i ? ", " : "") + number_text(v[i]);
   return s + "]";
 }
 
@@ -94,7 +88,7 @@ void DefaultsPrinter::line(const char* key, const std::string& value, const char
   out_ << l << "\n";
 }
 
-void DefaultsPrinter::value(const char* key, double& v, const char* c) { line(key, config_number(v), c); }
+void DefaultsPrinter::value(const char* key, double& v, const char* c) { line(key, number_text(v), c); }
 void DefaultsPrinter::value(const char* key, int& v, const char* c) { line(key, std::to_string(v), c); }
 void DefaultsPrinter::value(const char* key, unsigned& v, const char* c) { line(key, std::to_string(v), c); }
 void DefaultsPrinter::value(const char* key, bool& v, const char* c) { line(key, v ? "true" : "false", c); }

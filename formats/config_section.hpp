@@ -117,7 +117,5 @@ class DefaultsPrinter final : public ConfigSection {
   std::ostringstream out_;
 };
 
-// Shortest text that reads back to the same double ("0.002", "30", "1e-05").
-std::string config_number(double x);
 
 }  // namespace rsd::formats

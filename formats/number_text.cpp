@@ -1,5 +1,6 @@
 #include "formats/number_text.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 
@@ -12,6 +13,12 @@ std::optional<double> parse_number(const std::string& s) {
   // strtod stops at the first bad character and overflows to inf: reject both.
   if (end != s.c_str() + s.size() || !std::isfinite(x)) return std::nullopt;
   return x;
+}
+
+std::string number_text(double x) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, x);
+  return std::string(buf, r.ptr);
 }
 
 }  // namespace rsd::formats

@@ -14,7 +14,7 @@
 
 #include "formats/intrinsics_file.hpp"
 #include "formats/nominal_sections.hpp"
-#include "formats/recording_v1_number.hpp"
+#include "formats/number_text.hpp"
 #include "formats/target_spec.hpp"
 #include "formats/yaml_map.hpp"
 
@@ -22,7 +22,6 @@ namespace rsd::formats {
 
 namespace fs = std::filesystem;
 using dsp::Recording;
-using recording_v1_detail::num;
 
 namespace {
 
@@ -139,8 +138,8 @@ dsp::TargetSpec read_target(YamlMap t) {
   require(t, {"cols", "rows", type == "checkerboard" ? "square_m" : "tag_m"});
   const int cols = t.integer("cols", 0), rows = t.integer("rows", 0);
   std::string text = type + ":" + std::to_string(cols) + "x" + std::to_string(rows) + ":";
-  if (type == "checkerboard") text += num(t.number("square_m"));
-  else text += num(t.number("tag_m")) + ":" + num(t.number("spacing", 0.3));
+  if (type == "checkerboard") text += number_text(t.number("square_m"));
+  else text += number_text(t.number("tag_m")) + ":" + number_text(t.number("spacing", 0.3));
   t.finish();
   try {
     return parse_target(text);
@@ -219,7 +218,7 @@ std::vector<dsp::PoseSample> read_poses(const fs::path& path) {
   CsvReader csv(path, {"t", "x", "y", "z", "qw", "qx", "qy", "qz"});
   while (csv.next()) {
     Eigen::Quaterniond q(csv.number(4), csv.number(5), csv.number(6), csv.number(7));
-    if (std::abs(q.norm() - 1) > 1e-3) csv.fail(4, "quaternion is not unit length (norm " + num(q.norm()) + ")");
+    if (std::abs(q.norm() - 1) > 1e-3) csv.fail(4, "quaternion is not unit length (norm " + number_text(q.norm()) + ")");
     const double t = csv.number(0);
     if (!out.empty() && t < out.back().t) csv.fail(0, "time goes backwards");
     out.push_back({t, {csv.number(1), csv.number(2), csv.number(3)}, q.normalized()});

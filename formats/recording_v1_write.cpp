@@ -9,13 +9,12 @@
 #include <initializer_list>
 #include <string>
 
-#include "formats/recording_v1_number.hpp"
+#include "formats/number_text.hpp"
 
 namespace rsd::formats {
 
 namespace fs = std::filesystem;
 using dsp::Recording;
-using recording_v1_detail::num;
 
 namespace {
 
@@ -37,7 +36,7 @@ class CsvWriter {
   }
 
  private:
-  static std::string field(double v) { return num(v); }
+  static std::string field(double v) { return number_text(v); }
   static std::string field(int v) { return std::to_string(v); }
   static std::string field(const std::string& v) { return v; }
   fs::path path_;
@@ -48,12 +47,12 @@ YAML::Node camera_node(const dsp::NominalModel& n) {
   YAML::Node c;
   c["width"] = n.cam.width;
   c["height"] = n.cam.height;
-  c["fx"] = num(n.cam.fx);
-  c["fy"] = num(n.cam.fy);
-  c["cx"] = num(n.cam.cx);
-  c["cy"] = num(n.cam.cy);
+  c["fx"] = number_text(n.cam.fx);
+  c["fy"] = number_text(n.cam.fy);
+  c["cx"] = number_text(n.cam.cx);
+  c["cy"] = number_text(n.cam.cy);
   YAML::Node d;
-  for (double v : {n.cam.dist.k1, n.cam.dist.k2, n.cam.dist.p1, n.cam.dist.p2}) d.push_back(num(v));
+  for (double v : {n.cam.dist.k1, n.cam.dist.k2, n.cam.dist.p1, n.cam.dist.p2}) d.push_back(number_text(v));
   d.SetStyle(YAML::EmitterStyle::Flow);
   c["distortion"] = d;
   return c;
@@ -61,7 +60,7 @@ YAML::Node camera_node(const dsp::NominalModel& n) {
 
 YAML::Node flow_list(std::initializer_list<double> v) {
   YAML::Node n;
-  for (double x : v) n.push_back(num(x));
+  for (double x : v) n.push_back(number_text(x));
   n.SetStyle(YAML::EmitterStyle::Flow);
   return n;
 }
@@ -72,11 +71,11 @@ void write_header(const fs::path& dir, const Recording& r, const YAML::Node& obs
   YAML::Node y;
   y["format"] = "rsd-recording/1";
   y["camera"] = camera_node(n);
-  y["timing"]["frame_rate_hz"] = num(n.frame_rate_hz);
-  y["timing"]["line_delay_s"] = num(n.time.line_delay_s);
+  y["timing"]["frame_rate_hz"] = number_text(n.frame_rate_hz);
+  y["timing"]["line_delay_s"] = number_text(n.time.line_delay_s);
   y["timing"]["readout"] = std::string(dsp::to_string(n.time.readout));
-  y["timing"]["time_offset_s"] = num(n.time.time_offset_s);
-  y["timing"]["drift_ppm"] = num(n.time.drift_ppm);
+  y["timing"]["time_offset_s"] = number_text(n.time.time_offset_s);
+  y["timing"]["drift_ppm"] = number_text(n.time.drift_ppm);
   const bool traj = r.motion == dsp::MotionKind::Trajectory;
   y["motion"]["kind"] = dsp::to_string(r.motion);
   y["motion"]["file"] = traj ? "trajectory.csv" : "gyro.csv";
@@ -85,7 +84,7 @@ void write_header(const fs::path& dir, const Recording& r, const YAML::Node& obs
   y["motion"]["lever_arm_m"] = flow_list({n.lever_arm.x(), n.lever_arm.y(), n.lever_arm.z()});
   y["observations"] = observations;
   y["frames"] = "frames.csv";
-  if (r.noise_px) y["noise_px"] = num(*r.noise_px);
+  if (r.noise_px) y["noise_px"] = number_text(*r.noise_px);
   std::ofstream out(dir / "recording.yaml");
   out << y << '\n';
   if (!out) throw RecordingError((dir / "recording.yaml").string() + ": write failed");
@@ -121,8 +120,8 @@ YAML::Node target_node(const dsp::TargetSpec& t) {
   n["type"] = board ? "checkerboard" : "aprilgrid";
   n["cols"] = t.cols;
   n["rows"] = t.rows;
-  n[board ? "square_m" : "tag_m"] = num(t.spacing_m);
-  if (!board) n["spacing"] = num(t.tag_spacing);
+  n[board ? "square_m" : "tag_m"] = number_text(t.spacing_m);
+  if (!board) n["spacing"] = number_text(t.tag_spacing);
   return n;
 }
 

@@ -2,12 +2,12 @@
 
 #include "formats/image_t_codec.hpp"
 #include "formats/lcm_log.hpp"
+#include "formats/number_text.hpp"
 
 #include <bot_core/image_t.hpp>
 #include <bot_core/pose_t.hpp>
 #include <rsd/velocity_t.hpp>
 
-#include <charconv>
 #include <limits>
 #include <cmath>
 #include <stdexcept>
@@ -15,11 +15,6 @@
 namespace rsd::tools {
 
 namespace {
-
-std::string shortest(double v) {  // the shortest text that reads back to the same double
-  char buf[32];
-  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
-}
 
 int64_t to_utime(double t) { return static_cast<int64_t>(std::llround(t * 1e6)); }
 
@@ -115,7 +110,7 @@ void write_sim_lcm_log(const SimLogSpec& spec, const std::vector<double>& frame_
     img.data = frame.data;
     img.size = static_cast<int32_t>(img.data.size());
     add_meta(img, "frame_utime", std::to_string(img.utime));
-    add_meta(img, "line_delay_ns", shortest(spec.timing.line_delay_s * 1e9));
+    add_meta(img, "line_delay_ns", formats::number_text(spec.timing.line_delay_s * 1e9));
     add_meta(img, "readout", std::string(dsp::to_string(spec.timing.readout)));
     add_meta(img, "exposure_ns", std::to_string(std::llround(spec.timing.exposure_s * 1e9)));
     add_meta(img, "sequence", std::to_string(k));
