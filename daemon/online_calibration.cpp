@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <rsd/calibration_t.hpp>
@@ -294,6 +295,21 @@ double OnlineCalibrator::cpu_share() {
 dsp::OnlineEstimate OnlineCalibrator::latest() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return latest_;
+}
+
+// "online converged: offset 2.50 ms, line delay 69.44 us, bias [4.0 -3.0 2.0] mrad/s" (held or
+// rejected windows add their reason; before the first fit, what it waits for).
+std::string OnlineCalibrator::status_text() const {
+  const dsp::OnlineEstimate e = latest();
+  if (e.updates == 0)
+    return e.reason.empty() ? "online calibration: waiting for a window of frames" : "online calibration held: " + e.reason;
+  const bool kept = e.state == dsp::OnlineState::Held || e.state == dsp::OnlineState::Rejected;
+  const std::string state = kept ? (e.converged ? "converged, " : "") + std::string(dsp::to_string(e.state)) : dsp::to_string(e.state);
+  char text[160];
+  std::snprintf(text, sizeof text, "online %s: offset %.2f ms, line delay %.2f us, bias [%.1f %.1f %.1f] mrad/s", state.c_str(),
+                e.value.time_offset_s * 1e3, e.value.line_delay_s * 1e6, e.value.gyro_bias.x() * 1e3, e.value.gyro_bias.y() * 1e3,
+                e.value.gyro_bias.z() * 1e3);
+  return kept && !e.reason.empty() ? std::string(text) + " (" + e.reason + ")" : std::string(text);
 }
 
 void OnlineCalibrator::publish() {

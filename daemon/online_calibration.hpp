@@ -88,6 +88,8 @@ class OnlineCalibrator final : public FrameTap, public GyroTap {
   // rsd.calibration_t with the latest estimate.
   void publish();
   dsp::OnlineEstimate latest() const;
+  // The estimate in a few words, for the daemon's status line.
+  std::string status_text() const;
   // The share of one core the estimator thread used since the previous call (service thread).
   double cpu_share();
   uint64_t frames_offered() const { return offered_.load(); }

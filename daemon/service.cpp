@@ -336,10 +336,11 @@ void report_health(Session& s, const char* state, double dt, uint64_t& last_in, 
   last_in = static_cast<uint64_t>(h.frames_in), last_out = static_cast<uint64_t>(h.frames_out);
   if (!state && !v.warning.empty()) spdlog::warn("{}", v.warning);
   if (!state && !v.info.empty()) spdlog::info("{}", v.info);
-  char text[384];
-  std::snprintf(text, sizeof text, "%s %s: in %lld (%.1f fps) out %lld, rectified %llu, drops %lld, %s", h.source.c_str(),
+  char text[640];
+  std::snprintf(text, sizeof text, "%s %s: in %lld (%.1f fps) out %lld, rectified %llu, drops %lld, %s%s%s", h.source.c_str(),
                 h.source_state.c_str(), static_cast<long long>(h.frames_in), h.fps_in, static_cast<long long>(h.frames_out),
-                static_cast<unsigned long long>(st.rectified.load()), static_cast<long long>(h.drops), latency_text(h).c_str());
+                static_cast<unsigned long long>(st.rectified.load()), static_cast<long long>(h.drops), latency_text(h).c_str(),
+                s.online ? "; " : "", s.online ? s.online->status_text().c_str() : "");
   sd.status(text);
   if (line) show_status_line(text);
 }

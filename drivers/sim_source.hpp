@@ -87,6 +87,13 @@ class SimSource final : public CameraSource {
   std::mt19937 rng_;
 };
 
+// The daemon's built-in camera as `rsd` runs it with no configuration (and as config/rsd.yaml
+// shows it): a camera turning on its mount whose IMU, like a real one, is a few milliseconds off
+// the camera's clock and has a small gyro bias, so that the embedded default shows the online
+// calibration learning them. A SimSourceConfig constructed in code is the ideal rig (no hidden
+// physics) unless told otherwise.
+SimSourceConfig embedded_default();
+
 // The driver's entry (drivers/driver_registry.cpp) and its config section (source.sim).
 Driver sim_driver();
 void visit_config(formats::ConfigSection& c, SimSourceConfig& s);
