@@ -9,6 +9,8 @@
 #include <rsd/frame_info_t.hpp>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <thread>
@@ -41,18 +43,47 @@ void on_info(const lcm_recv_buf_t* rbuf, const char*, void* u) {
   if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) > 0) static_cast<Received*>(u)->infos.push_back(m);
 }
 
+// The velocity input: the constant rate, kept two seconds ahead of CLOCK_MONOTONIC (the frames'
+// stamps) by a thread of its own until the run ends, so that every frame finds its rate however
+// long a loaded or instrumented machine takes to deliver it.
+class RateFeeder {
+ public:
+  explicit RateFeeder(daemon::VelocityBuffer& v) : velocity_(v), next_ns_(drivers::monotonic_ns() - 500000000LL) {
+    feed();
+    thread_ = std::thread([this] {
+      while (!stop_.load()) {
+        feed();
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
+    });
+  }
+  ~RateFeeder() {
+    stop_ = true;
+    thread_.join();
+  }
+
+ private:
+  static constexpr int64_t kStepNs = 5000000, kLeadNs = 2000000000;
+  void feed() {
+    for (const int64_t until = drivers::monotonic_ns() + kLeadNs; next_ns_ <= until; next_ns_ += kStepNs) {
+      drivers::VelocitySample s;
+      s.t_ns = next_ns_;
+      for (int k = 0; k < 3; ++k) s.w[k] = kRate[k];
+      velocity_.push(s);
+    }
+  }
+  daemon::VelocityBuffer& velocity_;
+  int64_t next_ns_;  // the feeder's thread only (after the constructor)
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
 // Runs `source` through the pipeline until `frames` are published; returns what LCM carried.
+// Waits for the frames, not for a time: the limit only ends a run that hangs.
 Received run_pipeline(drivers::CameraSource& source, int frames) {
   source.open();
   daemon::VelocityBuffer velocity;
-  // The velocity input: constant rates valid around now, on CLOCK_MONOTONIC like the stamps.
-  const int64_t now = drivers::monotonic_ns();
-  for (int i = -100; i < 400; ++i) {  // -0.5 s .. +2 s: within the half ring the reader scans
-    drivers::VelocitySample s;
-    s.t_ns = now + i * 5000000LL;
-    for (int k = 0; k < 3; ++k) s.w[k] = kRate[k];
-    velocity.push(s);
-  }
+  RateFeeder feeder(velocity);
   daemon::LcmPublisher pub("memq://", {}, source.format());
   Received rx;
   lcm_subscribe(pub.handle(), "RSD_RECT", on_image, &rx);
@@ -63,9 +94,9 @@ Received run_pipeline(drivers::CameraSource& source, int frames) {
   daemon::Pipeline pipeline(pc, source, rect, pub, velocity);
   source.start();
   pipeline.start();
-  for (int i = 0; i < 1000 && pipeline.stats().frames_out.load() < static_cast<uint64_t>(frames); ++i) {
+  const auto hang = std::chrono::steady_clock::now() + std::chrono::seconds(static_cast<int>(60 * test::kTimeScale));
+  while (pipeline.stats().frames_out.load() < static_cast<uint64_t>(frames) && std::chrono::steady_clock::now() < hang)
     lcm_handle_timeout(pub.handle(), 10);
-  }
   pipeline.stop();
   source.stop();
   while (lcm_handle_timeout(pub.handle(), 0) > 0) {}
