@@ -4,7 +4,7 @@
 set -euo pipefail
 
 PACKAGES=(
-  build-essential cmake pkg-config git
+  build-essential cmake ninja-build pkg-config git  # Ninja: the README builds with it (finer-grained parallel steps than make)
   libeigen3-dev            # linear algebra (dsp/)
   libboost-dev             # Boost.Math bracketed root finding (dsp/)
   libgtest-dev libgmock-dev # unit tests
