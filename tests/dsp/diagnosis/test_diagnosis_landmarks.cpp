@@ -15,6 +15,7 @@
 #include "dsp/sim/recording_simulation.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
 #include "tests/dsp/diagnosis/diagnosis_lookup.hpp"
+#include "tests/support/sanitizer.hpp"
 
 using namespace rsd::dsp;
 using rsd::test::find;
@@ -121,6 +122,8 @@ TEST(DiagnosisLandmarks, ConcealedFocalLength) {
 // reported as a rival the data cannot tell from it. With +-30% over 6 s the lever arm is named
 // alone.
 TEST(DiagnosisLandmarks, ConcealedLeverArmAcrossOrSaidIndistinguishable) {
+  // Ten to twenty times slower under AddressSanitizer (a minute or more there).
+  RSD_SKIP_LONG_UNDER_SANITIZER("DiagnosisLandmarks.RollingShutterAndTimeOffsetConcealedTogether, ConcealedClockDrift, ConcealedLensDistortion (the same fits on landmarks)");
   SimConfig c = target(14);
   c.effects.lever_arm = Vector3d(0.0014, 0, 0);
   const Diagnosis d = diagnose(simulate_recording(c).rec);
@@ -142,6 +145,8 @@ TEST(DiagnosisLandmarks, ConcealedLeverArmAcrossOrSaidIndistinguishable) {
 }
 
 TEST(DiagnosisLandmarks, ConcealedLeverArmAlongTheAxisNeedsDepthChange) {
+  // Ten to twenty times slower under AddressSanitizer (a minute or more there).
+  RSD_SKIP_LONG_UNDER_SANITIZER("DiagnosisLandmarks.RollingShutterAndTimeOffsetConcealedTogether, ConcealedClockDrift, ConcealedLensDistortion (the same fits on landmarks)");
   // Along the optical axis a lever arm scales the image as a focal length does, except that
   // the scale follows the target's depth: with the depth changing by +-10% (3 s) the two differ
   // by less than BIC's price of a parameter and focal_length is the simpler explanation; with
@@ -157,6 +162,8 @@ TEST(DiagnosisLandmarks, ConcealedLeverArmAlongTheAxisNeedsDepthChange) {
 }
 
 TEST(DiagnosisLandmarks, RollingShutterAndDistortionConcealedTogether) {
+  // Ten to twenty times slower under AddressSanitizer (a minute or more there).
+  RSD_SKIP_LONG_UNDER_SANITIZER("DiagnosisLandmarks.RollingShutterAndTimeOffsetConcealedTogether, ConcealedClockDrift, ConcealedLensDistortion (the same fits on landmarks)");
   SimConfig c = target(15, 6.0);
   c.effects.line_delay_s = 1e-5;
   c.effects.k1k2 = Vector2d(0.05, 0);
@@ -175,6 +182,8 @@ TEST(DiagnosisLandmarks, RollingShutterAndTimeOffsetConcealedTogether) {
 }
 
 TEST(DiagnosisLandmarks, GrossFocalAndOffsetFirstThenAConcealedReadout) {
+  // Ten to twenty times slower under AddressSanitizer (a minute or more there).
+  RSD_SKIP_LONG_UNDER_SANITIZER("DiagnosisLandmarks.RollingShutterAndTimeOffsetConcealedTogether, ConcealedClockDrift, ConcealedLensDistortion (the same fits on landmarks)");
   // The nominal focal length is 20% long and the clocks are half a second apart; behind those
   // the rows are read bottom to top, not top to bottom as the nominal 10 ms readout says.
   SimConfig c = target(17);

@@ -14,6 +14,7 @@
 #include "dsp/sim/recording_simulation.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
 #include "tests/dsp/diagnosis/diagnosis_lookup.hpp"
+#include "tests/support/sanitizer.hpp"
 
 using namespace rsd::dsp;
 using rsd::test::find;
@@ -64,6 +65,8 @@ Diagnosis expect_named(const SimConfig& c, const std::string& expected) {
 }  // namespace
 
 TEST(DiagnosisMountScale, ConcealedMountRotationInMatches) {
+  // Ten to twenty times slower under AddressSanitizer (a minute or more there).
+  RSD_SKIP_LONG_UNDER_SANITIZER("DiagnosisMountScale.ConcealedMountRotationInLandmarks (the same mount and scale parameters)");
   SimConfig c = handheld(21, 4.0);
   const Vector3d r(0.024, -0.016, 0.03);  // about 2.3 degrees
   c.effects.mount_rotation = r;
@@ -75,6 +78,8 @@ TEST(DiagnosisMountScale, ConcealedMountRotationInMatches) {
 }
 
 TEST(DiagnosisMountScale, ConcealedGyroScaleInMatches) {
+  // Ten to twenty times slower under AddressSanitizer (a minute or more there).
+  RSD_SKIP_LONG_UNDER_SANITIZER("DiagnosisMountScale.ConcealedMountRotationInLandmarks (the same mount and scale parameters)");
   SimConfig c = handheld(22, 4.0);
   const Vector3d s(1.06, 0.96, 1.04);
   c.effects.gyro_scale = s;

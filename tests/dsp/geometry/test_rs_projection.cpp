@@ -8,6 +8,7 @@
 #include "dsp/geometry/rs_projection.hpp"
 #include "tests/support/brute_force.hpp"
 #include "tests/support/random_twist.hpp"
+#include "tests/support/sanitizer.hpp"
 
 using namespace rsd::dsp;
 using rsd::test::brute_force_project;
@@ -63,7 +64,8 @@ void check_against_brute_force(Solver solve, bool exact_motion, const Vector3d& 
   std::mt19937 rng(seed);
   for (const auto& sc : scenarios()) {
     const CaptureWindow win = default_capture_window(sc.timing);
-    int solved = 0, trials = 400;
+    // A sanitizer makes the brute force ten to twenty times slower: fewer points there.
+    int solved = 0, trials = rsd::test::kSanitized ? 50 : 400;
     for (int i = 0; i < trials; ++i) {
       const Vector3d X = random_point(sc.cam, rng, 0.5, 20);
       const Twist tw = random_twist(rng, vmask, wmask, 6.0, 3.0);
