@@ -1,5 +1,6 @@
 #include "daemon/velocity_input.hpp"
 
+#include "drivers/lcm_receive.hpp"
 #include "drivers/monotonic_clock.hpp"
 
 #include <bot_core/pose_t.hpp>
@@ -173,7 +174,8 @@ void VelocityInput::start() {
   if (running_.exchange(true)) return;
   thread_ = std::thread([this] {
     while (running_.load())
-      if (lcm_handle_timeout(lcm_, 50) < 0)  // a provider that cannot receive (a log being written)
+      // A provider that cannot receive (tcpq without its hub: a publish reconnects it).
+      if (drivers::handle_lcm(lcm_, 50) < 0)
         std::this_thread::sleep_for(std::chrono::milliseconds(50));
   });
 }

@@ -7,6 +7,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "drivers/lcm_receive.hpp"
 #include "drivers/monotonic_clock.hpp"  // monotonic_ns
 
 namespace rsd::drivers {
@@ -64,9 +65,16 @@ void LcmSource::open() {
   early_velocity_.clear();
   early_pose_.clear();
   const int64_t until = monotonic_ns() + static_cast<int64_t>(cfg_.open_timeout_s * 1e9);
+  bool lost = false;
   while (!got_frame_ && monotonic_ns() < until)
-    if (lcm_handle_timeout(lcm_, 100) < 0) break;
+    if (handle_lcm(lcm_, 100) < 0) {
+      lost = true;
+      break;
+    }
   opening_ = false;
+  // A lost connection (a hub gone, a peer's partial message) is not re-established by LCM: the
+  // next attempt builds a new instance.
+  if (!got_frame_ && lost && cfg_.url.rfind("file://", 0) != 0) close_lcm();
   if (!got_frame_)
     throw CameraError("lcm source: no frame on '" + cfg_.channel + "' at " + cfg_.url + " within " +
                       std::to_string(cfg_.open_timeout_s) + " s");
@@ -150,7 +158,7 @@ CaptureStatus LcmSource::capture(const dsp::ImageView& dst, FrameMeta& meta, std
   while (!got_frame_) {
     const int64_t left_ms = (until - monotonic_ns()) / 1000000;
     if (left_ms <= 0) break;
-    if (lcm_handle_timeout(lcm_, static_cast<int>(left_ms)) < 0) {
+    if (handle_lcm(lcm_, static_cast<int>(left_ms)) < 0) {
       // A log being read has ended (file:// provider), or the connection failed.
       target_ = nullptr;
       if (cfg_.url.rfind("file://", 0) == 0) return CaptureStatus::EndOfStream;
