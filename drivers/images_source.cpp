@@ -62,18 +62,18 @@ dsp::Image ImagesSource::read(size_t k) {
 
 CaptureStatus ImagesSource::capture(const dsp::ImageView& dst, FrameMeta& meta, std::chrono::milliseconds) {
   if (next_ >= count()) return CaptureStatus::EndOfStream;
-  const dsp::Image img = read(next_);
+  const size_t k = next_++;  // past it even when it throws: a caller may go on with the next one
+  const dsp::Image img = read(k);
   const FrameFormat f{img.width, img.height, img.format};
-  const std::string what = cfg_.video.empty() ? cfg_.files[next_] : cfg_.video + " frame " + std::to_string(cfg_.video_frames[next_]);
+  const std::string what = cfg_.video.empty() ? cfg_.files[k] : cfg_.video + " frame " + std::to_string(cfg_.video_frames[k]);
   if (f.width != format_.width || f.height != format_.height)
     throw std::runtime_error(what + ": frame is " + size_text(f) + ", the first was " + size_text(format_));
   if (f.format != format_.format) throw std::runtime_error(what + ": pixel format differs from the first frame's");
   dsp::copy_image(img.data.data(), img.stride(), dst);
   meta = {};
-  meta.sequence = cfg_.numbers.empty() ? next_ : cfg_.numbers.at(next_);
-  if (!cfg_.stamps_s.empty()) meta.first_row_ns = std::llround(cfg_.stamps_s[next_] * 1e9);
-  else meta.first_row_ns = cfg_.fps > 0 ? static_cast<int64_t>(static_cast<double>(next_) * 1e9 / cfg_.fps) : 0;
-  ++next_;
+  meta.sequence = cfg_.numbers.empty() ? k : cfg_.numbers.at(k);
+  if (!cfg_.stamps_s.empty()) meta.first_row_ns = std::llround(cfg_.stamps_s[k] * 1e9);
+  else meta.first_row_ns = cfg_.fps > 0 ? static_cast<int64_t>(static_cast<double>(k) * 1e9 / cfg_.fps) : 0;
   return CaptureStatus::Frame;
 }
 

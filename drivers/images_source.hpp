@@ -40,7 +40,8 @@ class ImagesSource final : public CameraSource {
   dsp::RowTiming timing() const override;
   void start() override;
   // EndOfStream after the last picture; throws std::runtime_error naming a file that cannot
-  // be read or whose size or format differs from the first.
+  // be read or whose size or format differs from the first (the next call goes on with the
+  // picture after it).
   CaptureStatus capture(const dsp::ImageView& dst, FrameMeta& meta, std::chrono::milliseconds timeout) override;
   void stop() override {}
   // The file (or "video#index") of the frame capture() delivered last.

@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <limits>
 
+#include <spdlog/spdlog.h>
+
 namespace rsd::drivers {
 
 std::vector<VelocitySample> body_rates(const std::vector<dsp::PoseSample>& poses) {
@@ -98,7 +100,15 @@ CaptureStatus RecordingReplaySource::capture(const dsp::ImageView& dst, FrameMet
   // The motion over this frame's readout (on the motion clock, at the nominal offset), and a
   // margin for a calibrated offset that differs from it.
   deliver_motion_until(std::llround((t + timing_.frame_readout_s() + offset_s() + cfg_.motion_lead_s) * 1e9));
-  const CaptureStatus st = images_->capture(dst, meta, timeout);
+  CaptureStatus st;
+  try {
+    st = images_->capture(dst, meta, timeout);
+  } catch (const std::exception& e) {  // this picture only: the ones after it may be fine
+    ++next_frame_;
+    const uint64_t n = refused_.fetch_add(1, std::memory_order_relaxed) + 1;
+    if (refused_log_.due(n)) spdlog::error("{}: picture refused ({} so far): {}", cfg_.dir, n, e.what());
+    return CaptureStatus::Timeout;
+  }
   if (st == CaptureStatus::Frame) {
     ++next_frame_;
     frames_.fetch_add(1, std::memory_order_relaxed);

@@ -23,6 +23,7 @@
 #include "drivers/images_source.hpp"
 #include "drivers/playback.hpp"
 #include "drivers/replay_source.hpp"
+#include "drivers/tenfold_log.hpp"
 #include "formats/recording_v1.hpp"
 
 namespace rsd::drivers {
@@ -60,6 +61,10 @@ class RecordingReplaySource final : public CameraSource, public Playback {
   uint64_t frames() const override { return frames_.load(std::memory_order_relaxed); }
   bool fast() const override { return cfg_.speed <= 0; }
   std::string summary(double seconds) const override;
+  // Pictures that could not be read or do not match the first (truncated, missing, another size
+  // or pixel format): each refused and counted (rsd.health_t's frames_refused), the first and
+  // every tenfold named in the log; the replay goes on with the next picture.
+  uint64_t refused() const override { return refused_.load(std::memory_order_relaxed); }
 
   const formats::ImagesRecording& recording() const { return rec_; }
 
@@ -74,7 +79,8 @@ class RecordingReplaySource final : public CameraSource, public Playback {
   size_t next_motion_ = 0, next_frame_ = 0;
   ReplayPacer pacer_;
   VelocitySink sink_;
-  std::atomic<uint64_t> frames_{0};
+  std::atomic<uint64_t> frames_{0}, refused_{0};
+  TenfoldLog refused_log_;  // the capture thread's
 };
 
 Driver recording_driver();

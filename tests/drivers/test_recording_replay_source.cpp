@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <Eigen/Geometry>
+#include <cstdio>
 #include <filesystem>
 
 #include "drivers/recording_replay_source.hpp"
@@ -166,4 +167,52 @@ TEST(RecordingReplaySource, RecordingsOfObservationsAreRefusedByName) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("observations.kind is matches, not images"), std::string::npos) << e.what();
   }
+}
+
+// A bad later picture (truncated, missing, another size) is refused, counted and named in the
+// log; the pictures after it play as if it were not there (issue 38: it used to end the capture
+// thread with an uncaught exception, and rsd with SIGABRT).
+TEST(RecordingReplaySource, ABadLaterPictureIsRefusedAndThePlayGoesOn) {
+  const fs::path dir = temp_dir("bad-picture");
+  formats::ImagesRecording r;
+  r.rec.kind = dsp::ObservationKind::Matches;
+  r.rec.motion = dsp::MotionKind::Gyro;
+  r.rec.nominal.cam.width = 32, r.rec.nominal.cam.height = 24;
+  r.rec.nominal.cam.fx = r.rec.nominal.cam.fy = 30, r.rec.nominal.cam.cx = 15.5, r.rec.nominal.cam.cy = 11.5;
+  r.rec.nominal.frame_rate_hz = 20;
+  r.rec.nominal.time.line_delay_s = 1e-3;
+  for (int k = 0; k < 6; ++k) {
+    char name[16];
+    std::snprintf(name, sizeof name, "f%d.png", k);
+    const fs::path file = dir / name;
+    dsp::Image img(k == 3 ? 16 : 32, 24, dsp::PixelFormat::Mono8);  // picture 3: another size
+    img.data.assign(img.data.size(), static_cast<uint8_t>(10 * k));
+    formats::write_png(file.string(), img.view());
+    r.rec.frames.push_back({k, 0.05 * k});
+    r.files.push_back(file.string());
+  }
+  for (int k = 0; k < 400; ++k) r.rec.gyro.push_back({-0.1 + 1e-3 * k, {0.1, 0.2, 0.3}});
+  formats::write_images_recording(dir.string(), r);
+  fs::resize_file(dir / "f1.png", 40);  // truncated
+  fs::remove(dir / "f4.png");           // missing
+  drivers::RecordingReplayConfig cfg;
+  cfg.dir = dir.string();
+  cfg.speed = 0;
+  drivers::RecordingReplaySource src(cfg);
+  src.open();
+  src.start();
+  dsp::Image img(32, 24, dsp::PixelFormat::Mono8);
+  drivers::FrameMeta meta;
+  std::vector<uint64_t> played;
+  for (int calls = 0; calls < 20; ++calls) {
+    const drivers::CaptureStatus st = src.capture(img.view(), meta, std::chrono::milliseconds(100));
+    if (st == drivers::CaptureStatus::EndOfStream) break;
+    if (st != drivers::CaptureStatus::Frame) continue;
+    played.push_back(meta.sequence);
+    EXPECT_EQ(img.data[0], 10 * meta.sequence);  // each played frame is its own picture
+  }
+  EXPECT_EQ(played, (std::vector<uint64_t>{0, 2, 5}));
+  EXPECT_EQ(src.refused(), 3u);
+  EXPECT_EQ(src.frames(), 3u);
+  EXPECT_EQ(src.capture(img.view(), meta, std::chrono::milliseconds(100)), drivers::CaptureStatus::EndOfStream);
 }
