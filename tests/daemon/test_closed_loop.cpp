@@ -27,7 +27,6 @@
 #include "formats/lcm_log.hpp"
 #include "tools/sim/scenario_frames.hpp"
 #include "tests/daemon/closed_loop_support.hpp"
-#include "tests/support/sanitizer.hpp"
 
 using namespace rsd;
 using namespace rsd::test;
@@ -148,13 +147,11 @@ void run(const Scenario& s, double nominal_at_least_px, double goal_px, double f
 }  // namespace
 
 TEST(ClosedLoop, HiddenRigPhysicsLearnedFromAnImagesRecording) {
-  RSD_SKIP_LONG_UNDER_SANITIZER("the images, replay, extract and diagnose tests");
   // Up to about 2 rad/s, a 25 ms readout: the nominal calibration leaves 0.8 px.
   run({"handheld", {0.3, -0.2, 0.1}, 1.5, 0.7, 0.025, 60}, 0.5, 0.3, 0.15);
 }
 
 TEST(ClosedLoop, FastRotationWithinReachOfTheTrueCalibration) {
-  RSD_SKIP_LONG_UNDER_SANITIZER("the images, replay, extract and diagnose tests");
   // 3-4 rad/s and more, a 30 ms readout: the nominal calibration leaves 3 px.
   run({"fast", {0.3, -0.2, 0.1}, 3.5, 1.2, 0.030, 60}, 2.0, 0.3, 0.15);
 }
@@ -165,7 +162,6 @@ TEST(ClosedLoop, FastRotationWithinReachOfTheTrueCalibration) {
 // diagnosis finds the target's corners in the pictures; the daemon turns the trajectory into
 // body rates and the calibration's T_cam_imu into the camera's.
 TEST(ClosedLoop, LandmarksRecordingOfATrackedBody) {
-  RSD_SKIP_LONG_UNDER_SANITIZER("the images, replay, extract and diagnose tests");
   tools::FrameOptions fo;
   fo.noise = 1;
   const tools::FrameRig rig = tools::make_rig(std::string(RSD_SCENARIO_DIR) + "/closed-loop-landmarks.yaml", fo);
@@ -184,7 +180,6 @@ TEST(ClosedLoop, LandmarksRecordingOfATrackedBody) {
 // rsd-diagnose writes the calibration, and the log is replayed with it (rsd --replay LOG
 // --calibration CAL), measured as above.
 TEST(ClosedLoop, ThroughAnLcmRecordingAndTheTools) {
-  RSD_SKIP_LONG_UNDER_SANITIZER("the images, replay, extract and diagnose tests");
   const fs::path dir = fs::temp_directory_path() / ("rsd-closed-loop-lcm-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -251,7 +246,6 @@ TEST(ClosedLoop, ThroughAnLcmRecordingAndTheTools) {
 // writes the calibration, and the log is replayed with it, the motion taken from the poses
 // (velocity.pose_channel: RSD_POSE) through the calibration's clock offset and T_cam_imu.
 TEST(ClosedLoop, LandmarksThroughAnLcmRecordingAndTheTools) {
-  RSD_SKIP_LONG_UNDER_SANITIZER("the images, replay, extract and diagnose tests");
   const fs::path dir = fs::temp_directory_path() / ("rsd-closed-loop-lcm-landmarks-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);

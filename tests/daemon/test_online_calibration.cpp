@@ -19,7 +19,6 @@
 #include "drivers/recording_replay_source.hpp"
 #include "formats/calibration_v1.hpp"
 #include "tests/daemon/closed_loop_support.hpp"
-#include "tests/support/sanitizer.hpp"
 
 using namespace rsd;
 using namespace rsd::test;
@@ -77,7 +76,6 @@ void expect_within_goal(const char* what, const formats::Calibration& c) {
 }  // namespace
 
 TEST(OnlineCalibration, LearnsWhileAnImagesRecordingReplays) {
-  RSD_SKIP_LONG_UNDER_SANITIZER("the images recording, a real-time replay and the diagnosis");
   const SimRig r = hand_held();
   const fs::path dir = fs::temp_directory_path() / ("rsd-online-" + std::to_string(::getpid()));
   fs::remove_all(dir);

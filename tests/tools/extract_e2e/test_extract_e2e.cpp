@@ -20,7 +20,6 @@
 
 #include "formats/recording_v1.hpp"
 #include "formats/scenario_file.hpp"
-#include "tests/support/sanitizer.hpp"
 
 using namespace rsd;
 namespace fs = std::filesystem;
@@ -141,7 +140,6 @@ void velocity_to_imu_axes(const std::string& in, const std::string& out, const E
 }  // namespace
 
 TEST(ExtractDiagnose, LandmarksFromACheckerboardNameTheRollingShutterAndOnlyIt) {
-  RSD_SKIP_LONG_UNDER_SANITIZER("cli_diagnose_e2e_*, images_* and the FrameSources tests");
   const std::string scenario = kScenarios + "/extract-rolling-shutter.yaml";
   const std::string dir = kWork + "/landmarks";
   fs::create_directories(dir);
@@ -191,7 +189,6 @@ void simulate_and_extract_matches(const std::string& scenario, const std::string
 }
 
 TEST(ExtractDiagnose, MatchesFromFeatureTracksNameTheRollingShutter) {
-  RSD_SKIP_LONG_UNDER_SANITIZER("cli_diagnose_e2e_*, images_* and the FrameSources tests");
   const std::string scenario = kScenarios + "/extract-matches-rolling-shutter.yaml";
   const std::string dir = kWork + "/matches";
   ASSERT_NO_FATAL_FAILURE(simulate_and_extract_matches(scenario, dir));
@@ -245,7 +242,6 @@ TEST(ExtractDiagnose, MatchesFromFeatureTracksNameTheRollingShutter) {
 // mount_rotation) or focal length in its stead. (Before the parallax test a gyro bias of tens of
 // mrad/s was named for such a recording.)
 TEST(ExtractDiagnose, ParallaxInMatchesIsARemainderNotAGyroEffect) {
-  RSD_SKIP_LONG_UNDER_SANITIZER("cli_diagnose_e2e_*, images_* and the FrameSources tests");
   const std::string scenario = kScenarios + "/extract-matches-parallax.yaml";
   const std::string dir = kWork + "/parallax";
   ASSERT_NO_FATAL_FAILURE(simulate_and_extract_matches(scenario, dir));
