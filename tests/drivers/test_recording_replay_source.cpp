@@ -29,10 +29,8 @@ Eigen::Quaterniond exp_q(const Eigen::Vector3d& r) {
   return r.norm() > 0 ? Eigen::Quaterniond(Eigen::AngleAxisd(r.norm(), r.normalized())) : Eigen::Quaterniond::Identity();
 }
 
-// Four 32x24 frames at 20 Hz starting at t = 100 s, numbered 7..10, in a video; a 1 kHz gyro
-// from 99.9 s; line delay 1 ms (a 24 ms readout); nominal offset 5 ms.
-fs::path gyro_video_recording() {
-  const fs::path dir = temp_dir("video");
+// An images recording's header: 32x24 pictures at 20 Hz, a gyro, line delay 1 ms.
+formats::ImagesRecording gyro_recording_32x24() {
   formats::ImagesRecording r;
   r.rec.kind = dsp::ObservationKind::Matches;
   r.rec.motion = dsp::MotionKind::Gyro;
@@ -40,6 +38,14 @@ fs::path gyro_video_recording() {
   r.rec.nominal.cam.fx = r.rec.nominal.cam.fy = 30, r.rec.nominal.cam.cx = 15.5, r.rec.nominal.cam.cy = 11.5;
   r.rec.nominal.frame_rate_hz = 20;
   r.rec.nominal.time.line_delay_s = 1e-3;
+  return r;
+}
+
+// Four 32x24 frames at 20 Hz starting at t = 100 s, numbered 7..10, in a video; a 1 kHz gyro
+// from 99.9 s; line delay 1 ms (a 24 ms readout); nominal offset 5 ms.
+fs::path gyro_video_recording() {
+  const fs::path dir = temp_dir("video");
+  formats::ImagesRecording r = gyro_recording_32x24();
   r.rec.nominal.time.time_offset_s = 0.005;
   r.video = (dir / "capture.avi").string();
   formats::VideoWriter w(r.video, 32, 24, 20);
@@ -174,13 +180,7 @@ TEST(RecordingReplaySource, RecordingsOfObservationsAreRefusedByName) {
 // thread with an uncaught exception, and rsd with SIGABRT).
 TEST(RecordingReplaySource, ABadLaterPictureIsRefusedAndThePlayGoesOn) {
   const fs::path dir = temp_dir("bad-picture");
-  formats::ImagesRecording r;
-  r.rec.kind = dsp::ObservationKind::Matches;
-  r.rec.motion = dsp::MotionKind::Gyro;
-  r.rec.nominal.cam.width = 32, r.rec.nominal.cam.height = 24;
-  r.rec.nominal.cam.fx = r.rec.nominal.cam.fy = 30, r.rec.nominal.cam.cx = 15.5, r.rec.nominal.cam.cy = 11.5;
-  r.rec.nominal.frame_rate_hz = 20;
-  r.rec.nominal.time.line_delay_s = 1e-3;
+  formats::ImagesRecording r = gyro_recording_32x24();
   for (int k = 0; k < 6; ++k) {
     char name[16];
     std::snprintf(name, sizeof name, "f%d.png", k);
