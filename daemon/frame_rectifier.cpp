@@ -29,22 +29,23 @@ dsp::DepthModel FrameRectifier::depth_model() const {
   return dsp::DepthModel::at_infinity();
 }
 
-void FrameRectifier::wait_for_samples(int64_t t_ns, const VelocityBuffer& velocity, RectifyResult& r) const {
+void FrameRectifier::wait_for_samples(int64_t t_ns, const VelocityBuffer& velocity, uint64_t horizon,
+                                      RectifyResult& r) const {
   using Clock = std::chrono::steady_clock;
-  if (velocity.newest_ns() < t_ns && cfg_.imu_wait_ms > 0) {
+  if (horizon == VelocityBuffer::kAll && velocity.newest_ns() < t_ns && cfg_.imu_wait_ms > 0) {
     const Clock::time_point start = Clock::now();
     const Clock::time_point until = start + std::chrono::microseconds(std::llround(cfg_.imu_wait_ms * 1e3));
     while (velocity.newest_ns() < t_ns && Clock::now() < until) std::this_thread::sleep_for(std::chrono::microseconds(100));
     r.imu_wait_s = std::chrono::duration<double>(Clock::now() - start).count();
   }
-  const int64_t newest = velocity.newest_ns();
+  const int64_t newest = velocity.newest_ns(horizon);
   if (newest != INT64_MIN && newest < t_ns) {
     r.extrapolated = true;
     r.extrapolated_s = static_cast<double>(t_ns - newest) * 1e-9;
   }
 }
 
-bool FrameRectifier::knots(const drivers::FrameMeta& meta, const VelocityBuffer& velocity, bool translate,
+bool FrameRectifier::knots(const drivers::FrameMeta& meta, const VelocityBuffer& velocity, uint64_t horizon, bool translate,
                            dsp::IntegratedMotion::Knot* out) const {
   // Frame time t is first_row_ns + t s, as row_time() counts it; the knots span every row's
   // exposure, and the motion holds the end rates beyond them.
@@ -53,7 +54,7 @@ bool FrameRectifier::knots(const drivers::FrameMeta& meta, const VelocityBuffer&
   for (int k = 0; k < kKnots; ++k) {
     const double t = a + (b - a) * k / (kKnots - 1);
     VelocityEstimate e;
-    if (velocity.at(meta.first_row_ns + static_cast<int64_t>(t * 1e9), e) != VelocityStatus::Ok) return false;
+    if (velocity.at(meta.first_row_ns + static_cast<int64_t>(t * 1e9), e, horizon) != VelocityStatus::Ok) return false;
     out[k].t = t;
     for (int i = 0; i < 3; ++i) {
       out[k].w[i] = e.sample.w[i];
@@ -64,7 +65,7 @@ bool FrameRectifier::knots(const drivers::FrameMeta& meta, const VelocityBuffer&
 }
 
 RectifyResult FrameRectifier::process(const dsp::ImageView& src, const dsp::ImageView& dst, const drivers::FrameMeta& meta,
-                                      const VelocityBuffer& velocity) {
+                                      const VelocityBuffer& velocity, uint64_t horizon) {
   RectifyResult r;
   r.reference_time_s = dsp::reference_time(timing_, cfg_.reference);
   if (!cfg_.enabled) {
@@ -75,11 +76,11 @@ RectifyResult FrameRectifier::process(const dsp::ImageView& src, const dsp::Imag
   // The samples covering the last row's exposure may still be on their way: wait for them, up
   // to the bound, and say when the motion beyond the newest one had to be held.
   const double end_s = std::max(timing_.row_time(0), timing_.row_time(timing_.height - 1)) + meta.exposure_s;
-  wait_for_samples(meta.first_row_ns + static_cast<int64_t>(end_s * 1e9), velocity, r);
+  wait_for_samples(meta.first_row_ns + static_cast<int64_t>(end_s * 1e9), velocity, horizon, r);
   // The velocity valid for this frame: at the middle of its readout.
   const int64_t t_mid = meta.first_row_ns + static_cast<int64_t>((0.5 * timing_.frame_readout_s() + 0.5 * meta.exposure_s) * 1e9);
   VelocityEstimate est;
-  const VelocityStatus st = velocity.at(t_mid, est);
+  const VelocityStatus st = velocity.at(t_mid, est, horizon);
   if (st != VelocityStatus::Ok) {
     rect_->pass_through(src, dst);
     r.reason = st == VelocityStatus::NoData ? "no velocity received" : "velocity stale";
@@ -99,7 +100,7 @@ RectifyResult FrameRectifier::process(const dsp::ImageView& src, const dsp::Imag
   // Every row's orientation from the rates integrated up to its time; one rate held for the
   // frame only when the buffer cannot cover every row.
   dsp::IntegratedMotion::Knot k[kKnots];
-  const dsp::RectifyReport rep = knots(meta, velocity, translate, k)
+  const dsp::RectifyReport rep = knots(meta, velocity, horizon, translate, k)
                                      ? rect_->rectify(src, dst, dsp::IntegratedMotion(k, kKnots), depth, r.reference_time_s)
                                      : rect_->rectify(src, dst, tw, depth, r.reference_time_s);
   r.rectified = rep.rectified;

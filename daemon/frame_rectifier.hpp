@@ -56,9 +56,10 @@ class FrameRectifier {
   FrameRectifier(const RectifyConfig& cfg, const dsp::CameraModel& cam, const dsp::RowTiming& timing,
                  const drivers::FrameFormat& fmt, dsp::RowExecutor* pool = nullptr);
   ~FrameRectifier();
-  // Never allocates: everything is sized in the constructor.
+  // Never allocates: everything is sized in the constructor. `horizon`: how many of the
+  // buffer's samples the frame may use (VelocityBuffer::at), all of them by default.
   RectifyResult process(const dsp::ImageView& src, const dsp::ImageView& dst, const drivers::FrameMeta& meta,
-                        const VelocityBuffer& velocity);
+                        const VelocityBuffer& velocity, uint64_t horizon = VelocityBuffer::kAll);
   const dsp::RowTiming& timing() const { return timing_; }
   // Which calibration this rectifier was made with, for frame info: "configured" or "online".
   const char* calibration() const { return calibration_; }
@@ -67,11 +68,11 @@ class FrameRectifier {
  private:
   dsp::DepthModel depth_model() const;
   // Waits (up to imu_wait_ms) for a sample at or after t_ns; fills the wait and extrapolation.
-  void wait_for_samples(int64_t t_ns, const VelocityBuffer& velocity, RectifyResult& r) const;
+  void wait_for_samples(int64_t t_ns, const VelocityBuffer& velocity, uint64_t horizon, RectifyResult& r) const;
   // The camera's own rates read from the buffer at kKnots times across the frame's rows
   // (interpolated between samples), for the integrated motion; false if any has no valid sample.
   static constexpr int kKnots = 9;
-  bool knots(const drivers::FrameMeta& meta, const VelocityBuffer& velocity, bool translate,
+  bool knots(const drivers::FrameMeta& meta, const VelocityBuffer& velocity, uint64_t horizon, bool translate,
              dsp::IntegratedMotion::Knot* out) const;
   RectifyConfig cfg_;
   dsp::CameraModel cam_;

@@ -115,8 +115,15 @@ std::optional<uint32_t> Pipeline::hand_over(DropOldestQueue& q, uint32_t slot) {
   return std::nullopt;
 }
 
+// Queues a captured frame for the rectifier; the slot to capture the next one into.
+uint32_t Pipeline::pass_on(uint32_t slot) {
+  const auto reclaimed = hand_over(to_rectify_, slot);
+  return reclaimed ? *reclaimed : raw_slot_for_capture();
+}
+
 void Pipeline::capture_loop() {
   uint32_t slot = raw_slot_for_capture();
+  std::optional<uint32_t> held;  // samples_until_next_frame: the frame waiting for the next one
   while (running_.load(std::memory_order_relaxed)) {
     Raw& r = raw_[slot];
     drivers::CaptureStatus st;
@@ -133,6 +140,7 @@ void Pipeline::capture_loop() {
       break;
     }
     if (st != drivers::CaptureStatus::Frame) continue;
+    const uint64_t samples = velocity_.count();  // all delivered before this frame
     r.ready_ns = monotonic_ns();
     drivers::stamp_wall_clock(r.meta);
     stats_.frames_in.fetch_add(1, std::memory_order_relaxed);
@@ -144,9 +152,16 @@ void Pipeline::capture_loop() {
       continue;
     }
     last_first_row_ns_ = r.meta.first_row_ns;
-    const auto reclaimed = hand_over(to_rectify_, slot);
-    slot = reclaimed ? *reclaimed : raw_slot_for_capture();
+    r.horizon = VelocityBuffer::kAll;
+    if (!cfg_.samples_until_next_frame) {
+      slot = pass_on(slot);
+      continue;
+    }
+    const std::optional<uint32_t> waiting = std::exchange(held, slot);  // this one waits for the next
+    if (waiting) raw_[*waiting].horizon = samples;
+    slot = waiting ? pass_on(*waiting) : raw_slot_for_capture();
   }
+  if (held) hand_over(to_rectify_, *held);  // the last frame: every sample it could wait for is in
   capture_done_ = true;
   to_rectify_.wake();  // the rectifier may be waiting for a frame that will not come
 }
@@ -175,7 +190,7 @@ void Pipeline::rectify_loop() {
     o.meta = r.meta;
     o.ready_ns = r.ready_ns;
     take_up_next_rectifier();
-    o.result = rectifier_->process(r.image.view(), o.image.view(), r.meta, velocity_);
+    o.result = rectifier_->process(r.image.view(), o.image.view(), r.meta, velocity_, r.horizon);
     o.timing = rectifier_->timing();
     o.calibration = rectifier_->calibration();
     (o.result.rectified ? stats_.rectified : stats_.unrectified).fetch_add(1, std::memory_order_relaxed);

@@ -40,6 +40,12 @@ struct PipelineConfig {
   // log as fast as possible, where every frame must come out for the outputs to be
   // reproducible). A live camera keeps the default: it must never wait.
   bool lossless = false;
+  // A replay: each frame waits in the capture thread for the next one and is rectified with
+  // the velocity samples delivered before that (the samples covering its last rows, which a live
+  // IMU sends after the frame), none later. The source reads on while frames wait for the
+  // rectifier: what a frame sees must depend on the log alone, not on how far the reader got.
+  // A live camera hands each frame on at once, and its rectifier uses every sample there is.
+  bool samples_until_next_frame = false;
   std::chrono::milliseconds capture_timeout{200};
   RealtimeConfig realtime;  // the threads' scheduling and CPUs (daemon/realtime.hpp)
 };
@@ -86,6 +92,7 @@ class Pipeline {
     dsp::Image image;
     drivers::FrameMeta meta;
     int64_t ready_ns = 0;  // when the last row had been read (latency reference)
+    uint64_t horizon = VelocityBuffer::kAll;  // the samples it may use (samples_until_next_frame)
   };
   struct Out {
     dsp::Image image;
@@ -102,6 +109,7 @@ class Pipeline {
   void publish_loop();
   uint32_t raw_slot_for_capture();
   std::optional<uint32_t> hand_over(DropOldestQueue& q, uint32_t slot);
+  uint32_t pass_on(uint32_t slot);
   void publish_frame(Out& o, uint64_t seq);
   void take_up_next_rectifier();
 

@@ -244,6 +244,7 @@ struct Session {
     if (online_applied) rectifier->set_calibration("online");
     PipelineConfig pc = cfg.pipeline;
     if (playback() && playback()->fast()) pc.lossless = true;  // every frame, reproducibly
+    pc.samples_until_next_frame = playback() != nullptr;        // the same numbers every time
     const bool to_files = !cfg.output.dir.empty() || !cfg.output.video.empty();
     if (to_files) pc.lossless = true;  // every frame into the files
     if (to_files && !files) {

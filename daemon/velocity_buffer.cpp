@@ -71,16 +71,30 @@ bool VelocityBuffer::push(const drivers::VelocitySample& s) {
   return true;
 }
 
-VelocityStatus VelocityBuffer::at(int64_t t_ns, VelocityEstimate& out) const {
+int64_t VelocityBuffer::newest_ns(uint64_t horizon) const {
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    const uint64_t count = count_.load(std::memory_order_acquire);
+    const uint64_t n = std::min(count, horizon);
+    if (n == 0 || count - n >= kCapacity / 2) return INT64_MIN;  // none, or overwritten soon
+    const int64_t t = ring_[(n - 1) % kCapacity].t_ns;
+    if (count_.load(std::memory_order_acquire) - n < kCapacity / 2) return t;  // not lapped meanwhile
+  }
+  return INT64_MIN;
+}
+
+VelocityStatus VelocityBuffer::at(int64_t t_ns, VelocityEstimate& out, uint64_t horizon) const {
   const int64_t max_age_ns = static_cast<int64_t>(limits_.max_age_s * 1e9);
   for (int attempt = 0; attempt < 4; ++attempt) {
-    const uint64_t n = count_.load(std::memory_order_acquire);
+    const uint64_t count = count_.load(std::memory_order_acquire);
+    const uint64_t n = std::min(count, horizon);
     if (n == 0) return VelocityStatus::NoData;
     // Read only the newer half of the ring, so a writer running ahead cannot lap the reader
     // unless it writes half a ring of samples meanwhile (checked below), and only the current
     // time line.
     const uint64_t epoch = epoch_.load(std::memory_order_acquire);
+    if (epoch >= n && n < count) return VelocityStatus::NoData;  // the horizon's line was replaced
     if (epoch >= n) continue;  // a new time line is being written: read again
+    if (count - n >= kCapacity / 2) return VelocityStatus::Stale;  // the horizon's samples are being overwritten
     const uint64_t lo = std::max(n > kCapacity / 2 ? n - kCapacity / 2 : 0, epoch);
     uint64_t i = n - 1;
     while (i > lo && ring_[i % kCapacity].t_ns > t_ns) --i;

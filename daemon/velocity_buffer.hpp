@@ -51,12 +51,19 @@ class VelocityBuffer {
   // the clock).
   void reject() { rejected_.fetch_add(1, std::memory_order_relaxed); }
 
+  // Every sample pushed so far: a reader's default horizon.
+  static constexpr uint64_t kAll = UINT64_MAX;
+
   // Reader: the velocity at t_ns, linearly interpolated between the samples around it (or
-  // the newest one, if t is after it but within max_age).
-  VelocityStatus at(int64_t t_ns, VelocityEstimate& out) const;
+  // the newest one, if t is after it but within max_age). Only the first `horizon` samples
+  // ever pushed count (a count() taken earlier): a replayed frame sees the samples that came
+  // before it in the log, however far the reader has gone on meanwhile.
+  VelocityStatus at(int64_t t_ns, VelocityEstimate& out, uint64_t horizon = kAll) const;
 
   // Reader: the newest accepted sample's time (INT64_MIN before the first); any thread.
   int64_t newest_ns() const { return newest_ns_.load(std::memory_order_acquire); }
+  // Reader: the newest time among the first `horizon` samples (INT64_MIN: none readable).
+  int64_t newest_ns(uint64_t horizon) const;
 
   uint64_t rejected() const { return rejected_.load(std::memory_order_relaxed); }
   // How often a new time line replaced the current one.

@@ -113,3 +113,30 @@ TEST(VelocityBuffer, ScatteredStraysNeverReplaceTheLine) {
   ASSERT_EQ(b.at(399 * 1000000, e), VelocityStatus::Ok);
   EXPECT_EQ(e.sample.w[2], 1.0);
 }
+
+// A horizon of n samples answers as a buffer that was given only those n (a replayed frame sees
+// the samples before the next frame, however many the reader pushed since).
+TEST(VelocityBuffer, AHorizonAnswersAsTheBufferOfItsSamplesAlone) {
+  VelocityBuffer all, first;
+  const uint64_t horizon = 30;
+  for (int64_t i = 0; i < 100; ++i) {
+    all.push(sample(i * 5, std::sin(0.1 * static_cast<double>(i))));
+    if (static_cast<uint64_t>(i) < horizon) first.push(sample(i * 5, std::sin(0.1 * static_cast<double>(i))));
+  }
+  EXPECT_EQ(all.newest_ns(horizon), first.newest_ns());
+  EXPECT_EQ(all.newest_ns(VelocityBuffer::kAll), all.newest_ns());
+  for (int64_t t_us = -1000; t_us < 300000; t_us += 777) {
+    VelocityEstimate a, b;
+    const VelocityStatus sa = all.at(t_us * 1000, a, horizon), sb = first.at(t_us * 1000, b);
+    ASSERT_EQ(sa, sb) << t_us;
+    if (sa != VelocityStatus::Ok) continue;
+    EXPECT_EQ(a.sample.w[2], b.sample.w[2]) << t_us;
+    EXPECT_EQ(a.age_s, b.age_s) << t_us;
+  }
+  // Samples the ring has since overwritten are not answered from.
+  VelocityBuffer lapped;
+  for (int64_t i = 0; i < static_cast<int64_t>(VelocityBuffer::kCapacity); ++i) lapped.push(sample(i, 1.0));
+  VelocityEstimate e;
+  EXPECT_EQ(lapped.at(5 * 1000000, e, 10), VelocityStatus::Stale);
+  EXPECT_EQ(lapped.newest_ns(10), INT64_MIN);
+}
