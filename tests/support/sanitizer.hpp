@@ -1,7 +1,9 @@
-// Whether this test binary runs under a sanitizer (tests/sanitizers/run.sh builds such trees), so
-// that a test with a time limit can widen it, or skip itself, saying so. AddressSanitizer costs
-// about 2x, ThreadSanitizer 5-15x; limits that hold on a loaded two-core machine at full speed do
-// not hold there, while what the test checks (order, counts, values) still must.
+// Whether this test binary runs under a sanitizer (tests/sanitizers/run.sh builds such trees) or
+// an emulator (the arm64 cross build under qemu-user, tests/cross), so that a test with a time
+// limit can widen it, or a long numerical test check fewer points or skip itself, saying so.
+// AddressSanitizer costs about 2x, ThreadSanitizer 5-15x, qemu 10-30x; limits that hold on a
+// loaded two-core machine at full speed do not hold there, while what the test checks (order,
+// counts, values) still must.
 #pragma once
 
 namespace rsd::test {
@@ -18,6 +20,16 @@ inline constexpr bool kSanitized = false;
 inline constexpr bool kSanitized = false;
 #endif
 
+// Built for another machine and run under qemu-user (tests/cross/dsp_only.cmake defines it).
+#ifdef RSD_TEST_EMULATED
+inline constexpr bool kEmulated = true;
+#else
+inline constexpr bool kEmulated = false;
+#endif
+
+// Either: every instruction costs several times what it does at full speed.
+inline constexpr bool kSlowBuild = kSanitized || kEmulated;
+
 // How much longer a timed step may take under a sanitizer than at full speed.
 inline constexpr double kTimeScale = kSanitized ? 10.0 : 1.0;
 
@@ -26,12 +38,12 @@ inline constexpr const char* kSanitizedNote = "under a sanitizer: time limits wi
 }  // namespace rsd::test
 
 // A test whose arithmetic alone takes tens of seconds at full speed (a diagnosis over a whole
-// recording) would take ten to twenty times that under AddressSanitizer, beyond any budget: it
-// skips itself there, naming the faster tests that run the same code under the sanitizer. Its
+// recording) would take ten to thirty times that under AddressSanitizer or qemu, beyond any
+// budget: it skips itself there, naming the faster tests that run the same code there. Its
 // numbers are checked in the normal tree.
-#define RSD_SKIP_LONG_UNDER_SANITIZER(covered_by)                                                   \
-  do {                                                                                              \
-    if (::rsd::test::kSanitized)                                                                    \
-      GTEST_SKIP() << "a long numerical run, skipped under a sanitizer; its code runs there in " \
-                   << covered_by;                                                                   \
+#define RSD_SKIP_LONG_IN_SLOW_BUILD(covered_by)                                                             \
+  do {                                                                                                      \
+    if (::rsd::test::kSlowBuild)                                                                            \
+      GTEST_SKIP() << "a long numerical run, skipped under a sanitizer or an emulator; its code runs there in " \
+                   << covered_by;                                                                           \
   } while (0)

@@ -66,7 +66,7 @@ Diagnosis expect_named(const SimConfig& c, const std::string& expected) {
 
 TEST(DiagnosisMountScale, ConcealedMountRotationInMatches) {
   // Ten to twenty times slower under AddressSanitizer (a minute or more there).
-  RSD_SKIP_LONG_UNDER_SANITIZER("DiagnosisMountScale.ConcealedMountRotationInLandmarks (the same mount and scale parameters)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisMountScale.ConcealedMountRotationInLandmarks (the same mount and scale parameters)");
   SimConfig c = handheld(21, 4.0);
   const Vector3d r(0.024, -0.016, 0.03);  // about 2.3 degrees
   c.effects.mount_rotation = r;
@@ -79,7 +79,7 @@ TEST(DiagnosisMountScale, ConcealedMountRotationInMatches) {
 
 TEST(DiagnosisMountScale, ConcealedGyroScaleInMatches) {
   // Ten to twenty times slower under AddressSanitizer (a minute or more there).
-  RSD_SKIP_LONG_UNDER_SANITIZER("DiagnosisMountScale.ConcealedMountRotationInLandmarks (the same mount and scale parameters)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisMountScale.ConcealedMountRotationInLandmarks (the same mount and scale parameters)");
   SimConfig c = handheld(22, 4.0);
   const Vector3d s(1.06, 0.96, 1.04);
   c.effects.gyro_scale = s;

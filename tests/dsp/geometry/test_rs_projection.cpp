@@ -64,8 +64,8 @@ void check_against_brute_force(Solver solve, bool exact_motion, const Vector3d& 
   std::mt19937 rng(seed);
   for (const auto& sc : scenarios()) {
     const CaptureWindow win = default_capture_window(sc.timing);
-    // A sanitizer makes the brute force ten to twenty times slower: fewer points there.
-    int solved = 0, trials = rsd::test::kSanitized ? 50 : 400;
+    // A sanitizer or qemu makes the brute force ten to thirty times slower: fewer points there.
+    int solved = 0, trials = rsd::test::kSlowBuild ? 50 : 400;
     for (int i = 0; i < trials; ++i) {
       const Vector3d X = random_point(sc.cam, rng, 0.5, 20);
       const Twist tw = random_twist(rng, vmask, wmask, 6.0, 3.0);

@@ -66,9 +66,9 @@ Image random_image(int w, int h, PixelFormat f, unsigned seed) {
 }  // namespace
 
 TEST(RsRectifier, MapMatchesTheExactInverseAtEveryPixel) {
-  // Under a sanitizer every third pixel of every third row: the exact inverse (the reference)
+  // Under a sanitizer or qemu every third pixel of every third row: the exact inverse (the reference)
   // costs a minute there, the map's own code runs whole either way.
-  const int step = rsd::test::kSanitized ? 3 : 1;
+  const int step = rsd::test::kSlowBuild ? 3 : 1;
   for (const Case& c : cases()) {
     Rectifier rect(c.cam, c.timing, PixelFormat::Mono8);
     const RectifyReport rep = rect.build_map(ScrewMotion(c.tw), c.depth, c.t_ref);
@@ -88,7 +88,7 @@ TEST(RsRectifier, MapMatchesTheExactInverseAtEveryPixel) {
 // image (the exact inverse at every pixel, computed the independent way), to within the spacing
 // of the nodes it is taken over: the edges and corners where it peaks lie within a node spacing.
 TEST(RsRectifier, ReportsTheLargestDisplacementOfTheMap) {
-  RSD_SKIP_LONG_UNDER_SANITIZER("MapMatchesTheExactInverseAtEveryPixel (the same maps, built whole)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("MapMatchesTheExactInverseAtEveryPixel (the same maps, built whole)");
   for (const Case& c : cases()) {
     Rectifier rect(c.cam, c.timing, PixelFormat::Mono8);
     const RectifyReport rep = rect.build_map(ScrewMotion(c.tw), c.depth, c.t_ref);
