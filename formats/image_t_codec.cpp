@@ -50,11 +50,6 @@ std::optional<dsp::PixelFormat> pixel_format(int32_t fourcc_code) {
 
 namespace {
 
-int32_t be32s(const uint8_t* p) {
-  return static_cast<int32_t>(static_cast<uint32_t>(p[0]) << 24 | static_cast<uint32_t>(p[1]) << 16 |
-                              static_cast<uint32_t>(p[2]) << 8 | p[3]);
-}
-
 constexpr std::initializer_list<const char*> kKeys = {"frame_utime", "line_delay_ns", "readout", "exposure_ns", "sequence", "rectified",
                              "frame_ns",    "exposure_s",    "timing",  "intrinsics"};
 constexpr size_t kValueCapacity = 256;
@@ -112,33 +107,10 @@ DecodeStatus check_image_t(const uint8_t* data, size_t n, std::string& why) {
     why = "not a bot_core.image_t";
     return DecodeStatus::WrongFingerprint;
   }
-  // hash, utime, width, height, row_stride, pixelformat, size
-  size_t pos = 8 + 8 + 4 * 4;
-  auto need = [&](size_t k) { return pos + k <= n; };
-  if (!need(4)) return why = "ends inside the image header", DecodeStatus::Undecodable;
-  const int32_t size = be32s(data + pos);
-  pos += 4;
-  if (size < 0 || !need(static_cast<size_t>(size)))
-    return why = "image size " + std::to_string(size) + " does not fit the " + std::to_string(n) + "-byte payload",
-           DecodeStatus::AbsurdSize;
-  pos += static_cast<size_t>(size);
-  if (!need(4)) return why = "ends before the metadata count", DecodeStatus::Undecodable;
-  const int32_t nmeta = be32s(data + pos);
-  pos += 4;
-  if (nmeta < 0 || nmeta > 4096) return why = "metadata count " + std::to_string(nmeta), DecodeStatus::AbsurdSize;
-  for (int32_t i = 0; i < nmeta; ++i) {
-    if (!need(4)) return why = "ends inside the metadata", DecodeStatus::Undecodable;
-    const int32_t key_len = be32s(data + pos);
-    pos += 4;
-    if (key_len < 1 || !need(static_cast<size_t>(key_len) + 4))
-      return why = "metadata key length " + std::to_string(key_len), DecodeStatus::AbsurdSize;
-    pos += static_cast<size_t>(key_len);
-    const int32_t value_len = be32s(data + pos);
-    pos += 4;
-    if (value_len < 0 || !need(static_cast<size_t>(value_len)))
-      return why = "metadata value length " + std::to_string(value_len), DecodeStatus::AbsurdSize;
-    pos += static_cast<size_t>(value_len);
-  }
+  // Every length against the payload: a metadata count can claim no more entries than the
+  // bytes that follow hold, so the decoder's allocations stay within a few times the payload.
+  const LayoutStatus st = check_layout<bot_core::image_t>(data, n, why);
+  if (st != LayoutStatus::Fits) return st == LayoutStatus::BadLength ? DecodeStatus::AbsurdSize : DecodeStatus::Undecodable;
   return DecodeStatus::Ok;
 }
 

@@ -14,13 +14,12 @@
 #pragma once
 
 #include <bot_core/image_t.hpp>
-#include <rsd/frame_info_t.hpp>
-#include <rsd/health_t.hpp>
 
 #include <array>
 #include <cstdint>
 #include <cstring>
 #include <initializer_list>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -28,6 +27,7 @@
 
 #include "dsp/core/frame.hpp"
 #include "dsp/geometry/row_timing.hpp"
+#include "formats/lcm_layout_check.hpp"
 #include "formats/lcm_log.hpp"
 #include "dsp/geometry/camera_model.hpp"
 
@@ -56,50 +56,13 @@ struct RecordedFrame {
 enum class DecodeStatus { Ok, WrongFingerprint, AbsurdSize, Undecodable };
 LogSkip to_skip(DecodeStatus s);
 
-// Checks a bot_core.image_t payload before decoding it: fingerprint, and every length field
-// against the payload (lcm-gen's decoder would otherwise allocate whatever a corrupt `size`
-// says). `why` explains a failure.
+// Checks a bot_core.image_t payload before decoding it: fingerprint, then every length field
+// against the payload (check_layout; lcm-gen's decoder would otherwise allocate whatever a
+// corrupt `size` says). `why` explains a failure.
 DecodeStatus check_image_t(const uint8_t* data, size_t n, std::string& why);
 
-// lcm-gen's string decoding checks a length against the payload's end but not its sign: a
-// length of -2^31 overflows (undefined behaviour) and one of 0 or below reaches
-// std::string::assign as a huge size. So the strings of our types with strings are checked
-// before decoding: StringFields<Msg>::gaps holds, for each string in order, the bytes of the
-// fixed-size fields between it and the previous string (or the fingerprint). image_t's strings
-// (metadata keys) are check_image_t's.
-template <class Msg>
-struct StringFields {
-  static constexpr std::array<int, 0> gaps{};
-};
-template <>
-struct StringFields<rsd::health_t> {
-  static constexpr std::array<int, 2> gaps{8, 0};  // utime; source, source_state
-};
-template <>
-struct StringFields<rsd::frame_info_t> {
-  // utime, sequence, source_sequence, line_delay_s, readout, exposure_s, reference_time_s,
-  // rectified; unrectified_reason
-  static constexpr std::array<int, 1> gaps{8 + 8 + 8 + 8 + 1 + 8 + 8 + 1};
-};
-
-// Whether every string StringFields<Msg> locates has a length of 1..(what is left) bytes.
-template <class Msg>
-bool strings_fit(const uint8_t* data, size_t n) {
-  size_t pos = 8;
-  for (const int gap : StringFields<Msg>::gaps) {
-    pos += static_cast<size_t>(gap);
-    if (pos + 4 > n) return false;
-    const int32_t len = static_cast<int32_t>(static_cast<uint32_t>(data[pos]) << 24 | static_cast<uint32_t>(data[pos + 1]) << 16 |
-                                             static_cast<uint32_t>(data[pos + 2]) << 8 | data[pos + 3]);
-    pos += 4;
-    if (len < 1 || static_cast<size_t>(len) > n - pos) return false;
-    pos += static_cast<size_t>(len);
-  }
-  return true;
-}
-
-// Fingerprint check, then decode. For fixed-size types (rsd.velocity_t, pose_t), our types
-// with strings (checked first, above) and, after check_image_t, image_t.
+// Fingerprint check, layout check (formats/lcm_layout_check.hpp), then decode: for every type
+// in lcmtypes/.
 template <class Msg>
 DecodeStatus decode_checked(const uint8_t* data, size_t n, Msg& msg, std::string& why) {
   if (n < 8) {
@@ -112,18 +75,10 @@ DecodeStatus decode_checked(const uint8_t* data, size_t n, Msg& msg, std::string
     why = std::string("not a ") + Msg::getTypeName();
     return DecodeStatus::WrongFingerprint;
   }
-  if (!strings_fit<Msg>(data, n)) {
-    why = std::string("a string's length does not fit the payload of ") + Msg::getTypeName();
-    return DecodeStatus::Undecodable;
-  }
-  int status = -1;
-  try {
-    status = msg.decode(data, 0, static_cast<int>(n));
-  } catch (const std::length_error&) {
-    // A string not checked above (image_t's, if check_image_t was skipped): assign's own
-    // length check throws before allocating.
-  }
-  if (status < 0) {
+  // Every string and array length of every type, before lcm-gen's decoder believes it.
+  if (const LayoutStatus st = check_layout<Msg>(data, n, why); st != LayoutStatus::Fits)
+    return st == LayoutStatus::BadLength ? DecodeStatus::AbsurdSize : DecodeStatus::Undecodable;
+  if (n > static_cast<size_t>(std::numeric_limits<int>::max()) || msg.decode(data, 0, static_cast<int>(n)) < 0) {
     why = std::string("does not decode as ") + Msg::getTypeName();
     return DecodeStatus::Undecodable;
   }
