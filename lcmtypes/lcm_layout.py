@@ -108,7 +108,7 @@ def main():
                 fail(path, line, f"more than {MAX_FIELDS} fields (raise MAX_FIELDS in lcm_layout.py)")
             if len(dim_specs) > 4:
                 fail(path, line, f"'{fname}' has more than four dimensions")
-            dims_text = "{" + ", ".join(dim_specs) + "}"
+            dims_text = "{{" + ", ".join(dim_specs) + "}}" if dim_specs else "{}"
             if ftype in PRIMITIVES:
                 kind, size, sub = "Kind::Primitive", PRIMITIVES[ftype], -1
                 integer = "true" if ftype in INTEGERS else "false"

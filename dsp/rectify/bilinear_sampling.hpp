@@ -149,9 +149,10 @@ inline bool segment_within(const Affine& a, int n, std::int32_t sx_end, int last
   const auto in = [](std::int64_t v, int last_tap) {  // 0 <= (v + 128) >> 16 <= last_tap
     return static_cast<std::uint64_t>(v + 128) < static_cast<std::uint64_t>(std::max(last_tap + 1, 0)) << 16;
   };
-  return (n >= 1) & (static_cast<std::uint32_t>(a.sx) < static_cast<std::uint32_t>(sx_end)) &
-         (static_cast<std::uint64_t>(std::int64_t{a.sy} + 8191) < 16383) & in(a.ax, last_x) & in(x1, last_x) &
-         in(a.ay, last_y) & in(y1, last_y);
+  const int all = int{n >= 1} & int{static_cast<std::uint32_t>(a.sx) < static_cast<std::uint32_t>(sx_end)} &
+                  int{static_cast<std::uint64_t>(std::int64_t{a.sy} + 8191) < 16383} & int{in(a.ax, last_x)} &
+                  int{in(x1, last_x)} & int{in(a.ay, last_y)} & int{in(y1, last_y)};
+  return all != 0;
 }
 
 // A run of consecutive cells of one row: cell k covers the output samples

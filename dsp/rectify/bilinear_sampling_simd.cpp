@@ -326,7 +326,7 @@ HWY_INLINE void paired_cells(const SamplePlane& src, const Affine* a, int total,
     BlockSegment s0[kBlocks], s1[kBlocks];
     for (int b = 0; b < kBlocks; ++b) {
       const Affine* cell = b < kHalfBlocks ? &lo : &hi;
-      const int e = 8 * (b % kHalfBlocks);
+      const int e = 8 * (b % std::max(kHalfBlocks, 1));  // (no blocks at all on the narrowest targets)
       s0[b] = {cell, e}, s1[b] = {cell, e + 4};
     }
     affine_step<T, C>(src, s0, s1, X, Y, hn::Add(X, X4), hn::Add(Y, Y4), out + c0 * kOut);

@@ -23,9 +23,14 @@ for t in $targets; do
   case " $all " in *" $t "*) ;; *) echo "run.sh: no fuzz target '$t' (targets: $all)" >&2; exit 2 ;; esac
 done
 
-cmake -S "$src" -B "$build" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DRSD_LIBFUZZER=ON \
+generator=()
+[ -f "$build/CMakeCache.txt" ] || ! command -v ninja >/dev/null || generator=(-G Ninja)
+cmake -S "$src" -B "$build" "${generator[@]}" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DRSD_LIBFUZZER=ON \
       -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-cmake --build "$build" -j"$(nproc)" --target $(for t in $targets; do printf 'fuzz_%s ' "$t"; done)
+start=$(date +%s)
+cmake --build "$build" -j"$(nproc)" --target $(for t in $targets; do printf 'fuzz_%s ' "$t"; done) >"$build/build.log" 2>&1 ||
+  { tail -n 60 "$build/build.log" >&2; exit 1; }
+echo "run.sh: fuzz targets built in $(( $(date +%s) - start )) s"
 
 seconds=$(awk "BEGIN { print int($minutes * 60) }")
 summary=$build/fuzz-summary.txt
