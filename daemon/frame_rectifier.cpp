@@ -104,7 +104,9 @@ RectifyResult FrameRectifier::process(const dsp::ImageView& src, const dsp::Imag
                                      ? rect_->rectify(src, dst, dsp::IntegratedMotion(k, kKnots), depth, r.reference_time_s)
                                      : rect_->rectify(src, dst, tw, depth, r.reference_time_s);
   r.rectified = rep.rectified;
-  r.reason = rep.rectified ? "" : "no rolling-shutter solution for this motion";
+  r.reason = rep.rectified    ? ""
+             : rep.map_outside ? "the map puts most of the frame outside the captured image (camera model or motion out of reach)"
+                               : "no rolling-shutter solution for this motion";
   // The correction this frame needed: the map's own largest displacement (at the reference time
   // the map was built for). The verdict checks the same reference on a coarse grid.
   r.max_correction_px = rep.rectified ? rep.max_displacement_px : 0.0;

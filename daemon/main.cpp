@@ -201,19 +201,31 @@ int main(int argc, char** argv) {
     if (r.kind == rsd::daemon::Reload::Restart) config_text = text, restart_cfg = r.cfg;
     return r;
   };
+  // A reloaded configuration that passed every check and still fails to start (a camera that
+  // delivers another size than its calibration's, say) must not end a daemon that was running:
+  // it goes back to the configuration that ran, once.
+  rsd::daemon::Config ran = cfg;
+  bool trying_reloaded = false;
   for (;;) {
     rsd::daemon::RunSummary summary;
     try {
       rsd::daemon::run_service(cfg, g_flags, limits, {}, &summary, reloader);
     } catch (const std::exception& e) {
-      rsd::daemon::log_fatal(e.what());
-      return 1;
+      if (!trying_reloaded || g_flags.stop.load()) {
+        rsd::daemon::log_fatal(e.what());
+        return 1;
+      }
+      spdlog::error("reload refused: the new configuration failed to start ({}); restarting with the one that ran", e.what());
+      cfg = ran, trying_reloaded = false;
+      cfg.record_append = true;
+      continue;
     }
+    ran = cfg, trying_reloaded = false;
     // SIGTERM just after a restart, before its first frame, is no failure of the whole run.
     limits.frames_before = limits.frames_before || summary.frames_out > 0;
     if (!g_flags.reload.exchange(false) || g_flags.stop.load()) return 0;
     spdlog::info("configuration reloaded: restarting the pipeline");
-    cfg = restart_cfg;
+    cfg = restart_cfg, trying_reloaded = true;
     cfg.record_append = true;  // the recording continues
     if (log_level.empty()) spdlog::set_level(*rsd::daemon::parse_log_level(cfg.log_level));
   }

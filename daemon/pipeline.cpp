@@ -40,7 +40,7 @@ void Pipeline::start() {
   for (uint32_t i = 0; i < cfg_.out_slots; ++i) out_free_.put(i);
   camera_lost_ = end_of_stream_ = finished_ = false;
   capture_done_ = rectify_done_ = false;
-  last_first_row_ns_ = INT64_MIN;
+  frame_line_.reset();
   running_ = true;
   const RealtimeConfig& rt = cfg_.realtime;
   capture_ = std::thread([this, &rt] {
@@ -145,13 +145,13 @@ void Pipeline::capture_loop() {
     drivers::stamp_wall_clock(r.meta);
     stats_.frames_in.fetch_add(1, std::memory_order_relaxed);
     stats_.last_frame_ns.store(r.ready_ns, std::memory_order_relaxed);
-    // A repeated or backward first-row time (a camera's clock fault) would send row times and
-    // the velocity looked up for them back: refused, counted, the slot reused.
-    if (r.meta.first_row_ns <= last_first_row_ns_) {
+    // A repeated, backward or wild first-row time (a camera's clock fault) would send row times
+    // and the velocity looked up for them back, or every later frame: refused, counted, the
+    // slot reused; a clock that really restarted is followed from its third frame.
+    if (frame_line_.offer(r.meta.first_row_ns) == dsp::TimeLine::Verdict::Held) {
       stats_.refused.fetch_add(1, std::memory_order_relaxed);
       continue;
     }
-    last_first_row_ns_ = r.meta.first_row_ns;
     r.horizon = VelocityBuffer::kAll;
     if (!cfg_.samples_until_next_frame) {
       slot = pass_on(slot);

@@ -53,7 +53,7 @@ struct PipelineConfig {
 struct PipelineStats {
   // frames_in = frames_out + drops + refused + the frames in flight.
   std::atomic<uint64_t> frames_in{0}, frames_out{0}, drops{0}, rectified{0}, unrectified{0};
-  std::atomic<uint64_t> refused{0};  // a first-row time not after the previous frame's
+  std::atomic<uint64_t> refused{0};  // a first-row time off the time line (drivers::frame_time_line)
   std::atomic<int64_t> last_frame_ns{0};  // CLOCK_MONOTONIC when the newest frame arrived (0: none yet)
 };
 
@@ -130,7 +130,7 @@ class Pipeline {
   std::atomic<bool> running_{false}, capture_done_{false}, rectify_done_{false};
   std::atomic<bool> camera_lost_{false}, end_of_stream_{false}, finished_{false};
   std::string camera_error_;  // written by the capture thread before camera_lost_ is set
-  int64_t last_first_row_ns_ = INT64_MIN;  // capture thread; reset by start() (a reopened camera's clock may restart)
+  dsp::TimeLine frame_line_ = drivers::frame_time_line();  // capture thread; reset by start() (a reopened camera's clock may restart)
   FrameFiles* files_ = nullptr;
   FrameTap* tap_ = nullptr;
   std::atomic<bool> output_failed_{false};

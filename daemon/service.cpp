@@ -294,7 +294,7 @@ std::string latency_text(const rsd::health_t& h) {
 // their stamps, events the recording could not write.
 void log_faults(Session& s, uint64_t refused, uint64_t record_errors) {
   if (s.refused_log.due(refused))
-    spdlog::warn("{}: {} frames refused: a first-row time not after the previous frame's (the camera's clock)",
+    spdlog::warn("{}: {} frames refused: a first-row time off the camera's time line (not after the previous frame's, or a wild jump)",
                  s.source->name(), refused);
   if (s.record_log.due(record_errors))
     spdlog::error("recording to {}: {} events not written ({}); the run goes on without them", s.recorder->path(),

@@ -1,7 +1,9 @@
 #include "daemon/source_config.hpp"
 
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include "drivers/driver_registry.hpp"
 #include "drivers/recording_replay_source.hpp"
@@ -95,15 +97,16 @@ void visit_source(formats::ConfigSection& c, SourceConfig& s) {
     c.check(dir.empty() || std::filesystem::is_regular_file(std::filesystem::path(dir) / "recording.yaml"), "driver",
             "'recording' plays recording.dir '" + dir + "', which holds no recording.yaml");
   }
-  // Intrinsics for another frame size than the section asks the camera for: refused now, not
-  // when the camera first delivers.
+  // Intrinsics for another frame size than the section asks the camera for (or the simulator
+  // renders): refused now, not when the camera first delivers (at start, or over SIGHUP).
   const char* intrinsics_key = s.calibration ? "calibration_file" : s.camera_origin == "source.intrinsics_file" ? "intrinsics_file" : "camera";
-  if (s.camera)
-    if (const auto size = driver->configured_size(s.settings.at(s.driver)))
-      c.check(s.camera->width == size->first && s.camera->height == size->second, intrinsics_key,
-              s.camera_origin + " gives intrinsics for " + std::to_string(s.camera->width) + "x" +
-                  std::to_string(s.camera->height) + ", but source." + s.driver + " asks the camera for " +
-                  std::to_string(size->first) + "x" + std::to_string(size->second));
+  std::optional<std::pair<int, int>> size = driver->configured_size(s.settings.at(s.driver));
+  if (const auto own = driver->own_camera(s.settings.at(s.driver)); own && !size) size = std::pair<int, int>(own->width, own->height);
+  if (s.camera && size)
+    c.check(s.camera->width == size->first && s.camera->height == size->second, intrinsics_key,
+            s.camera_origin + " gives intrinsics for " + std::to_string(s.camera->width) + "x" +
+                std::to_string(s.camera->height) + ", but source." + s.driver + " asks the camera for " +
+                std::to_string(size->first) + "x" + std::to_string(size->second));
   c.check(!driver->real_camera || s.camera.has_value(), "driver",
           "'" + s.driver + "' needs the camera's intrinsics: add source.camera {width, height, fx, fy, cx, cy, distortion}, "
           "source.intrinsics_file (Kalibr camchain or ROS camera_info) or source.calibration_file");

@@ -29,34 +29,22 @@ bool VelocityBuffer::sane(const drivers::VelocitySample& s) const {
   return norm3(s.w) <= limits_.max_angular_rad_s && (!s.has_linear || norm3(s.v) <= limits_.max_linear_m_s);
 }
 
-bool VelocityBuffer::on_time_line(int64_t t_ns) const {
-  return last_t_ns_ == INT64_MIN || (t_ns > last_t_ns_ && t_ns - last_t_ns_ <= max_jump_ns_);
-}
-
 void VelocityBuffer::append(const drivers::VelocitySample& s) {
   const uint64_t n = count_.load(std::memory_order_relaxed);
   ring_[n % kCapacity] = s;
-  last_t_ns_ = s.t_ns;
   count_.store(n + 1, std::memory_order_release);
   newest_ns_.store(s.t_ns, std::memory_order_release);
 }
 
-// An off-line sample: kept while the held ones form a time line with it; when they are
-// kNewTimeLine, that line replaces the current one (readers see only its samples).
-bool VelocityBuffer::hold_candidate(const drivers::VelocitySample& s) {
-  const bool continues = n_candidates_ > 0 && s.t_ns > candidates_[n_candidates_ - 1].t_ns &&
-                         s.t_ns - candidates_[n_candidates_ - 1].t_ns <= max_jump_ns_;
-  if (!continues) n_candidates_ = 0;  // the held ones were strays after all
-  // Counted as rejected while held (what a reader cannot see), uncounted if confirmed.
-  rejected_.fetch_add(1, std::memory_order_relaxed);
-  candidates_[n_candidates_++] = s;
-  if (n_candidates_ < kNewTimeLine) return false;
-  rejected_.fetch_sub(static_cast<uint64_t>(n_candidates_), std::memory_order_relaxed);
+// The held samples and `s` are a new time line (dsp::TimeLine): readers see only its samples.
+bool VelocityBuffer::take_new_line(const drivers::VelocitySample& s) {
+  const int held = kNewTimeLine - 1;  // counted as rejected while held (what a reader cannot see)
+  rejected_.fetch_sub(static_cast<uint64_t>(held), std::memory_order_relaxed);
   // Published before the samples' count, so a reader that sees them sees the new epoch.
   epoch_.store(count_.load(std::memory_order_relaxed), std::memory_order_release);
   time_lines_.fetch_add(1, std::memory_order_relaxed);
-  for (int i = 0; i < n_candidates_; ++i) append(candidates_[i]);
-  n_candidates_ = 0;
+  for (int i = 0; i < held; ++i) append(candidates_[static_cast<size_t>(i)]);
+  append(s);
   return true;
 }
 
@@ -65,10 +53,18 @@ bool VelocityBuffer::push(const drivers::VelocitySample& s) {
     rejected_.fetch_add(1, std::memory_order_relaxed);
     return false;
   }
-  if (!on_time_line(s.t_ns)) return hold_candidate(s);
-  n_candidates_ = 0;  // back on the current line: whatever was held was strays
-  append(s);
-  return true;
+  switch (line_.offer(s.t_ns)) {
+    case dsp::TimeLine::Verdict::Continues:
+      append(s);
+      return true;
+    case dsp::TimeLine::Verdict::Held:
+      rejected_.fetch_add(1, std::memory_order_relaxed);  // uncounted if a new line confirms it
+      candidates_[static_cast<size_t>(line_.held() - 1)] = s;
+      return false;
+    case dsp::TimeLine::Verdict::Replaces:
+      return take_new_line(s);
+  }
+  return false;
 }
 
 int64_t VelocityBuffer::newest_ns(uint64_t horizon) const {

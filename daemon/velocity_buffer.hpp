@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "drivers/camera_source.hpp"
+#include "dsp/core/time_line.hpp"
 
 namespace rsd::daemon {
 
@@ -34,7 +35,9 @@ class VelocityBuffer {
   // offset): a few hundred milliseconds of them must stay readable.
   static constexpr size_t kCapacity = 4096;
   explicit VelocityBuffer(VelocityLimits limits = {})
-      : limits_(limits), max_jump_ns_(std::max<int64_t>(1'000'000'000, static_cast<int64_t>(2e9 * limits.max_age_s))) {}
+      : limits_(limits),
+        max_jump_ns_(std::max<int64_t>(1'000'000'000, static_cast<int64_t>(2e9 * limits.max_age_s))),
+        line_(max_jump_ns_, kNewTimeLine) {}
 
   // A sample more than max_jump_ns() after the newest (1 s, or twice max_age_s if longer: the
   // widest gap the buffer interpolates across), or not after it, is off the current time line.
@@ -72,20 +75,18 @@ class VelocityBuffer {
 
  private:
   bool sane(const drivers::VelocitySample& s) const;
-  bool on_time_line(int64_t t_ns) const;
-  bool hold_candidate(const drivers::VelocitySample& s);
+  bool take_new_line(const drivers::VelocitySample& s);
   void append(const drivers::VelocitySample& s);
   VelocityLimits limits_;
   int64_t max_jump_ns_;
-  std::array<drivers::VelocitySample, kNewTimeLine> candidates_{};  // writer only
-  int n_candidates_ = 0;
+  dsp::TimeLine line_;                                                // writer only
+  std::array<drivers::VelocitySample, kNewTimeLine> candidates_{};  // writer only: the held samples
   std::atomic<uint64_t> epoch_{0};  // index of the current time line's first sample
   std::atomic<uint64_t> time_lines_{0};
   std::array<drivers::VelocitySample, kCapacity> ring_{};
   std::atomic<uint64_t> count_{0};
   std::atomic<uint64_t> rejected_{0};
-  int64_t last_t_ns_ = INT64_MIN;  // writer only
-  std::atomic<int64_t> newest_ns_{INT64_MIN};  // last_t_ns_, published for readers
+  std::atomic<int64_t> newest_ns_{INT64_MIN};  // line_.newest(), published for readers
 };
 
 }  // namespace rsd::daemon

@@ -2,6 +2,7 @@
 
 #include "drivers/lcm_receive.hpp"
 #include "drivers/monotonic_clock.hpp"
+#include "dsp/core/input_limits.hpp"
 
 #include <bot_core/pose_t.hpp>
 
@@ -31,10 +32,10 @@ VelocityInput::~VelocityInput() {
 
 namespace {
 
-// Stamps beyond +-4e15 us (127 years from either epoch) are wild: refused before any
-// arithmetic on them (the shift by the clock offset, the scaling to ns) could overflow.
-constexpr int64_t kMaxStampUs = 4'000'000'000'000'000;
-bool stamp_in_range(int64_t us) { return us >= -kMaxStampUs && us <= kMaxStampUs; }
+// Stamps beyond rsd's window for times from outside (+-2^61 ns, 73 years from either epoch;
+// dsp/core/input_limits.hpp) are wild: refused before any arithmetic on them (the shift by the
+// clock offset, the scaling to ns) could overflow.
+bool stamp_in_range(int64_t us) { return dsp::limits::stamp_us_ok(us); }
 
 }  // namespace
 

@@ -1,5 +1,6 @@
 // source.aravis: a GigE Vision camera's section, read and printed by one visit.
 #include "drivers/aravis_source.hpp"
+#include "dsp/core/input_limits.hpp"
 
 namespace rsd::drivers {
 
@@ -7,9 +8,9 @@ void visit_config(formats::ConfigSection& c, AravisConfig& a) {
   c.value("camera", a.camera);
   c.value("pixel_format", a.pixel_format, "Mono8, Mono16, RGB8");
   c.value("width", a.width, "0: keep the camera's");
-  c.check(a.width >= 0 && a.width <= kMaxSide, "width", "must be 0 (keep the camera's) .. " + std::to_string(kMaxSide));
+  c.check(a.width == 0 || (a.width >= kMinSide && a.width <= kMaxSide), "width", std::string("must be 0 (keep the camera's) or ") + dsp::limits::kSide.text);
   c.value("height", a.height);
-  c.check(a.height >= 0 && a.height <= kMaxSide, "height", "must be 0 (keep the camera's) .. " + std::to_string(kMaxSide));
+  c.check(a.height == 0 || (a.height >= kMinSide && a.height <= kMaxSide), "height", std::string("must be 0 (keep the camera's) or ") + dsp::limits::kSide.text);
   c.value("frame_rate_hz", a.frame_rate_hz);
   c.check(a.frame_rate_hz >= 0 && a.frame_rate_hz <= kMaxRateHz, "frame_rate_hz", "must be 0 (keep the camera's) .. 10000");
   c.value("exposure_s", a.exposure_s);

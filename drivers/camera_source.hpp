@@ -15,6 +15,7 @@
 #include <string>
 
 #include "dsp/core/frame.hpp"
+#include "dsp/core/time_line.hpp"
 #include "dsp/geometry/row_timing.hpp"
 
 namespace rsd::drivers {
@@ -28,6 +29,12 @@ using dsp::FrameFormat;
 using dsp::FrameMeta;
 
 enum class CaptureStatus { Frame, Timeout, EndOfStream };
+
+// Frames' first-row stamps keep one time line (dsp::TimeLine): each after the previous and at
+// most a minute later. A repeated, backward or wild stamp costs that frame alone (refused,
+// counted); a camera whose clock restarted, or that paused for longer, is followed again from
+// its third frame.
+inline dsp::TimeLine frame_time_line() { return dsp::TimeLine(60'000'000'000, 3); }
 
 using dsp::VelocitySample;
 using VelocitySink = std::function<void(const VelocitySample&)>;

@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "drivers/camera_source.hpp"
+#include "dsp/core/input_limits.hpp"
 #include "dsp/geometry/camera_model.hpp"
 #include "dsp/geometry/row_timing.hpp"
 #include "formats/config_section.hpp"
@@ -22,7 +23,7 @@
 namespace rsd::drivers {
 
 // What a driver section may ask for: an image side, a frame rate, an exposure, buffers.
-inline constexpr int kMaxSide = 16384;
+inline constexpr int kMinSide = dsp::limits::kMinSide, kMaxSide = dsp::limits::kMaxSide;  // the rectifier's
 inline constexpr double kMaxRateHz = 10000, kMaxExposureS = 10;
 inline constexpr int kMaxBuffers = 64;
 

@@ -1,5 +1,6 @@
 // source.lcm: frames over LCM, the section read and printed by one visit.
 #include "drivers/lcm_source.hpp"
+#include "dsp/core/input_limits.hpp"
 
 namespace rsd::drivers {
 
@@ -13,7 +14,7 @@ void visit_config(formats::ConfigSection& c, LcmSourceConfig& l) {
   c.value("open_timeout_s", l.open_timeout_s, "wait this long for the first frame, then retry with backoff");
   c.check(l.open_timeout_s > 0 && l.open_timeout_s <= 3600, "open_timeout_s", "must be positive, at most 3600 s");
   c.value("fps", l.fallback_fps, "frame rate when the frames do not carry their timing");
-  c.check(l.fallback_fps > 0 && l.fallback_fps <= kMaxRateHz, "fps", "must be positive, at most 10000");
+  c.check(dsp::limits::kFrameRateHz.contains(l.fallback_fps), "fps", std::string("must be ") + dsp::limits::kFrameRateHz.text);
 }
 
 Driver lcm_driver() {

@@ -54,7 +54,7 @@ void LcmSource::open() {
       close_lcm();
       throw CameraError("lcm source: cannot connect to '" + cfg_.url + "'");
     }
-    last_frame_ns_ = INT64_MIN;  // a new connection is a new stream (a player started again)
+    line_.reset();  // a new connection is a new stream (a player started again)
     subs_[0] = lcm_subscribe(lcm_, cfg_.channel.c_str(), &LcmSource::on_image, this);
     subs_[1] = lcm_subscribe(lcm_, cfg_.velocity_channel.c_str(), &LcmSource::on_velocity, this);
     if (!pose_channel_.empty()) subs_[2] = lcm_subscribe(lcm_, pose_channel_.c_str(), &LcmSource::on_pose, this);
@@ -86,14 +86,15 @@ void LcmSource::on_image(const lcm_recv_buf_t* rbuf, const char* channel, void* 
   const auto* data = static_cast<const uint8_t*>(rbuf->data);
   const formats::DecodeStatus st = formats::decode_frame(data, rbuf->data_size, self->img_, self->frame_, self->why_);
   if (st != formats::DecodeStatus::Ok) return self->skip(formats::to_skip(st), std::string(channel) + ": " + self->why_);
-  // A frame must come after the previous one: a repeated or backward stamp would make the
-  // pipeline's row times (and the velocity it looks up) go back.
-  if (self->frame_.meta.first_row_ns <= self->last_frame_ns_)
+  // A frame must continue the stream's time line: a repeated or backward stamp would make the
+  // pipeline's row times (and the velocity it looks up) go back, and one wild stamp taken as
+  // the newest would make every later frame "out of order".
+  const int64_t newest = self->line_.newest();
+  if (self->line_.offer(self->frame_.meta.first_row_ns) == dsp::TimeLine::Verdict::Held)
     return self->skip(formats::LogSkip::OutOfOrder, std::string(channel) + ": first row at " +
-                                                        std::to_string(self->frame_.meta.first_row_ns) + " ns, not after " +
-                                                        std::to_string(self->last_frame_ns_) + " ns");
+                                                        std::to_string(self->frame_.meta.first_row_ns) +
+                                                        " ns, off the stream's time line (newest " + std::to_string(newest) + " ns)");
   if (self->opening_) {
-    self->last_frame_ns_ = self->frame_.meta.first_row_ns;
     self->first_ = self->frame_;
     const FrameFormat& f = self->first_.format;
     self->pending_image_ = dsp::Image(f.width, f.height, f.format);
@@ -106,7 +107,6 @@ void LcmSource::on_image(const lcm_recv_buf_t* rbuf, const char* channel, void* 
   if (!self->target_ || f.width != self->first_.format.width || f.height != self->first_.format.height ||
       f.format != self->first_.format.format)
     return self->skip(formats::LogSkip::Undecodable, std::string(channel) + ": frame size or format changed");
-  self->last_frame_ns_ = self->frame_.meta.first_row_ns;
   formats::copy_pixels(self->img_, *self->target_);
   *self->target_meta_ = self->frame_.meta;
   self->got_frame_ = true;

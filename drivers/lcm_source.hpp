@@ -73,7 +73,7 @@ class LcmSource final : public MessageSource {
   FrameMeta* target_meta_ = nullptr;
   std::array<std::atomic<uint64_t>, formats::kLogSkipKinds> skips_{};  // written by the capture thread
   std::array<TenfoldLog, formats::kLogSkipKinds> skip_log_{};
-  int64_t last_frame_ns_ = INT64_MIN;  // the newest frame's first row: the next must come after
+  dsp::TimeLine line_ = frame_time_line();  // the frames' first rows (a new connection starts it again)
 };
 
 // The driver's entry (drivers/driver_registry.cpp) and its config section (source.lcm).

@@ -1,14 +1,15 @@
 // source.libcamera: a libcamera camera's section, read and printed by one visit.
 #include "drivers/libcamera_source.hpp"
+#include "dsp/core/input_limits.hpp"
 
 namespace rsd::drivers {
 
 void visit_config(formats::ConfigSection& c, LibcameraConfig& l) {
   c.value("camera_id", l.camera_id, "\"\": the first camera");
   c.value("width", l.width);
-  c.check(l.width >= 1 && l.width <= kMaxSide, "width", "must be 1.." + std::to_string(kMaxSide));
+  c.check(l.width >= kMinSide && l.width <= kMaxSide, "width", std::string("must be ") + dsp::limits::kSide.text);
   c.value("height", l.height);
-  c.check(l.height >= 1 && l.height <= kMaxSide, "height", "must be 1.." + std::to_string(kMaxSide));
+  c.check(l.height >= kMinSide && l.height <= kMaxSide, "height", std::string("must be ") + dsp::limits::kSide.text);
   c.pixel_format("format", l.format);  // asked for; the camera's nearest is taken
   c.value("role", l.role);
   c.value("fps", l.fps);

@@ -14,6 +14,7 @@
 #include <stdexcept>
 
 #include "drivers/libcamera_logic.hpp"
+#include "dsp/core/input_limits.hpp"
 
 namespace rsd::drivers {
 
@@ -233,8 +234,8 @@ void LibcameraSource::Live::on_camera_removed(std::shared_ptr<libcamera::Camera>
 void validate(const LibcameraConfig& c) {
   auto bad = [](const std::string& what) { throw std::invalid_argument("libcamera config: " + what); };
   lc::Role role;
-  if (c.width <= 0 || c.height <= 0 || c.width > 16384 || c.height > 16384)
-    bad("width/height: expected 1..16384, got " + std::to_string(c.width) + "x" + std::to_string(c.height));
+  if (!dsp::limits::side_ok(c.width) || !dsp::limits::side_ok(c.height))
+    bad(std::string("width/height: expected ") + dsp::limits::kSide.text + ", got " + std::to_string(c.width) + "x" + std::to_string(c.height));
   if (!(std::isfinite(c.fps) && c.fps > 0 && c.fps <= 10000)) bad("fps: expected a rate in (0, 10000]");
   if (c.buffers < 1 || c.buffers > 64) bad("buffers: expected 1..64, got " + std::to_string(c.buffers));
   if (!lc::parse_role(c.role, role)) bad("role: expected auto, viewfinder or raw, got '" + c.role + "'");

@@ -7,20 +7,29 @@
 #include <stdexcept>
 #include <thread>
 
+#include <spdlog/spdlog.h>
+
 #include "drivers/monotonic_clock.hpp"  // monotonic_ns
+#include "dsp/core/input_limits.hpp"
 
 namespace rsd::drivers {
 
 bool ReplayPacer::wait(int64_t log_us, std::chrono::milliseconds timeout) {
   if (speed_ <= 0) return true;
   const int64_t now = monotonic_ns();
-  if (!started_) {
+  const dsp::TimeLine::Verdict v = line_.offer(log_us);
+  if (v == dsp::TimeLine::Verdict::Held) return true;
+  if (!started_ || v == dsp::TimeLine::Verdict::Replaces) {
     started_ = true;
     log0_us_ = log_us;
     wall0_ns_ = now;
     return true;
   }
-  const int64_t due = wall0_ns_ + static_cast<int64_t>(static_cast<double>(log_us - log0_us_) * 1000.0 / speed_);
+  // Log times lie within rsd's window (the replay refuses others), so their difference fits; a
+  // slow speed's quotient is clamped to +-1e18 ns (31 years) before it is an integer again, and a
+  // monotonic clock's wall0 (years of uptime at most) added to it fits too.
+  const double ahead_ns = std::clamp(static_cast<double>(log_us - log0_us_) * 1000.0 / speed_, -1e18, 1e18);
+  const int64_t due = wall0_ns_ + static_cast<int64_t>(ahead_ns);
   const int64_t limit = std::chrono::duration_cast<std::chrono::nanoseconds>(timeout).count();
   if (due - now > limit) {
     std::this_thread::sleep_for(timeout);
@@ -69,6 +78,7 @@ void ReplaySource::open() {
   double fps = cfg_.fallback_fps;
   if (second && second->meta.first_row_ns > first->meta.first_row_ns)
     fps = 1e9 / static_cast<double>(second->meta.first_row_ns - first->meta.first_row_ns);
+  if (!dsp::limits::kFrameRateHz.contains(fps)) fps = cfg_.fallback_fps;  // two frames years apart: no rate
   timing_ = row_timing(first_, fps);
   reader_ = std::make_unique<formats::LcmLogReader>(cfg_.file);
   if (cfg_.quiet_skips) reader_->set_message_handler({});
@@ -108,12 +118,17 @@ CaptureStatus ReplaySource::capture(const dsp::ImageView& dst, FrameMeta& meta, 
       if (!reader_->next(ev_)) {
         if (!cfg_.loop || frames_this_pass_ == 0) return CaptureStatus::EndOfStream;
         // Again from the start, later by the log's length plus one frame period, so that
-        // frame and velocity times keep increasing.
-        offset_ns_ += last_frame_ns_ - first_frame_ns_ + static_cast<int64_t>(1e9 / timing_.frame_rate_hz);
-        ts_offset_us_ += last_ts_us_ - first_ts_us_ + static_cast<int64_t>(1e6 / timing_.frame_rate_hz);
+        // frame and velocity times keep increasing: while they stay in rsd's window for times
+        // (the log's own times do; passes add up), else the play ends there.
+        if (!next_pass_offsets()) return CaptureStatus::EndOfStream;
         reader_->rewind();
         frames_this_pass_ = 0;
         ++passes_;
+        continue;
+      }
+      if (!dsp::limits::stamp_us_ok(ev_.timestamp_us)) {  // before any arithmetic on it
+        reader_->skip(formats::LogSkip::Undecodable, ev_.offset,
+                      "event time " + std::to_string(ev_.timestamp_us) + " us is out of range");
         continue;
       }
       pending_ = true;
@@ -137,6 +152,20 @@ CaptureStatus ReplaySource::capture(const dsp::ImageView& dst, FrameMeta& meta, 
       reader_->skip(formats::LogSkip::UnknownChannel, ev_.offset, "channel '" + ev_.channel + "'");
     }
   }
+}
+
+bool ReplaySource::next_pass_offsets() {
+  const int64_t frame_ns = last_frame_ns_ - first_frame_ns_ + static_cast<int64_t>(1e9 / timing_.frame_rate_hz);
+  const int64_t ts_us = last_ts_us_ - first_ts_us_ + static_cast<int64_t>(1e6 / timing_.frame_rate_hz);
+  using dsp::limits::kStampLimitNs;
+  if (offset_ns_ + frame_ns > kStampLimitNs || ts_offset_us_ + ts_us > kStampLimitNs / 1000 ||
+      last_frame_ns_ + (offset_ns_ + frame_ns) > kStampLimitNs) {  // (each sum within +-2^62)
+    spdlog::warn("replay --loop: pass {} would take the log's times beyond rsd's window (+-2^61 ns): the play ends", passes_ + 1);
+    return false;
+  }
+  offset_ns_ += frame_ns;
+  ts_offset_us_ += ts_us;
+  return true;
 }
 
 bool ReplaySource::take_frame(const dsp::ImageView& dst, FrameMeta& meta) {

@@ -22,6 +22,7 @@
 #include "drivers/playback.hpp"
 #include "drivers/driver.hpp"
 #include "formats/image_t_codec.hpp"
+#include "dsp/core/time_line.hpp"
 
 namespace rsd::drivers {
 
@@ -41,7 +42,7 @@ struct ReplayConfig {
 class ReplayPacer {
  public:
   explicit ReplayPacer(double speed = 1.0) : speed_(speed) {}
-  void reset() { started_ = false; }
+  void reset() { started_ = false, line_.reset(); }
   // Waits until the event at `log_us` is due, at most `timeout`; true when due.
   bool wait(int64_t log_us, std::chrono::milliseconds timeout);
   bool fast() const { return speed_ <= 0; }
@@ -50,6 +51,10 @@ class ReplayPacer {
   double speed_;
   bool started_ = false;
   int64_t log0_us_ = 0, wall0_ns_ = 0;
+  // The log's event times (us): a wild one plays at once without moving the pace, instead of
+  // stalling the replay until its time comes; a log whose times jumped for good (a recording
+  // paused, logs joined) is paced again from its third event on the new line.
+  dsp::TimeLine line_{60'000'000, 3, true};
 };
 
 // Parses "fast" / "max" (0) or a positive factor; false otherwise.
@@ -83,6 +88,9 @@ class ReplaySource final : public MessageSource, public Playback {
   const formats::LcmLogReader* reader() const { return reader_.get(); }
 
  private:
+  // The offsets of the next --loop pass; false (said in the log) when they would leave rsd's
+  // window for times.
+  bool next_pass_offsets();
   bool take_frame(const dsp::ImageView& dst, FrameMeta& meta);
   void take_velocity();
   void take_pose();

@@ -1,14 +1,15 @@
 // source.v4l2: a V4L2 device's section, read and printed by one visit.
 #include "drivers/v4l2_source.hpp"
+#include "dsp/core/input_limits.hpp"
 
 namespace rsd::drivers {
 
 void visit_config(formats::ConfigSection& c, V4l2Config& v) {
   c.value("device", v.device);
   c.value("width", v.width);
-  c.check(v.width >= 1 && v.width <= kMaxSide, "width", "must be 1.." + std::to_string(kMaxSide));
+  c.check(v.width >= kMinSide && v.width <= kMaxSide, "width", std::string("must be ") + dsp::limits::kSide.text);
   c.value("height", v.height);
-  c.check(v.height >= 1 && v.height <= kMaxSide, "height", "must be 1.." + std::to_string(kMaxSide));
+  c.check(v.height >= kMinSide && v.height <= kMaxSide, "height", std::string("must be ") + dsp::limits::kSide.text);
   c.value("pixel_format", v.pixel_format, "GREY, Y16, RGB24, BGR3, YUYV, NV12, YU12, or a Bayer fourcc: RGGB .. GB16");
   c.value("fps", v.fps);
   c.check(v.fps > 0 && v.fps <= kMaxRateHz, "fps", "must be positive, at most 10000");

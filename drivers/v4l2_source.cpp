@@ -1,4 +1,5 @@
 #include "drivers/v4l2_source.hpp"
+#include "dsp/core/input_limits.hpp"
 
 #include <fcntl.h>
 #include <poll.h>
@@ -95,8 +96,8 @@ void validate(const V4l2Config& c) {
   auto bad = [](const std::string& what) { throw std::invalid_argument("v4l2 config: " + what); };
   std::uint32_t fourcc = 0;
   if (c.device.empty()) bad("device: empty path");
-  if (c.width <= 0 || c.height <= 0 || c.width > 16384 || c.height > 16384)
-    bad("width/height: expected 1..16384, got " + std::to_string(c.width) + "x" + std::to_string(c.height));
+  if (!dsp::limits::side_ok(c.width) || !dsp::limits::side_ok(c.height))
+    bad(std::string("width/height: expected ") + dsp::limits::kSide.text + ", got " + std::to_string(c.width) + "x" + std::to_string(c.height));
   if (!(std::isfinite(c.fps) && c.fps > 0 && c.fps <= 10000)) bad("fps: expected a rate in (0, 10000]");
   if (c.buffers < 1 || c.buffers > 64) bad("buffers: expected 1..64, got " + std::to_string(c.buffers));
   if (!v4l2::parse_pixel_format(c.pixel_format, fourcc))

@@ -14,6 +14,7 @@
 #include "formats/number_text.hpp"
 #include "formats/intrinsics_file.hpp"
 #include "formats/yaml_map.hpp"
+#include "dsp/core/input_limits.hpp"
 
 namespace rsd::formats {
 
@@ -55,20 +56,32 @@ void read_sigma(YamlMap s, Calibration& c) {
   s.finish();
 }
 
+// rsd's input limits (dsp/core/input_limits.hpp) on a number or each element of a vector.
+void check_range(YamlMap& m, const std::string& key, double v, const dsp::limits::Range& range) {
+  if (!range.contains(v)) m.fail(key, "is " + number_text(v) + ", outside " + range.text);
+}
+void check_range(YamlMap& m, const std::string& key, const Eigen::Vector3d& v, const dsp::limits::Range& range) {
+  for (int i = 0; i < 3; ++i) check_range(m, key, v[i], range);
+}
+
 void read_rsd(YamlMap r, Calibration& c) {
   c.has_rsd_block = true;
   if (!r.has("format")) r.fail("format", "is missing (rsd-calibration/1)");
   const std::string format = r.text("format", "");
   if (format != kFormat) r.fail("format", "is '" + format + "', expected " + kFormat);
   c.line_delay_s = r.number("line_delay_s", c.line_delay_s);
-  if (c.line_delay_s < 0) r.fail("line_delay_s", "must not be negative (0: global shutter)");
+  if (!dsp::limits::kLineDelayS.contains(c.line_delay_s))
+    r.fail("line_delay_s", std::string("must be ") + dsp::limits::kLineDelayS.text + " (0: global shutter)");
   if (r.has("readout") && !dsp::parse_readout(r.text("readout", ""), c.readout))
     r.fail("readout", "must be top_to_bottom or bottom_to_top");
   c.drift_ppm = r.number("drift_ppm", c.drift_ppm);
+  check_range(r, "drift_ppm", c.drift_ppm, dsp::limits::kDriftPpm);
   c.gyro_bias_rad_s = vec3(r, "gyro_bias_rad_s", c.gyro_bias_rad_s);
+  check_range(r, "gyro_bias_rad_s", c.gyro_bias_rad_s, dsp::limits::kGyroBiasRadS);
   c.gyro_scale = vec3(r, "gyro_scale", c.gyro_scale);
-  if (!(c.gyro_scale.array() > 0).all()) r.fail("gyro_scale", "must be positive");
+  check_range(r, "gyro_scale", c.gyro_scale, dsp::limits::kGyroScale);
   c.lever_arm_m = vec3(r, "lever_arm_m", c.lever_arm_m);
+  check_range(r, "lever_arm_m", c.lever_arm_m, dsp::limits::kLeverArmM);
   c.source = r.text("source", "");
   if (r.has("sigma")) read_sigma(r.map("sigma"), c);
   r.finish();  // unknown keys inside cam0.rsd are errors
@@ -97,6 +110,7 @@ Calibration read_calibration(const std::string& file) {
   c.cam = read_kalibr_camera(cam);
   read_t_cam_imu(cam, c);
   c.timeshift_cam_imu_s = cam.number("timeshift_cam_imu", 0.0);
+  check_range(cam, "timeshift_cam_imu", c.timeshift_cam_imu_s, dsp::limits::kTimeShiftS);
   if (cam.has("rsd")) read_rsd(cam.map("rsd"), c);
   return c;
 }

@@ -8,6 +8,8 @@
 #include <utility>
 
 #include "dsp/core/image_planes.hpp"
+#include "dsp/core/input_limits.hpp"
+#include "formats/number_text.hpp"
 
 namespace rsd::formats {
 
@@ -117,8 +119,9 @@ DecodeStatus check_image_t(const uint8_t* data, size_t n, std::string& why) {
 namespace {
 
 // Microseconds as nanoseconds, unless that overflows (a stamp beyond the year 2262).
+// Within rsd's window for times from outside (dsp/core/input_limits.hpp).
 bool us_to_ns(int64_t us, int64_t& ns) {
-  if (us > INT64_MAX / 1000 || us < INT64_MIN / 1000) return false;
+  if (!dsp::limits::stamp_us_ok(us)) return false;
   ns = us * 1000;
   return true;
 }
@@ -129,6 +132,7 @@ bool parse_times(const bot_core::image_t& img, RecordedFrame& out, std::string& 
   if (!us_to_ns(img.utime, out.meta.wall_ns))  // libbot2's convention; older rsd logs: their monotonic time
     return why = "utime " + std::to_string(img.utime) + " is out of range", false;
   if (parse_number(value_of(img, "frame_ns"), ns)) {
+    if (!dsp::limits::stamp_ok(ns)) return why = "metadata frame_ns " + std::to_string(ns) + " is out of range", false;
     out.meta.first_row_ns = ns;
   } else if (parse_number(value_of(img, "frame_utime"), us)) {
     if (!us_to_ns(us, out.meta.first_row_ns)) return why = "metadata frame_utime " + std::to_string(us) + " is out of range", false;
@@ -143,17 +147,17 @@ bool parse_times(const bot_core::image_t& img, RecordedFrame& out, std::string& 
 // Exposure, readout, line delay, frame rate and first row, each checked for range: a NaN or
 // absurd value here would stamp every row of the frame wrong.
 bool parse_timing(const bot_core::image_t& img, RecordedFrame& out, std::string& why) {
-  auto bad = [&](const char* key, double v) { return why = std::string("metadata ") + key + " " + std::to_string(v) + " is out of range", false; };
+  auto bad = [&](const char* key, double v) { return why = std::string("metadata ") + key + " " + number_text(v) + " is out of range", false; };
   double x = 0;
   if (parse_number(value_of(img, "exposure_s"), x)) out.meta.exposure_s = x;
   else if (parse_number(value_of(img, "exposure_ns"), x)) out.meta.exposure_s = x * 1e-9;
-  if (!(out.meta.exposure_s >= 0 && out.meta.exposure_s <= 10)) return bad("exposure", out.meta.exposure_s);
+  if (!dsp::limits::kExposureS.contains(out.meta.exposure_s)) return bad("exposure", out.meta.exposure_s);
   dsp::Readout r;
   if (dsp::parse_readout(value_of(img, "readout"), r)) out.readout = r;
   double t[4];
   if (parse_numbers(value_of(img, "timing"), t, 4)) {
-    if (!(t[0] >= 0 && t[0] < 1)) return bad("timing (line delay)", t[0]);
-    if (!(t[1] > 0 && t[1] <= 1e5)) return bad("timing (frame rate)", t[1]);
+    if (!dsp::limits::kLineDelayS.contains(t[0])) return bad("timing (line delay)", t[0]);
+    if (!dsp::limits::kFrameRateHz.contains(t[1])) return bad("timing (frame rate)", t[1]);
     // -1: the readout's natural first row (dsp::RowTiming::first_row)
     if (!(t[3] >= -1 && t[3] < img.height && t[3] == std::floor(t[3]))) return bad("timing (first row)", t[3]);
     out.line_delay_s = t[0];
@@ -176,6 +180,8 @@ bool parse_intrinsics(const bot_core::image_t& img, RecordedFrame& out, std::str
   c.width = img.width, c.height = img.height;
   c.fx = k[0], c.fy = k[1], c.cx = k[2], c.cy = k[3];
   c.dist = {k[4], k[5], k[6], k[7], k[8]};
+  if (const dsp::CameraOutOfRange r = dsp::out_of_range(c); r.part != dsp::CameraOutOfRange::None)
+    return why = "metadata intrinsics: " + r.why, false;
   out.camera = c;
   return true;
 }
@@ -186,8 +192,8 @@ bool parse_frame(const bot_core::image_t& img, RecordedFrame& out, std::string& 
   const auto fmt = pixel_format(img.pixelformat);
   if (!fmt)
     return why = "pixelformat " + std::to_string(img.pixelformat) + " is none of rsd's (" + dsp::format_names() + ")", false;
-  if (img.width < 1 || img.height < 1 || img.width > 16384 || img.height > 16384)
-    return why = "size " + std::to_string(img.width) + "x" + std::to_string(img.height), false;
+  if (!dsp::limits::side_ok(img.width) || !dsp::limits::side_ok(img.height))
+    return why = "size " + std::to_string(img.width) + "x" + std::to_string(img.height) + " (sides must be " + dsp::limits::kSide.text + ")", false;
   if (std::string fit; !dsp::size_fits(*fmt, img.width, img.height, &fit)) return why = "width, height: " + fit, false;
   const int64_t row = static_cast<int64_t>(dsp::row_bytes(*fmt, img.width));
   if (*fmt == dsp::PixelFormat::I420 && img.row_stride % 2) return why = "row_stride " + std::to_string(img.row_stride) + " is odd (i420)", false;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "formats/yaml_map.hpp"
+#include "dsp/core/input_limits.hpp"
 
 namespace rsd::formats {
 namespace {
@@ -25,6 +26,15 @@ std::string required_text(YamlMap& m, const std::string& key) {
 
 void check_focal(YamlMap& m, const std::string& key, double fx, double fy) {
   if (!(fx > 0) || !(fy > 0)) m.fail(key, "must have positive focal lengths");
+}
+
+// rsd's input limits (dsp/core/input_limits.hpp) on a camera read from `m`, each part reported
+// under the key that gave it.
+void check_limits(YamlMap& m, const dsp::CameraModel& c, const char* size_key, const char* matrix_key, const char* dist_key) {
+  const dsp::CameraOutOfRange r = dsp::out_of_range(c);
+  using P = dsp::CameraOutOfRange;
+  if (r.part == P::None) return;
+  m.fail(r.part == P::Size ? size_key : r.part == P::Distortion ? dist_key : matrix_key, "has " + r.why);
 }
 
 bool is_cam_key(const std::string& k) {
@@ -65,10 +75,11 @@ dsp::CameraModel read_kalibr_camera(YamlMap& c) {
 
   const std::vector<double> res = c.numbers("resolution", 2);
   for (double v : res)
-    if (!(v >= 1) || v != std::floor(v) || v > 16384)
-      c.fail("resolution", "must be two whole numbers [width, height] of 1..16384 pixels");
+    if (!dsp::limits::side_ok(v))
+      c.fail("resolution", std::string("must be two whole numbers [width, height] of ") + dsp::limits::kSide.text);
   cam.width = static_cast<int>(res[0]);
   cam.height = static_cast<int>(res[1]);
+  check_limits(c, cam, "resolution", "intrinsics", "distortion_coeffs");
   return cam;
 }
 
@@ -133,8 +144,8 @@ Intrinsics load_ros(const std::string& file, YamlMap& root, const std::string& c
   Intrinsics out;
   const int w = required_int(root, "image_width");
   const int h = required_int(root, "image_height");
-  if (w < 1 || w > 16384) root.fail("image_width", "must be 1..16384 pixels");
-  if (h < 1 || h > 16384) root.fail("image_height", "must be 1..16384 pixels");
+  if (!dsp::limits::side_ok(w)) root.fail("image_width", std::string("must be ") + dsp::limits::kSide.text);
+  if (!dsp::limits::side_ok(h)) root.fail("image_height", std::string("must be ") + dsp::limits::kSide.text);
   out.cam.width = w;
   out.cam.height = h;
 
@@ -184,6 +195,7 @@ Intrinsics load_ros(const std::string& file, YamlMap& root, const std::string& c
                                   "k4 = k5 = k6 = 0) is supported");
   }
 
+  check_limits(root, out.cam, "image_width", "camera_matrix", "distortion_coefficients");
   // Read for their shape only: rsd rectifies with its own model.
   if (root.has("rectification_matrix")) {
     const Matrix R = read_matrix(root, "rectification_matrix");
@@ -215,8 +227,8 @@ dsp::CameraModel read_camera_section(YamlMap m, const dsp::CameraModel& defaults
   c.width = m.integer("width", c.width);
   c.height = m.integer("height", c.height);
   // Before anything is computed from them (a width of -2^31 overflowed the default cx).
-  if (c.width < 2 || c.height < 2 || c.width > 16384 || c.height > 16384)
-    m.fail(c.width < 2 || c.width > 16384 ? "width" : "height", "must be 2..16384 pixels");
+  if (!dsp::limits::side_ok(c.width) || !dsp::limits::side_ok(c.height))
+    m.fail(!dsp::limits::side_ok(c.width) ? "width" : "height", std::string("must be ") + dsp::limits::kSide.text);
   c.fx = m.number("fx", c.fx);
   c.fy = m.number("fy", c.fx);
   c.cx = m.number("cx", 0.5 * (c.width - 1));
@@ -226,6 +238,8 @@ dsp::CameraModel read_camera_section(YamlMap m, const dsp::CameraModel& defaults
     c.dist = {d[0], d[1], d[2], d[3], 0};
   }
   if (!(c.fx > 0 && c.fy > 0)) m.fail("fx", "and fy must be positive");
+  if (const dsp::CameraOutOfRange r = dsp::out_of_range(c); r.part != dsp::CameraOutOfRange::None)
+    m.fail(r.part == dsp::CameraOutOfRange::Distortion ? "distortion" : r.field, "has " + r.why);
   m.finish();
   return c;
 }

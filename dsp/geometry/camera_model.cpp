@@ -1,7 +1,11 @@
 #include "dsp/geometry/camera_model.hpp"
 
+#include "dsp/core/input_limits.hpp"
+
 #include <Eigen/LU>
 #include <cmath>
+#include <cstdio>
+#include <utility>
 
 namespace rsd::dsp {
 
@@ -70,6 +74,32 @@ std::optional<Eigen::Vector3d> CameraModel::ray(const Eigen::Vector2d& px) const
   const auto xn = from_pixel(px);
   if (!xn) return std::nullopt;
   return Eigen::Vector3d(xn->x(), xn->y(), 1.0);
+}
+
+namespace {
+
+std::string outside(const char* name, double v, const limits::Range& r) {
+  char text[96];
+  std::snprintf(text, sizeof text, "%s %.9g is outside %s", name, v, r.text);
+  return text;
+}
+
+}  // namespace
+
+CameraOutOfRange out_of_range(const CameraModel& c) {
+  using P = CameraOutOfRange;
+  if (!limits::side_ok(c.width)) return {P::Size, "width", outside("width", c.width, limits::kSide)};
+  if (!limits::side_ok(c.height)) return {P::Size, "height", outside("height", c.height, limits::kSide)};
+  if (!limits::kFocalPx.contains(c.fx)) return {P::Focal, "fx", outside("fx", c.fx, limits::kFocalPx)};
+  if (!limits::kFocalPx.contains(c.fy)) return {P::Focal, "fy", outside("fy", c.fy, limits::kFocalPx)};
+  if (!limits::kPrincipalPointSizes.contains(c.cx / c.width))
+    return {P::PrincipalPoint, "cx", outside("cx / width", c.cx / c.width, limits::kPrincipalPointSizes)};
+  if (!limits::kPrincipalPointSizes.contains(c.cy / c.height))
+    return {P::PrincipalPoint, "cy", outside("cy / height", c.cy / c.height, limits::kPrincipalPointSizes)};
+  const std::pair<const char*, double> d[] = {{"k1", c.dist.k1}, {"k2", c.dist.k2}, {"p1", c.dist.p1}, {"p2", c.dist.p2}, {"k3", c.dist.k3}};
+  for (const auto& [name, v] : d)
+    if (!limits::kDistortion.contains(v)) return {P::Distortion, name, outside(name, v, limits::kDistortion)};
+  return {};
 }
 
 }  // namespace rsd::dsp

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <optional>
+#include <string>
 
 namespace rsd::dsp {
 
@@ -48,5 +49,14 @@ struct CameraModel {
            px.y() <= height - 1 + margin;
   }
 };
+
+// Which part of a camera lies outside rsd's input limits (dsp/core/input_limits.hpp), and how:
+// what a boundary reading intrinsics reports under its own key for that part.
+struct CameraOutOfRange {
+  enum Part { None, Size, Focal, PrincipalPoint, Distortion } part = None;
+  const char* field = "";  // width, height, fx, fy, cx, cy, k1, k2, p1, p2, k3
+  std::string why;         // "fx 1e+300 is outside 1..1e7 pixels"
+};
+CameraOutOfRange out_of_range(const CameraModel& cam);
 
 }  // namespace rsd::dsp

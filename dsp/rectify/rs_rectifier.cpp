@@ -10,6 +10,7 @@
 
 #include "dsp/rectify/bilinear_sampling.hpp"
 #include "dsp/rectify/fixed_point.hpp"
+#include "dsp/core/input_limits.hpp"
 
 namespace rsd::dsp {
 
@@ -47,8 +48,8 @@ Rectifier::Rectifier(const CameraModel& cam, const RowTiming& timing, const Came
     : cam_(cam), out_(out_cam), timing_(timing), format_(format), cfg_(cfg) {
   if (cam.height != timing.height) throw std::invalid_argument("Rectifier: camera and row timing heights differ");
   for (const CameraModel* c : {&cam_, &out_}) {
-    if (c->width < 4 || c->height < 4 || c->width > 8000 || c->height > 8000)
-      throw std::invalid_argument("Rectifier: image sizes must be 4..8000 px");
+    if (!limits::side_ok(c->width) || !limits::side_ok(c->height))
+      throw std::invalid_argument(std::string("Rectifier: image sides must be ") + limits::kSide.text);
     if (std::string why; !size_fits(format, c->width, c->height, &why)) throw std::invalid_argument("Rectifier: " + why);
   }
   if (!is_power_of_two(cfg.initial_spacing) || !is_power_of_two(cfg.min_spacing) || cfg.min_spacing < 2 ||
@@ -278,6 +279,11 @@ RectifyReport Rectifier::rectify(const ImageView& src, const ImageView& dst, con
                                  const DepthModel& depth, double t_ref) {
   check_views(src, dst);
   const RectifyReport rep = build_map(motion, depth, t_ref);
+  if (rep.mostly_outside()) {  // mostly black: not an honest rectification (RectifyReport)
+    RectifyReport out = pass_through(src, dst);
+    out.points_checked = rep.points_checked, out.points_inside = rep.points_inside, out.map_outside = true;
+    return out;
+  }
   remap(src, dst);
   return rep;
 }

@@ -73,6 +73,13 @@ struct RectifyReport {
   // over the map's nodes inside both images: the largest correction this frame needed. With an
   // output camera other than the source's it includes that change of camera.
   double max_displacement_px = 0;
+  // Of the points that largest correction is taken over, those whose source lies inside the
+  // captured image. A map with fewer than half inside would publish a frame that is mostly
+  // black (an absurd camera model, a motion out of the model's reach): rectify() does not
+  // publish it as rectified (the frame passes through, map_outside set).
+  int points_checked = 0, points_inside = 0;
+  bool map_outside = false;
+  bool mostly_outside() const { return points_checked > 0 && 2 * points_inside < points_checked; }
   bool within_tolerance() const { return error_bound_px <= tolerance_px; }
   double tolerance_px = 0.05;
 };
@@ -148,7 +155,8 @@ class Rectifier {
   void second_differences(Branch& b) const;
   RectifyReport solve_level();
   RectifyReport assess_level();
-  double max_node_displacement() const;
+  // max_displacement_px, points_checked and points_inside of the current map.
+  void measure_displacement(RectifyReport& rep) const;
   double cell_bound(const Branch& b, int i, int j) const;
   static double fixed_point_error(int spacing);
   std::size_t next_level(std::size_t level, double bound) const;

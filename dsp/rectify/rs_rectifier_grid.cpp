@@ -137,18 +137,20 @@ RectifyReport Rectifier::build_map(const CameraMotion& motion, const DepthModel&
   rep.levels_solved = solved;
   map_ready_ = true;
   rep.rectified = true;
-  rep.max_displacement_px = max_node_displacement();
+  measure_displacement(rep);
   return rep;
 }
 
 // Over the nodes, and the image's last row and column (between nodes when the spacing does not
 // divide the size), where a correction usually peaks: the map there is the bilinear
 // interpolation of its four nodes, as the sampler uses it.
-double Rectifier::max_node_displacement() const {
+void Rectifier::measure_displacement(RectifyReport& rep) const {
   const Level& L = levels_[level_];
   const int s = L.spacing;
   double worst = 0;
+  rep.points_checked = rep.points_inside = 0;
   auto at = [&](double px, double py) {
+    ++rep.points_checked;
     const int i = std::min(static_cast<int>(px) / s, L.nx - 2), j = std::min(static_cast<int>(py) / s, L.ny - 2);
     const double fx = px / s - i, fy = py / s - j;
     const std::size_t n = static_cast<std::size_t>(j) * L.nx + i;
@@ -159,7 +161,8 @@ double Rectifier::max_node_displacement() const {
     const double w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
     double x = 0, y = 0;
     for (int k = 0; k < 4; ++k) x += w[k] * b.x[c[k]], y += w[k] * b.y[c[k]];
-    if (x < -0.5 || y < -0.5 || x > cam_.width - 0.5 || y > cam_.height - 0.5) return;  // black there
+    if (!(x >= -0.5 && y >= -0.5 && x <= cam_.width - 0.5 && y <= cam_.height - 0.5)) return;  // black there
+    ++rep.points_inside;
     worst = std::max(worst, std::hypot(x - px, y - py));
   };
   const int last_x = out_.width - 1, last_y = out_.height - 1;
@@ -170,7 +173,7 @@ double Rectifier::max_node_displacement() const {
     }
     if (y == last_y) break;
   }
-  return worst;
+  rep.max_displacement_px = worst;
 }
 
 RectifyReport Rectifier::solve_level() {

@@ -136,9 +136,14 @@ TEST(Config, ACalibrationFileReachesCameraDriversAndVelocityInput) {
   EXPECT_NE(error_of("source:\n  driver: aravis\n  camera: {width: 320, height: 240, fx: 300}\n  calibration_file: cal.yaml\n")
                 .find("cal.yaml: the calibration's intrinsics and source.camera both give the camera: keep one"),
             std::string::npos);
-  EXPECT_NE(error_of("source:\n  calibration_file: cal.yaml\nvelocity:\n  imu_to_camera: [1, 0, 0, 0, 0, -1, 0, 1, 0]\n")
+  EXPECT_NE(error_of("source:\n  sim: {width: 320, height: 240}\n  calibration_file: cal.yaml\nvelocity:\n  imu_to_camera: [1, 0, 0, 0, 0, -1, 0, 1, 0]\n")
                 .find("cal.yaml: the calibration's T_cam_imu and velocity.imu_to_camera both rotate the IMU: keep one"),
             std::string::npos);
+  // Issue 38: a calibration for another size than the simulator renders is refused by the
+  // check, not when the first frame comes (at start, or over SIGHUP).
+  EXPECT_NE(error_of("source:\n  calibration_file: cal.yaml\n").find("gives intrinsics for 320x240, but source.sim asks the camera for 640x480"),
+            std::string::npos)
+      << error_of("source:\n  calibration_file: cal.yaml\n");
 }
 
 TEST(Config, BadValuesNameFileLineAndKey) {
@@ -161,7 +166,7 @@ TEST(Config, BadValuesNameFileLineAndKey) {
   const std::string multicast = std::string("udp") + "m://239.255.76.67:7667";
   EXPECT_NE(error_of("lcm: {url: \"" + multicast + "\"}\n").find("'lcm.url' is multicast"), std::string::npos);
   // Issue 16, defect 6: a width of -2^31 overflowed the default principal point.
-  EXPECT_NE(error_of("source:\n  camera: {width: -2147483648, height: 480, fx: 500}\n").find("'source.camera.width' must be 2..16384 pixels"),
+  EXPECT_NE(error_of("source:\n  camera: {width: -2147483648, height: 480, fx: 500}\n").find("'source.camera.width' must be 4..8000 pixels"),
             std::string::npos)
       << error_of("source:\n  camera: {width: -2147483648, height: 480, fx: 500}\n");
   EXPECT_NE(error_of("velocity: {imu_to_camera: [1, 0, 0, 0, 1, 0, 0, 0, 2]}\n").find("must be a rotation matrix"), std::string::npos);

@@ -258,13 +258,14 @@ class FaultyClock final : public drivers::CameraSource {
 
 // Issue 16, fault matrix: a camera whose stamps repeat or go back. Those frames are refused and
 // counted (rsd.health_t.frames_refused, a warning); the others go out in order; every frame
-// the camera delivered is accounted for: frames_in = frames_out + drops + refused.
+// the camera delivered is accounted for: frames_in = frames_out + drops + refused. Issue 38: one
+// frame stamped eleven days ahead was taken, and every later frame refused; it alone is now.
 TEST(ServiceHealth, FramesWhoseStampsDoNotAdvanceAreRefusedAndCounted) {
   daemon::Config cfg;
   cfg.source.settings_of<drivers::SimSourceConfig>("sim") = sim_config();
   cfg.record_file = g_tmp.path("faulty-clock.lcmlog");
   cfg.pipeline.lossless = true;  // nothing dropped: the accounting is exact
-  const std::vector<int64_t> stamps = {0, 33, 66, 66, 50, 100, 133, 133, 100, 5000, 5033};
+  const std::vector<int64_t> stamps = {0, 33, 66, 66, 50, 100, 1'000'000'000, 133, 133, 100, 5000, 5033};
   CapturedLog log;
   run(cfg, 10, [&](const daemon::Config& c) {
     return std::make_unique<FaultyClock>(c.source.settings_of<drivers::SimSourceConfig>("sim"), stamps);
@@ -275,11 +276,11 @@ TEST(ServiceHealth, FramesWhoseStampsDoNotAdvanceAreRefusedAndCounted) {
   EXPECT_EQ(out_ms, (std::vector<int64_t>{0, 33, 66, 100, 133, 5000, 5033}));
   const auto health = messages<rsd::health_t>(cfg.record_file, "RSD_HEALTH");
   ASSERT_FALSE(health.empty());
-  EXPECT_EQ(health.back().frames_in, 11);
+  EXPECT_EQ(health.back().frames_in, 12);
   EXPECT_EQ(health.back().frames_out, 7);
-  EXPECT_EQ(health.back().frames_refused, 4);
+  EXPECT_EQ(health.back().frames_refused, 5);
   EXPECT_EQ(health.back().frames_in, health.back().frames_out + health.back().drops + health.back().frames_refused);
-  EXPECT_NE(log.text().find("faulty-clock-sim: 4 frames refused: a first-row time not after the previous frame's"), std::string::npos)
+  EXPECT_NE(log.text().find("faulty-clock-sim: 5 frames refused: a first-row time off the camera's time line"), std::string::npos)
       << log.text();
 }
 

@@ -74,5 +74,33 @@ TEST(LcmSource, RefusesFramesWithBadTimingOrStampsThatDoNotAdvance) {
   EXPECT_EQ(src.refused(), 4u);
 }
 
+// Issue 38, defect 2: one frame stamped far in the future (+1e15 ns, INT64_MAX) was taken as the
+// newest, and every later frame was "out of order" until a reconnection. Now the wild frame
+// alone is refused; and a stream whose clock really restarts is followed from its third frame.
+TEST(LcmSource, AWildStampCostsThatFrameAloneAndARestartedClockIsFollowed) {
+  const double good = 1e-3 / kH;
+  const std::string log = write_log({{1'000'000'000, good},
+                                     {1'000'000'000 + 1'000'000'000'000'000, good},  // +1e15 ns
+                                     {1'033'000'000, good},
+                                     {std::numeric_limits<int64_t>::max(), good},
+                                     {1'066'000'000, good},
+                                     {5'000'000, good},  // the sender's clock restarted
+                                     {38'000'000, good},
+                                     {71'000'000, good},
+                                     {104'000'000, good}});
+  LcmSourceConfig cfg;
+  cfg.url = "file://" + log + "?speed=0";
+  LcmSource src(cfg);
+  src.open();
+  src.start();
+  dsp::Image img(kW, kH, dsp::PixelFormat::Mono8);
+  std::vector<int> pixels;
+  FrameMeta meta;
+  while (src.capture(img.view(), meta, std::chrono::milliseconds(500)) == CaptureStatus::Frame) pixels.push_back(img.data[0]);
+  EXPECT_EQ(pixels, (std::vector<int>{0, 2, 4, 7, 8}));
+  EXPECT_EQ(src.skipped(formats::LogSkip::OutOfOrder), 3u);   // the wild one, two held before the restart was sure
+  EXPECT_EQ(src.skipped(formats::LogSkip::Undecodable), 1u);  // INT64_MAX: outside rsd's window for times
+}
+
 }  // namespace
 }  // namespace rsd::drivers

@@ -83,14 +83,14 @@ TEST_F(V4l2SourceFake, ANodeThatIsNotV4l2OrCannotStreamIsRefused) {
 
 TEST_F(V4l2SourceFake, CapturesYuyvWithPaddedRowsAndConvertsAnEndOfFrameStamp) {
   dev->formats = {V4L2_PIX_FMT_YUYV};
-  dev->sizes = {discrete(4, 3)};
+  dev->sizes = {discrete(4, 4)};  // rsd's smallest frame (dsp/core/input_limits.hpp)
   dev->row_padding = 4;  // bytesperline 4 * 2 + 4 = 12
   cfg.width = 4;
-  cfg.height = 3;
+  cfg.height = 4;
   cfg.line_delay_s = 30e-6;
   dev->exposure_100us = 50;
   FakeFrame f;
-  f.bytes = yuyv_frame(4, 3, 12);
+  f.bytes = yuyv_frame(4, 4, 12);
   f.flags = V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC | V4L2_BUF_FLAG_TSTAMP_SRC_EOF;
   f.stamp = {100, 0};
   f.sequence = 7;
@@ -99,38 +99,38 @@ TEST_F(V4l2SourceFake, CapturesYuyvWithPaddedRowsAndConvertsAnEndOfFrameStamp) {
   src->open();
   src->start();
   EXPECT_EQ(src->format().format, dsp::PixelFormat::Yuyv);  // passed through, chroma and all
-  dsp::Image img(4, 3, dsp::PixelFormat::Yuyv);
+  dsp::Image img(4, 4, dsp::PixelFormat::Yuyv);
   FrameMeta meta;
   ASSERT_EQ(src->capture(img.view(), meta, std::chrono::milliseconds(100)), CaptureStatus::Frame);
   std::vector<std::uint8_t> want;  // the rows without their padding
-  for (int y = 0; y < 3; ++y)
+  for (int y = 0; y < 4; ++y)
     for (int x = 0; x < 4; ++x) want.insert(want.end(), {static_cast<std::uint8_t>(10 * y + x), 0x80});
   EXPECT_EQ(img.data, want);
-  // 3 rows: 100 s - (2 * 30 us + 5 ms) = 99.99494 s.
-  EXPECT_EQ(meta.first_row_ns, 99'994'940'000);
+  // 4 rows: 100 s - (3 * 30 us + 5 ms) = 99.99491 s.
+  EXPECT_EQ(meta.first_row_ns, 99'994'910'000);
   EXPECT_EQ(meta.sequence, 7u);
   EXPECT_DOUBLE_EQ(meta.exposure_s, 5e-3);
   EXPECT_EQ(dev->queued.size(), 4u);  // the buffer went straight back to the driver
 }
 
 TEST_F(V4l2SourceFake, CountsSequenceGapsAndSkipsErrorAndShortFrames) {
-  cfg.width = 2;
-  cfg.height = 2;
-  dev->sizes = {discrete(2, 2)};
+  cfg.width = 4;
+  cfg.height = 4;
+  dev->sizes = {discrete(4, 4)};
   auto frame = [](std::uint32_t seq, std::uint8_t v) {
     FakeFrame f;
-    f.bytes.assign(4, v);
+    f.bytes.assign(16, v);
     f.sequence = seq;
     f.stamp = {1, static_cast<long>(seq)};
     return f;
   };
   dev->frames = {frame(0, 10), frame(1, 11), frame(2, 12), frame(3, 13), frame(6, 16)};
   dev->frames[2].flags |= V4L2_BUF_FLAG_ERROR;  // seq 2: corrupted
-  dev->frames[3].bytesused = 3;                 // seq 3: truncated
+  dev->frames[3].bytesused = 15;                // seq 3: truncated
   auto src = make();
   src->open();
   src->start();
-  dsp::Image img(2, 2, dsp::PixelFormat::Mono8);
+  dsp::Image img(4, 4, dsp::PixelFormat::Mono8);
   FrameMeta meta;
   std::vector<std::uint64_t> seqs;
   while (src->capture(img.view(), meta, std::chrono::milliseconds(0)) == CaptureStatus::Frame) {

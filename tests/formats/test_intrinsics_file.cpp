@@ -208,15 +208,15 @@ TEST(IntrinsicsFile, NeitherFormatRefused) {
   EXPECT_NE(error_of(testing::TempDir() + "/rsd-intr-none.yaml").find("cannot open"), std::string::npos);
 }
 
-// Issue 16, defect 6: sizes are checked against rsd's frame limit (16384) before use; a width
+// Issue 16, defect 6: sizes are checked against rsd's frame limit (4..8000, the rectifier's) before use; a width
 // of -2^31 overflowed the default principal point.
 TEST(IntrinsicsFile, SizesBeyondTheFrameLimitRefused) {
   const std::string kalibr = write("kalibr-huge.yaml", replace(kKalibr, "resolution: [752, 480]", "resolution: [100000, 480]"));
-  EXPECT_NE(error_of(kalibr).find("'cam0.resolution' must be two whole numbers [width, height] of 1..16384 pixels"),
+  EXPECT_NE(error_of(kalibr).find("'cam0.resolution' must be two whole numbers [width, height] of 4..8000 pixels"),
             std::string::npos)
       << error_of(kalibr);
   const std::string ros = write("ros-negative.yaml", replace(kRos, "image_width: 1280", "image_width: -2147483648"));
-  EXPECT_NE(error_of(ros).find(ros + ":1:14: 'image_width' must be 1..16384 pixels"), std::string::npos) << error_of(ros);
+  EXPECT_NE(error_of(ros).find(ros + ":1:14: 'image_width' must be 4..8000 pixels"), std::string::npos) << error_of(ros);
   const std::string tall = write("ros-tall.yaml", replace(kRos, "image_height: 720", "image_height: 16385"));
-  EXPECT_NE(error_of(tall).find("'image_height' must be 1..16384 pixels"), std::string::npos) << error_of(tall);
+  EXPECT_NE(error_of(tall).find("'image_height' must be 4..8000 pixels"), std::string::npos) << error_of(tall);
 }

@@ -112,11 +112,11 @@ struct Replayed {
   std::unique_ptr<ReplaySource> src;
 };
 
-Replayed replay_all(const std::string& path) {
+Replayed replay_all(const std::string& path, double speed = 0) {
   Replayed out;
   ReplayConfig c;
   c.file = path;
-  c.speed = 0;
+  c.speed = speed;
   out.src = std::make_unique<ReplaySource>(c);
   out.src->open();
   const_cast<LcmLogReader*>(out.src->reader())->set_message_handler([&](const std::string& m) { out.messages.push_back(m); });
@@ -270,6 +270,27 @@ TEST(LcmLog, ImageWithCorruptSizeFieldIsRefusedBeforeDecoding) {
   EXPECT_EQ(got.src->reader()->skipped(LogSkip::AbsurdSize), 1u);
 }
 
+void put64(std::vector<uint8_t>& b, size_t at, uint64_t v) {
+  put32(b, at, static_cast<uint32_t>(v >> 32));
+  put32(b, at + 4, static_cast<uint32_t>(v));
+}
+
+// Issue 38, defect 8 (and 5): one wild event time stalled a real-time replay for good (the
+// pacer waited for the year 2057), and INT64_MIN/MAX overflowed its arithmetic. An event time
+// outside rsd's window is refused before any arithmetic; one inside it but off the log's time
+// line plays at once. At speed 1 every frame comes out (a stall would end the capture loop's
+// guard of a thousand timeouts first).
+TEST(LcmLog, WildEventTimesNeitherStallNorOverflowARealTimeReplay) {
+  Written w = write_good_log("wild-times.lcmlog");
+  put64(w.bytes, w.velocity_offsets[3] + 12, static_cast<uint64_t>(INT64_MAX));
+  put64(w.bytes, w.velocity_offsets[5] + 12, static_cast<uint64_t>(INT64_MIN));
+  put64(w.bytes, w.velocity_offsets[7] + 12, 1'000'000'000'000'000ULL);  // 31 years on: within the window
+  const Replayed got = replay_all(save("wild-times-bad.lcmlog", w.bytes), 1.0);
+  EXPECT_EQ(got.pixels, (std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9}));
+  EXPECT_EQ(got.src->reader()->skipped(LogSkip::Undecodable), 2u);
+  EXPECT_TRUE(any_contains(got.messages, "event time 9223372036854775807 us is out of range"));
+}
+
 // Every defect in one log: each skipped once with its reason, every good frame replayed in
 // order, and the summary says what happened.
 TEST(LcmLog, ReplaySkipsEachDefectWithItsReasonAndReplaysTheRest) {
@@ -385,10 +406,10 @@ namespace {
 bot_core::image_t frame_with(std::vector<std::pair<std::string, std::string>> meta, int64_t utime = 1700000000000000) {
   bot_core::image_t img{};
   img.utime = utime;
-  img.width = 4, img.height = 2, img.row_stride = 4;
+  img.width = 4, img.height = 4, img.row_stride = 4;  // rsd's smallest frame
   img.pixelformat = bot_core::image_t::PIXEL_FORMAT_GRAY;
-  img.size = 8;
-  img.data.assign(8, 0);
+  img.size = 16;
+  img.data.assign(16, 0);
   for (const auto& [k, v] : meta) {
     bot_core::image_metadata_t m;
     m.key = k;
@@ -418,7 +439,7 @@ TEST(RecordedFrame, OutOfRangeStampsAndTimingAreRefusedNamingTheField) {
   EXPECT_NE(refusal(frame_with({{"timing", "nan 30 0.001 0"}})).find("timing (line delay)"), std::string::npos);
   EXPECT_NE(refusal(frame_with({{"timing", "1e-5 -30 0.001 0"}})).find("timing (frame rate)"), std::string::npos);
   EXPECT_NE(refusal(frame_with({{"timing", "1e-5 30 0.001 nan"}})).find("timing (first row)"), std::string::npos);
-  EXPECT_NE(refusal(frame_with({{"timing", "1e-5 30 0.001 2"}})).find("timing (first row)"), std::string::npos);
+  EXPECT_NE(refusal(frame_with({{"timing", "1e-5 30 0.001 4"}})).find("timing (first row)"), std::string::npos);
   EXPECT_NE(refusal(frame_with({{"timing", "1e-5 30 0.001 -2"}})).find("timing (first row)"), std::string::npos);
   EXPECT_NE(refusal(frame_with({{"exposure_s", "inf"}})).find("exposure"), std::string::npos);
   EXPECT_NE(refusal(frame_with({{"line_delay_ns", "-5"}})).find("line_delay_ns"), std::string::npos);

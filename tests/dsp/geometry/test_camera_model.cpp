@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
+#include <string>
 
 #include "dsp/geometry/camera_model.hpp"
 
@@ -70,4 +72,39 @@ TEST(CameraModel, ProjectRejectsPointsBehind) {
   ASSERT_TRUE(p.has_value());
   EXPECT_NEAR(p->x(), 500 * 0.1 + 319.5, 1e-12);
   EXPECT_NEAR(p->y(), -500 * 0.05 + 239.5, 1e-12);
+}
+
+// rsd's input limits on a camera (dsp/core/input_limits.hpp): issue 38's absurd intrinsics (fx
+// 1e300 or 1e-300, cx 1e300, k1 1e6) are refused naming the part; a real camera passes, as do
+// the limits' own ends.
+TEST(CameraModel, OutOfRangeNamesThePartAndTheField) {
+  const CameraModel ok = CameraModel::from_hfov(640, 480, 1.0);
+  EXPECT_EQ(out_of_range(ok).part, CameraOutOfRange::None);
+  struct Case {
+    void (*bend)(CameraModel&);
+    CameraOutOfRange::Part part;
+    const char* field;
+  };
+  const Case cases[] = {
+      {[](CameraModel& c) { c.fx = 1e300; }, CameraOutOfRange::Focal, "fx"},
+      {[](CameraModel& c) { c.fy = 1e-300; }, CameraOutOfRange::Focal, "fy"},
+      {[](CameraModel& c) { c.fx = std::nan(""); }, CameraOutOfRange::Focal, "fx"},
+      {[](CameraModel& c) { c.cx = 1e300; }, CameraOutOfRange::PrincipalPoint, "cx"},
+      {[](CameraModel& c) { c.cy = -5.0 * c.height; }, CameraOutOfRange::PrincipalPoint, "cy"},
+      {[](CameraModel& c) { c.dist.k1 = 1e6; }, CameraOutOfRange::Distortion, "k1"},
+      {[](CameraModel& c) { c.dist.p2 = -INFINITY; }, CameraOutOfRange::Distortion, "p2"},
+      {[](CameraModel& c) { c.width = 8001; }, CameraOutOfRange::Size, "width"},
+      {[](CameraModel& c) { c.height = 2; }, CameraOutOfRange::Size, "height"},
+  };
+  for (const Case& k : cases) {
+    CameraModel c = ok;
+    k.bend(c);
+    const CameraOutOfRange r = out_of_range(c);
+    EXPECT_EQ(r.part, k.part) << k.field;
+    EXPECT_STREQ(r.field, k.field);
+    EXPECT_EQ(r.why.rfind(std::string(k.field) == "cx" || std::string(k.field) == "cy" ? std::string(k.field) + " / " : k.field, 0), 0u) << r.why;
+  }
+  CameraModel edge = ok;
+  edge.fx = 1, edge.fy = 1e7, edge.cx = -4.0 * edge.width, edge.cy = 5.0 * edge.height, edge.dist.k3 = 1000;
+  EXPECT_EQ(out_of_range(edge).part, CameraOutOfRange::None) << out_of_range(edge).why;
 }
