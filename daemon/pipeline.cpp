@@ -1,6 +1,8 @@
 #include "daemon/pipeline.hpp"
 
 #include <cstdio>
+#include <exception>
+#include <string>
 
 #include <spdlog/spdlog.h>
 
@@ -133,6 +135,10 @@ void Pipeline::capture_loop() {
     } catch (const drivers::CameraError& e) {
       camera_error_ = e.what();
       camera_lost_ = true;
+      break;
+    } catch (const std::exception& e) {  // any other fault of a source: never the thread's end
+      camera_error_ = std::string("capture failed: ") + e.what();
+      camera_lost_ = true;  // the service reopens the camera, with backoff, as for a lost one
       break;
     }
     if (st == drivers::CaptureStatus::EndOfStream) {

@@ -10,6 +10,8 @@
 #include <atomic>
 #include <cstdlib>
 #include <new>
+#include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -183,3 +185,47 @@ TEST(Pipeline, HotPathWithWorkersAllocatesNothingAfterStartUp) { expect_no_alloc
 
 // With the online calibration's estimator fed from the rectify thread: still nothing.
 TEST(Pipeline, HotPathWithTheOnlineEstimatorAllocatesNothing) { expect_no_allocation_per_frame(1, true); }
+
+namespace {
+
+// The simulated camera, whose third capture throws what no camera driver documents (a bug, a
+// library's own exception).
+class ThrowingSource final : public drivers::CameraSource {
+ public:
+  ThrowingSource() : sim_(small_sim(true)) {}
+  std::string name() const override { return "throwing-sim"; }
+  void open() override { sim_.open(); }
+  drivers::FrameFormat format() const override { return sim_.format(); }
+  dsp::RowTiming timing() const override { return sim_.timing(); }
+  void start() override { sim_.start(); }
+  void stop() override { sim_.stop(); }
+  drivers::CaptureStatus capture(const dsp::ImageView& dst, drivers::FrameMeta& meta, std::chrono::milliseconds t) override {
+    if (++calls_ == 3) throw std::out_of_range("a library's own exception");
+    return sim_.capture(dst, meta, t);
+  }
+
+ private:
+  drivers::SimSource sim_;
+  int calls_ = 0;
+};
+
+}  // namespace
+
+// Issue 38: the capture thread must not end with such an exception (std::terminate, the daemon
+// gone): the pipeline reports a lost camera, which the service reopens with backoff.
+TEST(Pipeline, AnExceptionFromTheSourceIsALostCameraNotTheProcessEnd) {
+  ThrowingSource source;
+  source.open();
+  daemon::VelocityBuffer velocity;
+  daemon::LcmPublisher pub("memq://", {}, source.format());
+  daemon::FrameRectifier rect({}, dsp::CameraModel::from_hfov(160, 120, 1.0), source.timing(), source.format());
+  daemon::Pipeline pipeline({}, source, rect, pub, velocity);
+  source.start();
+  pipeline.start();
+  for (int i = 0; i < 6000 && !pipeline.camera_lost(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  pipeline.stop();
+  EXPECT_TRUE(pipeline.camera_lost());
+  EXPECT_EQ(pipeline.camera_error(), "capture failed: a library's own exception");
+  EXPECT_EQ(pipeline.stats().frames_in.load(), 2u);
+}
+

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <fstream>
 #include <string>
+#include <utility>
 
 #include "formats/calibration_v1.hpp"
 #include "formats/yaml_map.hpp"
@@ -178,6 +179,26 @@ TEST(CalibrationV1, BadFilesAreRefusedNamingKeyAndReason) {
   EXPECT_NE(error_of("cam1:\n  camera_model: pinhole\n").find("'cam0' is missing"), std::string::npos);
   // Unknown keys outside cam0.rsd are Kalibr's business: ignored.
   EXPECT_EQ(error_of(cam + "  rostopic: /cam0/image_raw\n  cam_overlaps: []\n"), "no error");
+}
+
+// Issue 38: values that passed as finite numbers and then overflowed the velocity input's
+// microsecond arithmetic (a time shift of 1e13 s) or blackened every frame (fx 1e300, k1 1e6)
+// are refused by rsd's input limits (dsp/core/input_limits.hpp), naming the key.
+TEST(CalibrationV1, ValuesBeyondRsdsInputLimitsAreRefusedNamingTheKey) {
+  const std::string head = "cam0:\n  camera_model: pinhole\n  distortion_model: radtan\n  resolution: [640, 480]\n";
+  const std::string cam = head + "  intrinsics: [500, 500, 319.5, 239.5]\n  distortion_coeffs: [0, 0, 0, 0]\n";
+  const std::string rsd = "  rsd:\n    format: rsd-calibration/1\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {cam + "  timeshift_cam_imu: 1e13\n", "'cam0.timeshift_cam_imu' is 1e+13, outside -86400..86400 s"},
+      {head + "  intrinsics: [1e300, 500, 319.5, 239.5]\n  distortion_coeffs: [0, 0, 0, 0]\n", "'cam0.intrinsics' has fx 1e+300 is outside 1..1e7 pixels"},
+      {head + "  intrinsics: [500, 500, 1e300, 239.5]\n  distortion_coeffs: [0, 0, 0, 0]\n", "'cam0.intrinsics' has cx / width"},
+      {head + "  intrinsics: [500, 500, 319.5, 239.5]\n  distortion_coeffs: [1e6, 0, 0, 0]\n", "'cam0.distortion_coeffs' has k1 1000000 is outside -1000..1000"},
+      {cam + rsd + "    line_delay_s: 5\n", "'cam0.rsd.line_delay_s' must be 0..1 s"},
+      {cam + rsd + "    drift_ppm: 1e9\n", "'cam0.rsd.drift_ppm' is 1e+09, outside -10000..10000 ppm"},
+      {cam + rsd + "    gyro_scale: [1, 1e-300, 1]\n", "'cam0.rsd.gyro_scale' is 1e-300, outside 0.1..10"},
+  };
+  for (const auto& [text, want] : cases) EXPECT_NE(error_of(text).find(want), std::string::npos) << error_of(text);
+  EXPECT_EQ(error_of(cam + "  timeshift_cam_imu: -86400\n" + rsd + "    line_delay_s: 1\n    drift_ppm: 10000\n"), "no error");
 }
 
 }  // namespace

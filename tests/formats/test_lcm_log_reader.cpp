@@ -438,6 +438,13 @@ TEST(RecordedFrame, OutOfRangeStampsAndTimingAreRefusedNamingTheField) {
             "metadata frame_utime -9223372036854775807 is out of range");
   EXPECT_NE(refusal(frame_with({{"timing", "nan 30 0.001 0"}})).find("timing (line delay)"), std::string::npos);
   EXPECT_NE(refusal(frame_with({{"timing", "1e-5 -30 0.001 0"}})).find("timing (frame rate)"), std::string::npos);
+  // Issue 38: a frame rate of 5e-324 was accepted, then inf published as line delay and
+  // reference time; a first row time near INT64_MAX overflowed the rectifier's sums.
+  EXPECT_EQ(refusal(frame_with({{"timing", "1e-5 5e-324 0.001 0"}})), "metadata timing (frame rate) 5e-324 is out of range");
+  EXPECT_EQ(refusal(frame_with({{"frame_ns", "9223372036854775000"}})), "metadata frame_ns 9223372036854775000 is out of range");
+  EXPECT_EQ(refusal(frame_with({{"frame_utime", "2305843009213693"}})), "accepted");  // 2^61 ns, the window's edge
+  EXPECT_EQ(refusal(frame_with({{"frame_utime", "2305843009213693"}, {"intrinsics", "1e300 500 2 1 0 0 0 0 0"}})),
+            "metadata intrinsics: fx 1e+300 is outside 1..1e7 pixels");
   EXPECT_NE(refusal(frame_with({{"timing", "1e-5 30 0.001 nan"}})).find("timing (first row)"), std::string::npos);
   EXPECT_NE(refusal(frame_with({{"timing", "1e-5 30 0.001 4"}})).find("timing (first row)"), std::string::npos);
   EXPECT_NE(refusal(frame_with({{"timing", "1e-5 30 0.001 -2"}})).find("timing (first row)"), std::string::npos);

@@ -10,6 +10,7 @@
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tools/report/diagnosis_calibration.hpp"
+#include "tests/support/sanitizer.hpp"
 
 namespace rsd {
 namespace {
@@ -49,6 +50,7 @@ TEST(DiagnosisCalibration, TheFileCarriesWhatTheDiagnosisFound) {
 // trajectory recordings as Exp(r)^T (R_c = R Exp(r): body-to-camera is its transpose); the
 // daemon then turns the gyro's (or the body's) rates into the camera's true ones.
 TEST(DiagnosisCalibration, MountRotationComposesIntoTheImuRotation) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisCalibration.TheFileCarriesWhatTheDiagnosisFound (the same diagnosis to file)");
   dsp::SimConfig g = test::simulation(dsp::ObservationKind::Matches, 21, 4.0, 0.5);
   g.matches_per_pair = 100;
   g.nominal.imu_to_camera << 0, -1, 0, -1, 0, 0, 0, 0, -1;

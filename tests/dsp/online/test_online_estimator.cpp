@@ -16,6 +16,7 @@
 #include "dsp/sim/recording_simulation.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
 #include "tests/dsp/online/online_figure.hpp"
+#include "tests/support/sanitizer.hpp"
 
 using namespace rsd::dsp;
 using Eigen::Vector2d;
@@ -111,6 +112,7 @@ TEST(OnlineEstimator, ConvergesWithinTenSecondsToTheIssueTolerances) {
 // The IMU turned by about a degree on its mount beyond the nominal: the hand-held motion turns
 // about every axis, so the mount shows, and is learned with the rest.
 TEST(OnlineEstimator, LearnsTheMountRotationWhenTheMotionShowsIt) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.ConvergesWithinTenSecondsToTheIssueTolerances (the same estimator, fitting the mount there too)");
   SimConfig c = hand_held(11, 12);
   const Vector3d mount(0.012, -0.009, 0.006);
   c.effects.mount_rotation = mount;
@@ -140,6 +142,7 @@ Recording with_step(const SimulatedRecording& first, const SimulatedRecording& s
 }
 
 TEST(OnlineEstimator, FollowsAStepOfFiveMillisecondsWithinTenSeconds) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.ConvergesWithinTenSecondsToTheIssueTolerances (the same windows and fits)");
   SimConfig a = hand_held(9, 12), b = hand_held(10, 14);
   b.start_time_s = a.start_time_s + 12 + 1 / a.nominal.frame_rate_hz;
   b.effects.time_offset_s = 0.020;
