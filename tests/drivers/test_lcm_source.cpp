@@ -45,6 +45,31 @@ std::string write_log(const std::vector<Sent>& frames) {
   return path;
 }
 
+// What the source delivers of a log played through LCM's file provider: each frame's stamp and
+// first pixel (the frame's index in the log).
+struct Played {
+  std::vector<int64_t> stamps;
+  std::vector<int> pixels;
+};
+Played play(LcmSource& src) {
+  src.open();
+  src.start();
+  dsp::Image img(kW, kH, dsp::PixelFormat::Mono8);
+  Played out;
+  FrameMeta meta;
+  while (src.capture(img.view(), meta, std::chrono::milliseconds(500)) == CaptureStatus::Frame) {
+    out.stamps.push_back(meta.first_row_ns);
+    out.pixels.push_back(img.data[0]);
+  }
+  return out;
+}
+
+LcmSourceConfig config_for(const std::string& log) {
+  LcmSourceConfig cfg;
+  cfg.url = "file://" + log + "?speed=0";
+  return cfg;
+}
+
 TEST(LcmSource, RefusesFramesWithBadTimingOrStampsThatDoNotAdvance) {
   const double good = 1e-3 / kH;
   const std::string log = write_log({{1'000'000'000, good},
@@ -54,21 +79,10 @@ TEST(LcmSource, RefusesFramesWithBadTimingOrStampsThatDoNotAdvance) {
                                      {1'050'000'000, std::numeric_limits<double>::quiet_NaN()},
                                      {1'060'000'000, good, kW / 2},  // another size
                                      {1'066'000'000, good}});
-  LcmSourceConfig cfg;
-  cfg.url = "file://" + log + "?speed=0";
-  LcmSource src(cfg);
-  src.open();
-  src.start();
-  dsp::Image img(kW, kH, dsp::PixelFormat::Mono8);
-  std::vector<int64_t> stamps;
-  std::vector<int> pixels;
-  FrameMeta meta;
-  while (src.capture(img.view(), meta, std::chrono::milliseconds(500)) == CaptureStatus::Frame) {
-    stamps.push_back(meta.first_row_ns);
-    pixels.push_back(img.data[0]);
-  }
-  EXPECT_EQ(stamps, (std::vector<int64_t>{1'000'000'000, 1'033'000'000, 1'066'000'000}));
-  EXPECT_EQ(pixels, (std::vector<int>{0, 1, 6}));
+  LcmSource src(config_for(log));
+  const Played got = play(src);
+  EXPECT_EQ(got.stamps, (std::vector<int64_t>{1'000'000'000, 1'033'000'000, 1'066'000'000}));
+  EXPECT_EQ(got.pixels, (std::vector<int>{0, 1, 6}));
   EXPECT_EQ(src.skipped(formats::LogSkip::OutOfOrder), 2u);
   EXPECT_EQ(src.skipped(formats::LogSkip::Undecodable), 2u);  // NaN timing, another size
   EXPECT_EQ(src.refused(), 4u);
@@ -88,16 +102,8 @@ TEST(LcmSource, AWildStampCostsThatFrameAloneAndARestartedClockIsFollowed) {
                                      {38'000'000, good},
                                      {71'000'000, good},
                                      {104'000'000, good}});
-  LcmSourceConfig cfg;
-  cfg.url = "file://" + log + "?speed=0";
-  LcmSource src(cfg);
-  src.open();
-  src.start();
-  dsp::Image img(kW, kH, dsp::PixelFormat::Mono8);
-  std::vector<int> pixels;
-  FrameMeta meta;
-  while (src.capture(img.view(), meta, std::chrono::milliseconds(500)) == CaptureStatus::Frame) pixels.push_back(img.data[0]);
-  EXPECT_EQ(pixels, (std::vector<int>{0, 2, 4, 7, 8}));
+  LcmSource src(config_for(log));
+  EXPECT_EQ(play(src).pixels, (std::vector<int>{0, 2, 4, 7, 8}));
   EXPECT_EQ(src.skipped(formats::LogSkip::OutOfOrder), 3u);   // the wild one, two held before the restart was sure
   EXPECT_EQ(src.skipped(formats::LogSkip::Undecodable), 1u);  // INT64_MAX: outside rsd's window for times
 }
