@@ -160,7 +160,9 @@ TEST(ServiceHealth, CameraBelowItsConfiguredRateIsWarnedOnce) {
   CapturedLog log;
   run(cfg, 3.5, [](const daemon::Config&) { return std::make_unique<Unreliable>(sim_config(), 99, 99, 2); });
   const std::string text = log.text();
-  const size_t at = text.find("unreliable-sim: delivering 1");  // about 15 fps
+  // About 15 fps at full speed; a loaded sanitizer build delivers fewer (seen: 8.9): the warning,
+  // once, is what is checked, not the machine's speed.
+  const size_t at = text.find("unreliable-sim: delivering ");
   ASSERT_NE(at, std::string::npos) << text;
   EXPECT_NE(text.find("below the configured 30.0 fps", at), std::string::npos) << text;
   EXPECT_EQ(text.find("delivering", at + std::string("unreliable-sim: delivering").size()), std::string::npos) << "said twice: " << text;

@@ -26,9 +26,6 @@ case $kind in
     export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:suppressions=$here/ubsan.supp"
     targets=all
     tests=""
-    # Twice as many tests as cores: a third of this tree's test time is daemons running for a
-    # set time (their limits are widened tenfold here), which leaves the cores idle.
-    test_jobs=$((jobs * 2))
     ;;
   thread)
     export TSAN_OPTIONS="suppressions=$here/tsan.supp:print_suppressions=0:exitcode=66:second_deadlock_stack=1"
@@ -59,8 +56,8 @@ cmake --build "$build" -j"$jobs" --target $targets >"$build.build.log" 2>&1 ||
 echo "run.sh: $kind tree built in $(( $(date +%s) - start )) s"
 start=$(date +%s)
 if [ -n "$tests" ]; then
-  ctest --test-dir "$build" -j"${test_jobs:-$jobs}" --output-on-failure -R "$tests"
+  ctest --test-dir "$build" -j"$jobs" --output-on-failure -R "$tests"
 else
-  ctest --test-dir "$build" -j"${test_jobs:-$jobs}" --output-on-failure
+  ctest --test-dir "$build" -j"$jobs" --output-on-failure
 fi
 echo "run.sh: $kind tests ran in $(( $(date +%s) - start )) s"
