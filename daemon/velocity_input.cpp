@@ -3,6 +3,7 @@
 #include "drivers/lcm_receive.hpp"
 #include "drivers/monotonic_clock.hpp"
 #include "dsp/core/input_limits.hpp"
+#include "formats/image_t_codec.hpp"
 
 #include <bot_core/pose_t.hpp>
 
@@ -62,7 +63,8 @@ void VelocityInput::on_velocity(const lcm_recv_buf_t* rbuf, const char*, void* u
   }
   if (self->record_) self->record_->write(self->channel_.c_str(), formats::wall_clock_us(), rbuf->data, rbuf->data_size);
   rsd::velocity_t m;
-  if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) {
+  std::string why;
+  if (formats::decode_checked(static_cast<const uint8_t*>(rbuf->data), rbuf->data_size, m, why) != formats::DecodeStatus::Ok) {
     self->malformed_.fetch_add(1);
     return;
   }
@@ -147,7 +149,8 @@ void VelocityInput::on_pose(const lcm_recv_buf_t* rbuf, const char*, void* user)
   if (self->record_)
     self->record_->write(self->cfg_.pose_channel.c_str(), formats::wall_clock_us(), rbuf->data, rbuf->data_size);
   bot_core::pose_t m;
-  if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) {
+  std::string why;
+  if (formats::decode_checked(static_cast<const uint8_t*>(rbuf->data), rbuf->data_size, m, why) != formats::DecodeStatus::Ok) {
     self->malformed_.fetch_add(1);
     return;
   }
