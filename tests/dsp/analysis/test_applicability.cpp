@@ -140,6 +140,7 @@ TEST(GeneralBound, MiddleRowReference) {
 // The general bound's min depth for pure v_y in closed form: the correction on the last
 // row, (H - 1) v_y / (r_n z - v_y) = N, gives z = v_y (H - 1 + N) / (N r_n).
 TEST(GeneralBound, MinDepthPureVyClosedForm) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("GeneralBound.PureVyMatchesClosedFormMaximum (the same bound)");
   const CameraModel cam = vga(500);
   const RowTiming t = RowTiming::full_frame(480, 15);
   for (double N : {0.5, 1.0, 3.0}) {

@@ -200,6 +200,7 @@ TEST(DiagnosisLandmarks, GrossFocalAndOffsetFirstThenAConcealedReadout) {
 }
 
 TEST(DiagnosisLandmarks, WithoutStatedNoiseTheScaleIsEstimated) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("Remainder.UnderstatedNoiseRestartsTheSelectionAtTheDataScale (the noise scale taken from the data), DiagnosisLandmarks.RollingShutterAndTimeOffsetConcealedTogether (the same fit)");
   SimConfig c = target(18);
   c.effects.line_delay_s = 1.2e-5;
   Recording rec = simulate_recording(c).rec;

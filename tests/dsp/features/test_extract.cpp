@@ -17,6 +17,7 @@
 #include "formats/target_spec.hpp"  // targets by name, as rsd-extract takes them
 #include "dsp/sim/calibration_target.hpp"
 #include "dsp/features/target_observations.hpp"
+#include "tests/support/sanitizer.hpp"
 
 using namespace rsd;
 
@@ -88,6 +89,7 @@ TEST(FeatureTracks, RecoverAKnownSubPixelShiftAcrossTheImage) {
 // tracks must be dropped rather than kept wrong. Without the patch correlation check two
 // wrong tracks (14 and 21 px off) survived the forward-backward check here.
 TEST(FeatureTracks, DropTracksThatDoNotSurviveTheRoundTrip) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("FeatureTracks.RecoverAKnownSubPixelShiftAcrossTheImage (the same tracker and round trip)");
   const cv::Mat a = render(wall(3), Eigen::Affine3d::Identity());
   cv::Mat b = a.clone();
   render(wall(4), Eigen::Affine3d::Identity()).colRange(320, 640).copyTo(b.colRange(320, 640));
@@ -169,6 +171,7 @@ TEST(TargetDetection, AprilGridCornersWhereTheModelProjectsThem) {
 }
 
 TEST(TargetDetection, NothingWhereThereIsNoTarget) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("TargetDetection.CheckerboardCornersWhereTheModelProjectsThem, AprilGridCornersWhereTheModelProjectsThem (the same detectors)");
   EXPECT_TRUE(dsp::detect_target(render(wall(5), Eigen::Affine3d::Identity()), formats::parse_target("checkerboard:9x7:0.04")).empty());
   EXPECT_TRUE(dsp::detect_target(render(wall(5), Eigen::Affine3d::Identity()), formats::parse_target("aprilgrid:5x4:0.05")).empty());
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "dsp/sim/rs_renderer.hpp"
+#include "tests/support/sanitizer.hpp"
 
 using namespace rsd::dsp;
 
@@ -46,6 +47,7 @@ Image render(const CameraMotion& motion, const RowTiming& timing, const CameraMo
 }  // namespace
 
 TEST(RsRenderer, TranslationShearsEdgesByTheRowTime) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("RsRenderer.RollBendsEdgesAsThePoseAtEachRowSays (the same renderer, a pose per row)");
   CameraModel cam;
   cam.width = 320, cam.height = 240, cam.fx = cam.fy = 250, cam.cx = 159.5, cam.cy = 119.5;
   const RowTiming timing = RowTiming::full_frame(240, 30);
