@@ -36,6 +36,11 @@ void visit_pipeline(formats::ConfigSection& c, PipelineConfig& p) {
 
 void visit_rectification(formats::ConfigSection& c, RectifyConfig& r) {
   c.value("enabled", r.enabled);
+  c.choice("output", r.output, {{"same_lens", RectifyOutput::SameLens}, {"pinhole", RectifyOutput::Pinhole}},
+           "or pinhole: the lens undone too, at output_hfov_deg");
+  c.value("output_hfov_deg", r.output_hfov_deg, "pinhole output: horizontal field of view (degrees), centred");
+  c.check(std::isfinite(r.output_hfov_deg) && r.output_hfov_deg >= 1 && r.output_hfov_deg <= 170, "output_hfov_deg",
+          "must be 1..170 degrees");
   c.choice("reference", r.reference, {{"middle_row", dsp::ReferenceRow::Middle}, {"first_row", dsp::ReferenceRow::First}},
            "or first_row: the instant the output is a global shutter at");
   c.choice("depth", r.depth, {{"infinite", DepthKind::Infinite}, {"plane", DepthKind::Plane}, {"ground", DepthKind::Ground}},

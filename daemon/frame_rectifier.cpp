@@ -4,9 +4,15 @@
 
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <thread>
 
 namespace rsd::daemon {
+
+dsp::CameraModel output_camera(const RectifyConfig& cfg, const dsp::CameraModel& captured) {
+  if (cfg.output == RectifyOutput::SameLens) return captured;
+  return dsp::CameraModel::from_hfov(captured.width, captured.height, cfg.output_hfov_deg * std::numbers::pi / 180);
+}
 
 FrameRectifier::FrameRectifier(const RectifyConfig& cfg, const dsp::CameraModel& cam, const dsp::RowTiming& timing,
                                const drivers::FrameFormat& fmt, dsp::RowExecutor* pool)
@@ -14,7 +20,9 @@ FrameRectifier::FrameRectifier(const RectifyConfig& cfg, const dsp::CameraModel&
   dsp::RectifierConfig rc;
   rc.initial_spacing = cfg.grid_px;
   rc.max_bands = pool ? dsp::RectifierConfig::bands_for(pool->concurrency()) : 1;
-  rect_ = std::make_unique<dsp::Rectifier>(cam, timing, fmt.format, rc);
+  rect_ = cfg.output == RectifyOutput::SameLens
+              ? std::make_unique<dsp::Rectifier>(cam, timing, fmt.format, rc)
+              : std::make_unique<dsp::Rectifier>(cam, timing, output_camera(cfg, cam), fmt.format, rc);
   rect_->set_executor(pool);
 }
 

@@ -17,8 +17,15 @@ namespace rsd::daemon {
 
 enum class DepthKind { Infinite, Plane, Ground };
 
+// The rectified image's camera: the captured one with the rolling shutter removed and its lens
+// kept (what downstream visual-inertial odometry expects), or a pinhole of a chosen field of view
+// (the lens undone too: straight lines straight).
+enum class RectifyOutput { SameLens, Pinhole };
+
 struct RectifyConfig {
   bool enabled = true;
+  RectifyOutput output = RectifyOutput::SameLens;
+  double output_hfov_deg = 90;   // Pinhole: its horizontal field of view, centred, square pixels
   dsp::ReferenceRow reference = dsp::ReferenceRow::Middle;
   DepthKind depth = DepthKind::Infinite;
   double depth_m = 5.0;          // Plane: distance of the fronto-parallel plane
@@ -33,6 +40,9 @@ struct RectifyConfig {
   // created at start (daemon/worker_pool). 1: the rectify thread alone.
   int workers = 1;
 };
+
+// The output camera the configuration asks for, given the captured one.
+dsp::CameraModel output_camera(const RectifyConfig& cfg, const dsp::CameraModel& captured);
 
 struct RectifyResult {
   bool rectified = false;

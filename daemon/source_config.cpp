@@ -63,6 +63,7 @@ void visit_source(formats::ConfigSection& c, SourceConfig& s) {
   const drivers::Driver* driver = drivers::find_driver(s.driver);
   c.check(driver != nullptr, "driver", "must be " + drivers::driver_names());
   c.note("camera: {width: 1280, height: 720, fx: 900, fy: 900, cx: 639.5, cy: 359.5, distortion: [0, 0, 0, 0]}");
+  c.note("    (a fisheye: model: pinhole-equi, distortion: [k1, k2, k3, k4]; docs/geometry.md, lens models)");
   c.note("intrinsics_file: camchain.yaml   # or a Kalibr camchain / ROS camera_info file (intrinsics_camera: cam0)");
   c.note("calibration_file: cal.yaml   # or an rsd-calibration/1 file (docs/formats/calibration-v1.md): intrinsics,");
   c.note("    line delay, readout, and the IMU's time offset, gyro bias and scale, rotation (rsd --calibration FILE)");

@@ -21,7 +21,7 @@
 namespace rsd::formats {
 
 struct Calibration {
-  dsp::CameraModel cam;  // intrinsics, radtan distortion (k1, k2, p1, p2), resolution
+  dsp::CameraModel cam;  // intrinsics, lens (radtan k1, k2, p1, p2 or equidistant k1..k4), resolution
   // T_cam_imu: X_cam = R X_imu + t; R is the recording's imu_to_camera (w_cam = R w_imu).
   Eigen::Matrix3d imu_to_camera = Eigen::Matrix3d::Identity();
   Eigen::Vector3d imu_to_camera_t = Eigen::Vector3d::Zero();

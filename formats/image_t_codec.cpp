@@ -54,7 +54,7 @@ namespace {
 
 constexpr std::initializer_list<const char*> kKeys = {"frame_utime", "line_delay_ns", "readout", "exposure_ns", "sequence", "rectified",
                              "frame_ns",    "exposure_s",    "timing",  "intrinsics"};
-constexpr size_t kValueCapacity = 256;
+constexpr size_t kValueCapacity = 320;  // the intrinsics: 10 numbers of up to 24 characters and a lens name
 
 std::string value_of(const bot_core::image_t& img, const char* key) {
   for (const auto& m : img.metadata)
@@ -170,16 +170,25 @@ bool parse_timing(const bot_core::image_t& img, RecordedFrame& out, std::string&
   return true;
 }
 
+// "fx fy cx cy k1 k2 p1 p2 k3" (a pinhole-radtan lens), or those, k4 and the lens's name
+// ("... k3 k4 pinhole-equi"): the Distortion's terms in their order, each slot meaning the same.
 bool parse_intrinsics(const bot_core::image_t& img, RecordedFrame& out, std::string& why) {
-  double k[9];
-  if (!parse_numbers(value_of(img, "intrinsics"), k, 9)) return true;
+  double k[10] = {};
+  dsp::LensModel lens = dsp::LensModel::PinholeRadtan;
+  const std::string text = value_of(img, "intrinsics");
+  if (!parse_numbers(text, k, 9)) {
+    const size_t name = text.find_last_of(' ');
+    const auto model = name == std::string::npos ? std::nullopt : dsp::parse_lens_model(text.substr(name + 1));
+    if (!model || !parse_numbers(text.substr(0, name), k, 10)) return true;  // none of rsd's: no intrinsics
+    lens = *model;
+  }
   for (double v : k)
     if (!std::isfinite(v)) return why = "metadata intrinsics hold a value that is not finite", false;
   if (!(k[0] > 0 && k[1] > 0)) return why = "metadata intrinsics have a focal length that is not positive", false;
   dsp::CameraModel c;
   c.width = img.width, c.height = img.height;
   c.fx = k[0], c.fy = k[1], c.cx = k[2], c.cy = k[3];
-  c.dist = {k[4], k[5], k[6], k[7], k[8]};
+  c.dist = {k[4], k[5], k[6], k[7], k[8], k[9], lens};
   if (const dsp::CameraOutOfRange r = dsp::out_of_range(c); r.part != dsp::CameraOutOfRange::None)
     return why = "metadata intrinsics: " + r.why, false;
   out.camera = c;
@@ -256,8 +265,12 @@ RawFrameEncoder::RawFrameEncoder(const FrameFormat& fmt, const dsp::RowTiming& t
   set(8, text);
   if (camera) {
     const dsp::CameraModel& c = *camera;
-    std::snprintf(text, sizeof text, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g", c.fx, c.fy, c.cx, c.cy,
-                  c.dist.k1, c.dist.k2, c.dist.p1, c.dist.p2, c.dist.k3);
+    if (c.dist.model == dsp::LensModel::PinholeRadtan)
+      std::snprintf(text, sizeof text, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g", c.fx, c.fy, c.cx, c.cy,
+                    c.dist.k1, c.dist.k2, c.dist.p1, c.dist.p2, c.dist.k3);
+    else
+      std::snprintf(text, sizeof text, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %s", c.fx, c.fy, c.cx,
+                    c.cy, c.dist.k1, c.dist.k2, c.dist.p1, c.dist.p2, c.dist.k3, c.dist.k4, dsp::lens_model_name(c.dist.model));
     set(9, text);
   } else {  // no intrinsics known: leave the key out
     msg_.metadata.pop_back();

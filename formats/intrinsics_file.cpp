@@ -66,11 +66,10 @@ dsp::CameraModel read_kalibr_camera(YamlMap& c) {
   } else if (dmodel == "none") {
     // No distortion; whatever distortion_coeffs holds is unused.
   } else if (dmodel == "equidistant") {
-    c.fail("distortion_model",
-           "is 'equidistant' (fisheye, Kannala-Brandt): not supported by the Brown-Conrady model "
-           "rsd uses; recalibrate with 'pinhole-radtan'");
+    const std::vector<double> d = c.numbers("distortion_coeffs", 4);  // [k1, k2, k3, k4]: pinhole-equi
+    cam.dist = dsp::Distortion::equidistant(d[0], d[1], d[2], d[3]);
   } else {
-    c.fail("distortion_model", "is '" + dmodel + "': only 'radtan' (or 'none') is supported");
+    c.fail("distortion_model", "is '" + dmodel + "': only 'radtan', 'equidistant' (or 'none') are supported");
   }
 
   const std::vector<double> res = c.numbers("resolution", 2);
@@ -188,11 +187,13 @@ Intrinsics load_ros(const std::string& file, YamlMap& root, const std::string& c
                 "model rsd uses (k1, k2, p1, p2, k3); recalibrate with plumb_bob");
     out.cam.dist = {d[0], d[1], d[2], d[3], d[4]};
   } else if (dmodel == "equidistant") {
-    root.fail("distortion_model",
-              "is 'equidistant' (fisheye): not supported by the Brown-Conrady model rsd uses");
+    if (d.size() != 4)
+      root.fail("distortion_coefficients", "must have 4 coefficients [k1, k2, k3, k4] for equidistant, has " +
+                                               std::to_string(d.size()));
+    out.cam.dist = dsp::Distortion::equidistant(d[0], d[1], d[2], d[3]);
   } else {
-    root.fail("distortion_model", "is '" + dmodel + "': only 'plumb_bob' (or 'rational_polynomial' with "
-                                  "k4 = k5 = k6 = 0) is supported");
+    root.fail("distortion_model", "is '" + dmodel + "': only 'plumb_bob', 'equidistant' (or 'rational_polynomial' "
+                                  "with k4 = k5 = k6 = 0) are supported");
   }
 
   check_limits(root, out.cam, "image_width", "camera_matrix", "distortion_coefficients");
@@ -233,9 +234,20 @@ dsp::CameraModel read_camera_section(YamlMap m, const dsp::CameraModel& defaults
   c.fy = m.number("fy", c.fx);
   c.cx = m.number("cx", 0.5 * (c.width - 1));
   c.cy = m.number("cy", 0.5 * (c.height - 1));
+  // The lens (recording-v1's camera.model): pinhole-radtan's distortion is [k1, k2, p1, p2],
+  // pinhole-equi's [k1, k2, k3, k4].
+  if (m.has("model")) {
+    const std::string name = required_text(m, "model");
+    const auto lens = dsp::parse_lens_model(name);
+    if (!lens) m.fail("model", "is '" + name + "': the lens models are pinhole-radtan and pinhole-equi");
+    c.dist = dsp::Distortion{};
+    c.dist.model = *lens;
+  }
   if (m.has("distortion")) {
     const auto d = m.numbers("distortion", 4);
-    c.dist = {d[0], d[1], d[2], d[3], 0};
+    const dsp::LensModel lens = c.dist.model;
+    c.dist = lens == dsp::LensModel::PinholeEqui ? dsp::Distortion::equidistant(d[0], d[1], d[2], d[3])
+                                                 : dsp::Distortion{d[0], d[1], d[2], d[3], 0};
   }
   if (!(c.fx > 0 && c.fy > 0)) m.fail("fx", "and fy must be positive");
   if (const dsp::CameraOutOfRange r = dsp::out_of_range(c); r.part != dsp::CameraOutOfRange::None)

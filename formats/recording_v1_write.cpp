@@ -4,6 +4,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -51,10 +52,16 @@ YAML::Node camera_node(const dsp::NominalModel& n) {
   c["fy"] = number_text(n.cam.fy);
   c["cx"] = number_text(n.cam.cx);
   c["cy"] = number_text(n.cam.cy);
+  // camera.model: pinhole-radtan's distortion is [k1, k2, p1, p2], pinhole-equi's [k1, k2, k3, k4].
+  const dsp::Distortion& lens = n.cam.dist;
+  const bool equi = lens.model == dsp::LensModel::PinholeEqui;
+  const std::array<double, 4> k = equi ? std::array<double, 4>{lens.k1, lens.k2, lens.k3, lens.k4}
+                                       : std::array<double, 4>{lens.k1, lens.k2, lens.p1, lens.p2};
   YAML::Node d;
-  for (double v : {n.cam.dist.k1, n.cam.dist.k2, n.cam.dist.p1, n.cam.dist.p2}) d.push_back(number_text(v));
+  for (double v : k) d.push_back(number_text(v));
   d.SetStyle(YAML::EmitterStyle::Flow);
   c["distortion"] = d;
+  if (equi) c["model"] = dsp::lens_model_name(lens.model);
   return c;
 }
 

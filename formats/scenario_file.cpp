@@ -113,6 +113,19 @@ Eigen::Vector3d vec3(YamlMap m, const char* a, const char* b, const char* c) {
   return v;
 }
 
+// lens_model: the true lens is of the other family than the nominal one (a fisheye modelled as a
+// pinhole, or the reverse): its model and its terms (pinhole-equi k1..k4, pinhole-radtan k1, k2).
+dsp::Distortion read_lens_model_effect(YamlMap& m, const dsp::NominalModel& n) {
+  const std::string name = m.text("model", "");
+  const auto model = dsp::parse_lens_model(name);
+  if (!model) m.fail("model", "is '" + name + "': the lens models are pinhole-radtan and pinhole-equi");
+  if (*model == n.cam.dist.model)
+    m.fail("model", "is the nominal lens's own family: a change of its terms is lens_distortion");
+  if (*model == dsp::LensModel::PinholeEqui)
+    return dsp::Distortion::equidistant(m.number("k1", 0.0), m.number("k2", 0.0), m.number("k3", 0.0), m.number("k4", 0.0));
+  return dsp::Distortion{m.number("k1", 0.0), m.number("k2", 0.0), 0, 0, 0};
+}
+
 void read_effect(YamlMap& effects, const std::string& name, const dsp::NominalModel& n, dsp::Effects& e) {
   YamlMap m = effects.map(name);
   if (name == "rolling_shutter") {
@@ -128,7 +141,13 @@ void read_effect(YamlMap& effects, const std::string& name, const dsp::NominalMo
   } else if (name == "clock_drift") {
     e.drift_ppm = m.number("drift_ppm");
   } else if (name == "lens_distortion") {
+    // The nominal lens's own terms: k1, k2, and for a pinhole-equi lens k3, k4 too.
     e.k1k2 = Eigen::Vector2d(m.number("k1"), m.number("k2", 0.0));
+    if (n.cam.dist.model == dsp::LensModel::PinholeEqui) {
+      if (m.has("k3") || m.has("k4")) e.k3k4 = Eigen::Vector2d(m.number("k3", 0.0), m.number("k4", 0.0));
+    }
+  } else if (name == "lens_model") {
+    e.lens = read_lens_model_effect(m, n);
   } else if (name == "focal_length") {
     e.fxfy = Eigen::Vector2d(m.number("fx"), m.number("fy"));
   } else if (name == "gyro_bias") {
@@ -147,7 +166,7 @@ void read_effect(YamlMap& effects, const std::string& name, const dsp::NominalMo
     e.principal_point = Eigen::Vector2d(m.number("cx"), m.number("cy"));
   } else {
     effects.fail(name, "is not an effect of recording-v1 (rolling_shutter, readout_direction, time_offset, "
-                       "clock_drift, lens_distortion, focal_length, gyro_bias, lever_arm, mount_rotation, "
+                       "clock_drift, lens_distortion, lens_model, focal_length, gyro_bias, lever_arm, mount_rotation, "
                        "gyro_scale, principal_point)");
   }
   m.finish();
@@ -172,6 +191,8 @@ Scenario load_scenario(const std::string& file) {
   if (root.has("effects")) {
     YamlMap effects = root.map("effects");
     for (const auto& name : effects.keys()) read_effect(effects, name, c.nominal, c.effects);
+    if (c.effects.lens && (c.effects.k1k2 || c.effects.k3k4))
+      effects.fail("lens_model", "and lens_distortion together: lens_model gives every term of the true lens");
     effects.finish();
   }
   if (root.has("unmodelled")) read_unmodelled(root.map("unmodelled"), c.unmodelled);

@@ -24,7 +24,7 @@ std::vector<std::string> split(const std::string& s, char sep) {
 bool parse_size(const std::string& s, int& cols, int& rows) {
   const size_t x = s.find('x');
   if (x == std::string::npos) return false;
-  const auto c = parse_number(s.substr(0, x)), r = parse_number(s.substr(x + 1));
+  const auto c = formats::parse_number(s.substr(0, x)), r = formats::parse_number(s.substr(x + 1));
   if (!c || !r || *c != static_cast<int>(*c) || *r != static_cast<int>(*r) || *c < 1 || *r < 1) return false;
   cols = static_cast<int>(*c), rows = static_cast<int>(*r);
   return true;
@@ -41,11 +41,11 @@ dsp::TargetSpec parse_target(const std::string& text) {
   if (p[0] == "checkerboard" && p.size() == 3) s.kind = dsp::TargetKind::Checkerboard;
   else if (p[0] == "aprilgrid" && p.size() <= 4) s.kind = dsp::TargetKind::AprilGrid;
   else throw std::invalid_argument(expected);
-  const auto size = parse_number(p[2]);
+  const auto size = formats::parse_number(p[2]);
   if (!parse_size(p[1], s.cols, s.rows) || !size || !(*size > 0)) throw std::invalid_argument(expected);
   s.spacing_m = *size;
   if (p.size() == 4) {
-    const auto gap = parse_number(p[3]);
+    const auto gap = formats::parse_number(p[3]);
     if (!gap || !(*gap > 0)) throw std::invalid_argument(expected);
     s.tag_spacing = *gap;
   }

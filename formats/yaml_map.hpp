@@ -22,6 +22,8 @@ class YamlMap {
   static YamlMap load(const std::string& file);  // the document's root mapping
 
   bool has(const std::string& key) const { return static_cast<bool>(node_[key]); }
+  // Present and null (JSON's null, YAML's ~): "not given" in formats that write every key.
+  bool is_null(const std::string& key) const { return has(key) && node_[key].IsNull(); }
   double number(const std::string& key, double fallback);
   double number(const std::string& key);  // required
   int integer(const std::string& key, int fallback);

@@ -7,6 +7,8 @@
 //   rsd-calib synth-led --out DIR [...]
 //     Writes a synthetic capture of that set-up (dsp/calib/led_capture_synthesis.hpp), the ground
 //     truth of the tests and of docs/led-calibration.md.
+//   rsd-calib import-lens PROFILE.json --width W --height H -o CAL
+//     A gyroflow lens profile as a calibration file (tools/calib/import_lens.hpp).
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -21,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "tools/calib/import_lens.hpp"
 #include "tools/common/cli_util.hpp"
 #include "dsp/calib/led_calibration.hpp"
 #include "dsp/calib/led_capture_synthesis.hpp"
@@ -40,6 +43,7 @@ constexpr const char* kDescription =
     "  led        line delay, row rate and frame readout time from frames of a sensor facing\n"
     "             an LED that blinks at a known frequency; whether the inter-frame delay d is 0\n"
     "  synth-led  write a synthetic LED capture (for tests and trials)\n"
+    "  import-lens  a calibration file from a gyroflow lens profile (a fisheye lens, the readout)\n"
     "Run 'rsd-calib SUBCOMMAND --help' for the options.\n"
     "Exit status: 0 on success, 2 on bad arguments, 1 on other errors (unreadable images,\n"
     "no LED modulation found).";
@@ -329,10 +333,13 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     LedOptions led;
     SynthOptions synth;
+    ImportLensOptions lens;
     CLI::App* led_cmd = add_led_command(app, led);
     add_synth_command(app, synth);
+    CLI::App* lens_cmd = add_import_lens_command(app, lens);
     if (const auto rc = parse_command_line(app, argc, argv)) return *rc;
     led.fps_given = led_cmd->count("--fps") > 0;
+    if (lens_cmd->parsed()) return run_import_lens(lens);
     return led_cmd->parsed() ? run_led(led) : run_synth(synth);
   });
 }

@@ -94,7 +94,7 @@ Transversals common_transversals(const std::array<Line3, 4>& lines) {
 
 std::optional<CrossedSlits> crossed_slits(const CameraModel& cam, const RowTiming& timing,
                                           const Twist& tw) {
-  if ((tw.w.array() != 0).any() || tw.v.z() != 0 || !cam.dist.is_zero() || tw.v.y() == 0)
+  if ((tw.w.array() != 0).any() || tw.v.z() != 0 || !cam.dist.is_identity() || tw.v.y() == 0)
     return std::nullopt;
   // Normalised rolling-shutter constraint v_n = r_n t - v0_n (see rs_projection.cpp).
   const double r_n = timing.r() / cam.fy;

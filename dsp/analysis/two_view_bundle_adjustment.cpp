@@ -94,7 +94,7 @@ void check(const TwoViewData& data, const TwoViewEstimate& initial) {
     throw std::invalid_argument("two_view_bundle_adjust: one observation per point and camera");
   if (!(initial.cam2.t.norm() > 0))
     throw std::invalid_argument("two_view_bundle_adjust: the initial translation sets the scale");
-  if (!data.cam.dist.is_zero())
+  if (!data.cam.dist.is_identity())
     throw std::invalid_argument("two_view_bundle_adjust: lens distortion is not modelled");
 }
 

@@ -2,13 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 namespace rsd::dsp {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // A small deterministic normal generator (SplitMix64 + Marsaglia's polar method): the
 // same noise on every platform, unlike std::normal_distribution whose algorithm is
@@ -49,7 +48,7 @@ class Normal {
 // Integral of the LED waveform from 0 to phase u (in cycles): a square wave that is on
 // for the first `duty` of each cycle, or the raised cosine 0.5 + 0.5 cos(2 pi u).
 double waveform_integral(const LedCaptureSpec& s, double u) {
-  if (s.waveform == LedWaveform::Sine) return 0.5 * u + std::sin(2 * kPi * u) / (4 * kPi);
+  if (s.waveform == LedWaveform::Sine) return 0.5 * u + std::sin(2 * std::numbers::pi * u) / (4 * std::numbers::pi);
   const double whole = std::floor(u);
   return whole * s.duty + std::min(u - whole, s.duty);
 }
@@ -167,7 +166,7 @@ RowTiming LedCaptureSpec::timing() const {
 double led_mean_brightness(const LedCaptureSpec& s, double t, double e) {
   const double u = s.led_hz * t + s.led_phase_cycles;
   if (e <= 0) {  // instantaneous: the waveform itself
-    if (s.waveform == LedWaveform::Sine) return 0.5 + 0.5 * std::cos(2 * kPi * u);
+    if (s.waveform == LedWaveform::Sine) return 0.5 + 0.5 * std::cos(2 * std::numbers::pi * u);
     return u - std::floor(u) < s.duty ? 1.0 : 0.0;
   }
   const double du = s.led_hz * e;

@@ -2,7 +2,6 @@
 
 #include "dsp/core/input_limits.hpp"
 
-#include <Eigen/LU>
 #include <cmath>
 #include <cstdio>
 #include <utility>
@@ -19,41 +18,13 @@ CameraModel CameraModel::from_hfov(int width, int height, double hfov_rad) {
   return c;
 }
 
-Eigen::Vector2d CameraModel::distort(const Eigen::Vector2d& xn) const {
-  const double x = xn.x(), y = xn.y();
-  const double r2 = x * x + y * y;
-  const double radial = 1 + r2 * (dist.k1 + r2 * (dist.k2 + r2 * dist.k3));
-  return {x * radial + 2 * dist.p1 * x * y + dist.p2 * (r2 + 2 * x * x),
-          y * radial + dist.p1 * (r2 + 2 * y * y) + 2 * dist.p2 * x * y};
-}
-
-Eigen::Matrix2d CameraModel::distort_jacobian(const Eigen::Vector2d& xn) const {
-  const double x = xn.x(), y = xn.y();
-  const double r2 = x * x + y * y;
-  const double radial = 1 + r2 * (dist.k1 + r2 * (dist.k2 + r2 * dist.k3));
-  // d(radial)/d(r2); d(r2)/dx = 2x, d(r2)/dy = 2y.
-  const double dradial = dist.k1 + r2 * (2 * dist.k2 + 3 * r2 * dist.k3);
-  Eigen::Matrix2d J;
-  J(0, 0) = radial + x * dradial * 2 * x + 2 * dist.p1 * y + dist.p2 * 6 * x;
-  J(0, 1) = x * dradial * 2 * y + 2 * dist.p1 * x + dist.p2 * 2 * y;
-  J(1, 0) = y * dradial * 2 * x + dist.p1 * 2 * x + 2 * dist.p2 * y;
-  J(1, 1) = radial + y * dradial * 2 * y + dist.p1 * 6 * y + 2 * dist.p2 * x;
-  return J;
-}
-
-std::optional<Eigen::Vector2d> CameraModel::undistort(const Eigen::Vector2d& xd) const {
-  if (dist.is_zero()) return xd;
-  Eigen::Vector2d xn = xd;  // distortion is a perturbation of identity: start there
-  for (int it = 0; it < 50; ++it) {
-    const Eigen::Vector2d err = distort(xn) - xd;
-    if (err.norm() < 1e-15) return xn;
-    const Eigen::Matrix2d J = distort_jacobian(xn);
-    if (std::abs(J.determinant()) < 1e-12) return std::nullopt;
-    xn -= J.partialPivLu().solve(err);
-    if (!xn.allFinite()) return std::nullopt;
-  }
-  if ((distort(xn) - xd).norm() < 1e-12) return xn;
-  return std::nullopt;
+CameraModel scaled_camera(const CameraModel& c, int width, int height) {
+  const double sx = static_cast<double>(width) / c.width, sy = static_cast<double>(height) / c.height;
+  CameraModel s = c;
+  s.width = width, s.height = height;
+  s.fx = c.fx * sx, s.fy = c.fy * sy;
+  s.cx = (c.cx + 0.5) * sx - 0.5, s.cy = (c.cy + 0.5) * sy - 0.5;
+  return s;
 }
 
 Eigen::Vector2d CameraModel::to_pixel(const Eigen::Vector2d& xn) const {
@@ -96,9 +67,15 @@ CameraOutOfRange out_of_range(const CameraModel& c) {
     return {P::PrincipalPoint, "cx", outside("cx / width", c.cx / c.width, limits::kPrincipalPointSizes)};
   if (!limits::kPrincipalPointSizes.contains(c.cy / c.height))
     return {P::PrincipalPoint, "cy", outside("cy / height", c.cy / c.height, limits::kPrincipalPointSizes)};
-  const std::pair<const char*, double> d[] = {{"k1", c.dist.k1}, {"k2", c.dist.k2}, {"p1", c.dist.p1}, {"p2", c.dist.p2}, {"k3", c.dist.k3}};
+  const std::pair<const char*, double> d[] = {{"k1", c.dist.k1}, {"k2", c.dist.k2}, {"p1", c.dist.p1},
+                                               {"p2", c.dist.p2}, {"k3", c.dist.k3}, {"k4", c.dist.k4}};
   for (const auto& [name, v] : d)
     if (!limits::kDistortion.contains(v)) return {P::Distortion, name, outside(name, v, limits::kDistortion)};
+  // Each lens's own terms only: radtan has no k4, the equidistant lens no tangential terms.
+  if (c.dist.model == LensModel::PinholeRadtan && c.dist.k4 != 0)
+    return {P::Distortion, "k4", "k4 is not a term of the pinhole-radtan lens"};
+  if (c.dist.model == LensModel::PinholeEqui && (c.dist.p1 != 0 || c.dist.p2 != 0))
+    return {P::Distortion, c.dist.p1 != 0 ? "p1" : "p2", "the pinhole-equi lens has no tangential terms (p1, p2)"};
   return {};
 }
 

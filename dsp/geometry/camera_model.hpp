@@ -1,4 +1,6 @@
-// Pinhole intrinsics K and Brown-Conrady lens distortion, with its inverse.
+// The camera: pinhole intrinsics K and a lens (dsp/geometry/lens_model.hpp: pinhole-radtan or
+// pinhole-equi), with their inverse. Every user of the camera (projection, rays, the rectifier's
+// maps, the simulator, the diagnosis) goes through it, so each works with either lens.
 //
 // Pixel convention (docs/formats/recording-v1.md): u to the right, v down,
 // origin at the centre of the top-left pixel. Camera axes: x right, y down, z forward.
@@ -8,13 +10,9 @@
 #include <optional>
 #include <string>
 
-namespace rsd::dsp {
+#include "dsp/geometry/lens_model.hpp"
 
-// Brown-Conrady coefficients in OpenCV's order (k1, k2, p1, p2, k3).
-struct Distortion {
-  double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
-  bool is_zero() const { return k1 == 0 && k2 == 0 && p1 == 0 && p2 == 0 && k3 == 0; }
-};
+namespace rsd::dsp {
 
 struct CameraModel {
   int width = 640;
@@ -26,13 +24,12 @@ struct CameraModel {
   // A distortion-free camera whose horizontal field of view is hfov_rad, principal point centred.
   static CameraModel from_hfov(int width, int height, double hfov_rad);
 
-  // Normalised image-plane point (x/z, y/z) -> distorted normalised point.
-  Eigen::Vector2d distort(const Eigen::Vector2d& xn) const;
+  // Normalised image-plane point (x/z, y/z) -> distorted normalised point (the lens).
+  Eigen::Vector2d distort(const Eigen::Vector2d& xn) const { return dsp::distort(dist, xn); }
   // d(distort)/d(xn), analytic: used by the inverse and by solvers.
-  Eigen::Matrix2d distort_jacobian(const Eigen::Vector2d& xn) const;
-  // Inverse of distort() by Newton's method; nullopt if it does not converge
-  // (far outside the region where the polynomial is monotonic).
-  std::optional<Eigen::Vector2d> undistort(const Eigen::Vector2d& xd) const;
+  Eigen::Matrix2d distort_jacobian(const Eigen::Vector2d& xn) const { return dsp::distort_jacobian(dist, xn); }
+  // Inverse of distort(); nullopt where the lens has none (lens_model.hpp).
+  std::optional<Eigen::Vector2d> undistort(const Eigen::Vector2d& xd) const { return dsp::undistort(dist, xd); }
 
   // Normalised (undistorted) point -> pixel, applying distortion.
   Eigen::Vector2d to_pixel(const Eigen::Vector2d& xn) const;
@@ -50,11 +47,16 @@ struct CameraModel {
   }
 };
 
+// The same camera at another resolution with the same field of view: focal lengths scaled, and the
+// principal point about the pixel grid's edge (pixel centres at whole numbers: c' = (c + 1/2) s - 1/2);
+// the lens, on the normalised plane, unchanged.
+CameraModel scaled_camera(const CameraModel& c, int width, int height);
+
 // Which part of a camera lies outside rsd's input limits (dsp/core/input_limits.hpp), and how:
 // what a boundary reading intrinsics reports under its own key for that part.
 struct CameraOutOfRange {
   enum Part { None, Size, Focal, PrincipalPoint, Distortion } part = None;
-  const char* field = "";  // width, height, fx, fy, cx, cy, k1, k2, p1, p2, k3
+  const char* field = "";  // width, height, fx, fy, cx, cy, k1, k2, p1, p2, k3, k4
   std::string why;         // "fx 1e+300 is outside 1..1e7 pixels"
 };
 CameraOutOfRange out_of_range(const CameraModel& cam);

@@ -72,7 +72,7 @@ std::optional<double> earliest_quadratic_root(double a2, double a1, double a0,
 
 RsProjection solve_linearised(const CameraModel& cam, const RowTiming& timing, const Twist& tw,
                               const Eigen::Vector3d& X, const CaptureWindow& win) {
-  if (!cam.dist.is_zero()) return fail(RsStatus::UnsupportedMotion);
+  if (!cam.dist.is_identity()) return fail(RsStatus::UnsupportedMotion);
   // The constraint in normalised coordinates: with K applied, fy y_n + cy = r t - v0, so
   // y_n = r_n t - v0_n (rs_closed_form.hpp).
   const auto [r_n, v0_n] = normalised_readout(cam, timing);
@@ -91,7 +91,7 @@ RsProjection solve_linearised(const CameraModel& cam, const RowTiming& timing, c
 
 RsProjection project_fronto_parallel(const CameraModel& cam, const RowTiming& timing, const Twist& tw,
                                      const Eigen::Vector3d& X, const CaptureWindow& win) {
-  if (tw.v.z() != 0 || tw.w.x() != 0 || tw.w.y() != 0 || !cam.dist.is_zero())
+  if (tw.v.z() != 0 || tw.w.x() != 0 || tw.w.y() != 0 || !cam.dist.is_identity())
     return fail(RsStatus::UnsupportedMotion);
   const NormalisedReadout ro = normalised_readout(cam, timing);
   if (!(X.z() > 0)) return fail(RsStatus::BehindCamera);

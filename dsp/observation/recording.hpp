@@ -18,7 +18,7 @@ enum class MotionKind { Trajectory, Gyro };
 
 // What the recording's header (the "simulation") says: the nominal model.
 struct NominalModel {
-  CameraModel cam;  // distortion k1, k2, p1, p2 (the spec has no k3)
+  CameraModel cam;  // its lens: pinhole-radtan k1, k2, p1, p2 (the spec has no k3) or pinhole-equi k1..k4
   double frame_rate_hz = 30;
   TimeModel time;   // line delay, readout, offset, drift; t0 = first frame's timestamp
   Eigen::Matrix3d imu_to_camera = Eigen::Matrix3d::Identity();

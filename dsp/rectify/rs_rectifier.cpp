@@ -22,8 +22,7 @@ bool finite(const Twist& tw) { return tw.v.allFinite() && tw.w.allFinite(); }
 
 bool same_geometry(const CameraModel& a, const CameraModel& b) {
   return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx &&
-         a.cy == b.cy && a.dist.k1 == b.dist.k1 && a.dist.k2 == b.dist.k2 && a.dist.p1 == b.dist.p1 &&
-         a.dist.p2 == b.dist.p2 && a.dist.k3 == b.dist.k3;
+         a.cy == b.cy && a.dist == b.dist;
 }
 
 }  // namespace
@@ -151,7 +150,7 @@ void Rectifier::build_pose_table(const CameraMotion& motion, int step_rows) {
 // start (the node's neighbour): unique while the image moves slower than the readout.
 bool Rectifier::solve_node(const double* Y, double rho, double& v, double* px, double* gain) const {
   const double last = static_cast<double>(table_n_ - 1);
-  const bool distorted = !cam_.dist.is_zero();
+  const bool distorted = !cam_.dist.is_identity();
   for (int it = 0; it < 20; ++it) {
     const double u = (v - table_v0_) * table_inv_step_;
     if (!(u >= 0 && u <= last)) return false;  // outside the capture window

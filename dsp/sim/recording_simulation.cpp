@@ -19,7 +19,8 @@ std::vector<std::string> Effects::names() const {
   if (flip_readout) n.push_back("readout_direction");
   if (time_offset_s) n.push_back("time_offset");
   if (drift_ppm) n.push_back("clock_drift");
-  if (k1k2) n.push_back("lens_distortion");
+  if (k1k2 || k3k4) n.push_back("lens_distortion");
+  if (lens) n.push_back("lens_model");
   if (fxfy) n.push_back("focal_length");
   if (gyro_bias) n.push_back("gyro_bias");
   if (lever_arm) n.push_back("lever_arm");
@@ -72,7 +73,9 @@ TrueModel true_model(const NominalModel& n, const Effects& e) {
     t.time.readout = n.time.readout == Readout::TopToBottom ? Readout::BottomToTop : Readout::TopToBottom;
   if (e.time_offset_s) t.time.time_offset_s = *e.time_offset_s;
   if (e.drift_ppm) t.time.drift_ppm = *e.drift_ppm;
+  if (e.lens) t.cam.dist = *e.lens;  // a fisheye behind a pinhole nominal, or the reverse
   if (e.k1k2) t.cam.dist.k1 = e.k1k2->x(), t.cam.dist.k2 = e.k1k2->y();
+  if (e.k3k4) t.cam.dist.k3 = e.k3k4->x(), t.cam.dist.k4 = e.k3k4->y();
   if (e.fxfy) t.cam.fx = e.fxfy->x(), t.cam.fy = e.fxfy->y();
   if (e.lever_arm) t.lever_arm = *e.lever_arm;
   if (e.gyro_bias) t.gyro_bias = *e.gyro_bias;

@@ -22,7 +22,9 @@ struct Effects {
   bool flip_readout = false;              // readout_direction
   std::optional<double> time_offset_s;    // time_offset
   std::optional<double> drift_ppm;        // clock_drift
-  std::optional<Eigen::Vector2d> k1k2;    // lens_distortion
+  std::optional<Eigen::Vector2d> k1k2;    // lens_distortion: k1, k2 of the nominal lens
+  std::optional<Eigen::Vector2d> k3k4;    // lens_distortion: k3, k4 (a pinhole-equi nominal lens)
+  std::optional<Distortion> lens;         // lens_model: a lens of the other family, all its terms
   std::optional<Eigen::Vector2d> fxfy;    // focal_length
   std::optional<Eigen::Vector3d> gyro_bias;  // gyro_bias (IMU axes)
   std::optional<Eigen::Vector3d> lever_arm;  // lever_arm (body axes)

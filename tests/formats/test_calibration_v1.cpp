@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <utility>
 
@@ -151,6 +152,19 @@ TEST(CalibrationV1, WrittenFilesReadBackToTheSameDoubles) {
   EXPECT_EQ(r.source, c.source);
   EXPECT_EQ(r.sigma, c.sigma);
   EXPECT_TRUE(r.has_rsd_block);
+}
+
+// An equidistant (pinhole-equi) camera: Kalibr's distortion_model equidistant with k1..k4.
+TEST(CalibrationV1, AnEquidistantCameraIsWrittenAndReadBack) {
+  formats::Calibration c;
+  c.cam = dsp::CameraModel::from_hfov(1280, 960, 2.2);
+  c.cam.dist = dsp::Distortion::equidistant(0.0469, -0.0135, 0.0021, -1.0 / 3000);
+  const std::string path = g_tmp.path("equidistant.yaml");
+  formats::write_calibration(path, c);
+  EXPECT_EQ(formats::read_calibration(path).cam.dist, c.cam.dist);
+  std::ifstream in(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("distortion_model: equidistant"), std::string::npos) << text;
 }
 
 TEST(CalibrationV1, BadFilesAreRefusedNamingKeyAndReason) {

@@ -136,11 +136,26 @@ TEST(IntrinsicsFile, KalibrOnlyCameraIsTheDefault) {
   EXPECT_EQ(load_intrinsics(write("kalibr-one.yaml", one)).cam.fx, 458.654);
 }
 
-TEST(IntrinsicsFile, KalibrEquidistantRefused) {
-  const std::string path = write("kalibr-fish.yaml", replace(kKalibr, "distortion_model: radtan", "distortion_model: equidistant"));
+// Kalibr's pinhole-equi camera: distortion_model equidistant, coefficients [k1, k2, k3, k4].
+TEST(IntrinsicsFile, KalibrEquidistantIsThePinholeEquiLens) {
+  const std::string fish = replace(replace(kKalibr, "distortion_model: radtan", "distortion_model: equidistant"),
+                                   "[-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]", "[-0.0137, 0.0212, -0.0271, 0.0113]");
+  const Intrinsics in = load_intrinsics(write("kalibr-fish.yaml", fish));
+  EXPECT_EQ(in.cam.dist.model, rsd::dsp::LensModel::PinholeEqui);
+  EXPECT_EQ(in.cam.dist.k1, -0.0137);
+  EXPECT_EQ(in.cam.dist.k2, 0.0212);
+  EXPECT_EQ(in.cam.dist.k3, -0.0271);
+  EXPECT_EQ(in.cam.dist.k4, 0.0113);
+  EXPECT_EQ(in.cam.dist.p1, 0);
+  EXPECT_EQ(in.cam.dist.p2, 0);
+  EXPECT_EQ(in.cam.fx, 458.654);
+}
+
+TEST(IntrinsicsFile, KalibrUnknownLensModelRefusedNamingTheModels) {
+  const std::string path = write("kalibr-ds.yaml", replace(kKalibr, "distortion_model: radtan", "distortion_model: fov"));
   const std::string err = error_of(path);
-  EXPECT_NE(err.find(path + ":5:21: 'cam0.distortion_model' is 'equidistant'"), std::string::npos) << err;
-  EXPECT_NE(err.find("not supported by the Brown-Conrady model"), std::string::npos) << err;
+  EXPECT_NE(err.find(path + ":5:21: 'cam0.distortion_model' is 'fov'"), std::string::npos) << err;
+  EXPECT_NE(err.find("'radtan', 'equidistant'"), std::string::npos) << err;
 }
 
 TEST(IntrinsicsFile, KalibrMissingIntrinsicsNamesFileLineAndKey) {
@@ -170,6 +185,22 @@ TEST(IntrinsicsFile, RosPlumbBob) {
   EXPECT_EQ(in.cam.dist.k3, 0.03125);
   EXPECT_FALSE(in.line_delay_s.has_value());
   EXPECT_NE(in.source.find("narrow_stereo"), std::string::npos);
+}
+
+// ROS's fisheye camera_info (camera_calibration's fisheye model): distortion_model equidistant, D
+// of four coefficients.
+TEST(IntrinsicsFile, RosEquidistantIsThePinholeEquiLens) {
+  const std::string fish = replace(replace(kRos, "distortion_model: plumb_bob", "distortion_model: equidistant"),
+                                   "  cols: 5\n  data: [-0.125, 0.0625, 0.001, -0.002, 0.03125]",
+                                   "  cols: 4\n  data: [0.0469, -0.0135, 0.0021, -0.0003]");
+  const Intrinsics in = load_intrinsics(write("ros-fish.yaml", fish));
+  EXPECT_EQ(in.cam.dist, rsd::dsp::Distortion::equidistant(0.0469, -0.0135, 0.0021, -0.0003));
+  // Five coefficients are plumb_bob's, not a fisheye's: refused by key.
+  const std::string five = replace(kRos, "distortion_model: plumb_bob", "distortion_model: equidistant");
+  const std::string path = write("ros-fish5.yaml", five);
+  const std::string err = error_of(path);
+  EXPECT_NE(err.find("'distortion_coefficients' must have 4 coefficients [k1, k2, k3, k4] for equidistant, has 5"),
+            std::string::npos) << err;
 }
 
 TEST(IntrinsicsFile, RosRationalPolynomialWithZeroExtraTermsAccepted) {

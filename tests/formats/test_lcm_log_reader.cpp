@@ -480,3 +480,32 @@ TEST(RecordedFrame, AStringWithANegativeLengthIsRefusedNotAnException) {
     EXPECT_EQ(why.rfind("rsd.health_t.source has a string length of ", 0), 0u) << why;
   }
 }
+
+// The frame's intrinsics carry the lens: "fx fy cx cy k1 k2 p1 p2 k3" for pinhole-radtan, and
+// k4 with the lens's name for pinhole-equi; written by the encoder, read back exactly.
+TEST(RecordedFrame, AnEquidistantLensTravelsWithItsName) {
+  dsp::CameraModel cam = dsp::CameraModel::from_hfov(kW, kH, 2.0);
+  cam.dist = dsp::Distortion::equidistant(0.0469, -0.0135, 0.0021, -1.0 / 3000);
+  RawFrameEncoder enc({kW, kH, dsp::PixelFormat::Mono8}, dsp::RowTiming::full_frame(kH, 30), cam);
+  dsp::Image img(kW, kH, dsp::PixelFormat::Mono8);
+  FrameMeta meta;
+  meta.first_row_ns = 1000;
+  const size_t n = enc.encode(img.view(), meta);
+  bot_core::image_t decoded;
+  RecordedFrame f;
+  std::string why;
+  ASSERT_EQ(decode_frame(enc.data(), n, decoded, f, why), DecodeStatus::Ok) << why;
+  ASSERT_TRUE(f.camera);
+  EXPECT_EQ(f.camera->dist, cam.dist);
+  EXPECT_EQ(f.camera->fx, cam.fx);
+  // Written by hand: the name decides; an unknown one is no intrinsics, a tangential term refused.
+  RecordedFrame g;
+  ASSERT_TRUE(parse_frame(frame_with({{"intrinsics", "500 500 2 1 0.1 0.2 0 0 0.3 0.4 pinhole-equi"}}), g, why)) << why;
+  ASSERT_TRUE(g.camera);
+  EXPECT_EQ(g.camera->dist, dsp::Distortion::equidistant(0.1, 0.2, 0.3, 0.4));
+  RecordedFrame h;
+  ASSERT_TRUE(parse_frame(frame_with({{"intrinsics", "500 500 2 1 0.1 0.2 0 0 0.3 0.4 fisheye"}}), h, why));
+  EXPECT_FALSE(h.camera);
+  EXPECT_EQ(refusal(frame_with({{"intrinsics", "500 500 2 1 0.1 0.2 0.01 0 0.3 0.4 pinhole-equi"}})),
+            "metadata intrinsics: the pinhole-equi lens has no tangential terms (p1, p2)");
+}

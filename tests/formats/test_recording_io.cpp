@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "formats/recording_v1.hpp"
 #include "formats/scenario_file.hpp"
@@ -130,5 +131,40 @@ TEST(Scenario, UnknownKeysAndBadValuesNameTheLine) {
             std::string::npos);
   EXPECT_NE(err("effects:\n  time_offset: 0.01\n").find("'effects.time_offset' must be a mapping"), std::string::npos);
   EXPECT_EQ(err("effects:\n  time_offset: {time_offset_s: 0.01}\n"), "");
+  // The lens: pinhole-radtan or pinhole-equi, and each one's own terms.
+  EXPECT_NE(err("camera: {model: fisheye}\n").find("'camera.model' is 'fisheye': the lens models are pinhole-radtan and pinhole-equi"),
+            std::string::npos) << err("camera: {model: fisheye}\n");
+  EXPECT_EQ(err("camera: {model: pinhole-equi, distortion: [0.05, -0.01, 0.002, -0.0003]}\n"), "");
+  // lens_model: a lens of the other family; lens_distortion: the nominal lens's own terms.
+  EXPECT_EQ(err("effects:\n  lens_model: {model: pinhole-equi, k1: 0.05, k4: -0.001}\n"), "");
+  EXPECT_NE(err("effects:\n  lens_model: {model: pinhole-radtan}\n").find("is the nominal lens's own family"), std::string::npos);
+  EXPECT_NE(err("effects:\n  lens_model: {model: pinhole-equi}\n  lens_distortion: {k1: 0.1}\n")
+                .find("'effects.lens_model' and lens_distortion together"),
+            std::string::npos);
+  EXPECT_NE(err("effects:\n  lens_distortion: {k1: 0.1, k3: 0.2}\n").find("unknown key 'effects.lens_distortion.k3'"),
+            std::string::npos);  // a radtan nominal lens has no k3 here
+  EXPECT_EQ(err("camera: {model: pinhole-equi}\neffects:\n  lens_distortion: {k1: 0.1, k3: 0.2}\n"), "");
+  fs::remove_all(dir);
+}
+
+// recording-v1's camera.model: a fisheye nominal camera is written with its model and its
+// k1..k4 and reads back bit for bit; a radtan one is written as before (no model key).
+TEST(RecordingIo, AFisheyeNominalCameraRoundTrips) {
+  auto sim = small(dsp::ObservationKind::Landmarks);
+  sim.rec.nominal.cam.dist = dsp::Distortion::equidistant(0.0469, -0.0135, 0.0021, -1.0 / 3000);
+  const fs::path dir = temp_dir("fish");
+  formats::write_recording(dir.string(), sim.rec);
+  const dsp::Recording r = formats::read_recording(dir.string());
+  EXPECT_EQ(r.nominal.cam.dist, sim.rec.nominal.cam.dist);
+  std::ifstream yaml(dir / "recording.yaml");
+  const std::string text((std::istreambuf_iterator<char>(yaml)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("model: pinhole-equi"), std::string::npos) << text;
+  fs::remove_all(dir);
+  const auto plain = small(dsp::ObservationKind::Landmarks);
+  formats::write_recording(dir.string(), plain.rec);
+  std::ifstream yaml2(dir / "recording.yaml");
+  const std::string text2((std::istreambuf_iterator<char>(yaml2)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text2.find("model:"), std::string::npos) << text2;
+  EXPECT_EQ(formats::read_recording(dir.string()).nominal.cam.dist, plain.rec.nominal.cam.dist);
   fs::remove_all(dir);
 }

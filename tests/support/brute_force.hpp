@@ -31,8 +31,15 @@ inline std::optional<BruteForceSolution> brute_force_project(const dsp::CameraMo
     const double xn = Xc.x() / Xc.z(), yn = Xc.y() / Xc.z();
     const double r2 = xn * xn + yn * yn;
     const auto& d = cam.dist;
-    const double yd = yn * (1 + d.k1 * r2 + d.k2 * r2 * r2 + d.k3 * r2 * r2 * r2) +
-                      d.p1 * (r2 + 2 * yn * yn) + 2 * d.p2 * xn * yn;
+    // Each lens's formula as the format spec writes it (not the camera model's code).
+    double yd;
+    if (d.model == dsp::LensModel::PinholeEqui) {
+      const double rn = std::sqrt(r2), th = std::atan(rn), t2 = th * th;
+      const double thd = th * (1 + d.k1 * t2 + d.k2 * t2 * t2 + d.k3 * t2 * t2 * t2 + d.k4 * t2 * t2 * t2 * t2);
+      yd = rn > 0 ? yn * thd / rn : yn;
+    } else {
+      yd = yn * (1 + d.k1 * r2 + d.k2 * r2 * r2 + d.k3 * r2 * r2 * r2) + d.p1 * (r2 + 2 * yn * yn) + 2 * d.p2 * xn * yn;
+    }
     return cam.fy * yd + cam.cy - (first + r * t);  // row read at t: first row + r t
   };
   double ta = t0, fa = f(ta);

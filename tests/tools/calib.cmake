@@ -75,3 +75,31 @@ rsd_cli_test(cli_led_write_calibration_wrong_camera STATUS 1
              COMMAND ${calib} led --freq 20 --fps 7.5 ${LED}/d0 --write-calibration ${LED}/cal-wrong.yaml
                      --calibration ${CMAKE_BINARY_DIR}/led-other-camera.yaml)
 set_tests_properties(cli_led_write_calibration_wrong_camera PROPERTIES FIXTURES_REQUIRED led_d0)
+
+# rsd-calib import-lens: a gyroflow profile (its layout, made-up numbers) at half its calibrated
+# resolution: K scaled about the pixel grid's edge, the readout over the rows.
+set(LENS_DIR ${CMAKE_BINARY_DIR}/import-lens)
+file(MAKE_DIRECTORY ${LENS_DIR})
+file(WRITE ${LENS_DIR}/profile.json
+"{\"name\": \"Test fisheye\", \"calib_dimension\": {\"w\": 1920, \"h\": 1080}, \"frame_readout_time\": 21.6,
+ \"use_opencv_fisheye\": true, \"fisheye_params\": {\"RMS_error\": 0.5, \"camera_matrix\": [[1000, 0, 959.5], [0, 1000, 539.5], [0, 0, 1]],
+ \"distortion_coeffs\": [0.05, -0.01, 0.002, -0.0003], \"radial_distortion_limit\": null}}\n")
+file(WRITE ${LENS_DIR}/anamorphic.json
+"{\"calib_dimension\": {\"w\": 1920, \"h\": 1080}, \"input_horizontal_stretch\": 1.33,
+ \"fisheye_params\": {\"camera_matrix\": [[1000, 0, 959.5], [0, 1000, 539.5], [0, 0, 1]], \"distortion_coeffs\": [0, 0, 0, 0]}}\n")
+rsd_cli_test(cli_import_lens STATUS 0 MESSAGES "Wrote ${LENS_DIR}/cal.yaml: Test fisheye at 960x540" "fx 500.00, fy 500.00, cx 479.50, cy 269.50"
+                                             "pinhole-equi k1..k4 0.05, -0.01, 0.002, -0.0003" "frame readout 21.6 ms over 540 rows"
+             COMMAND ${calib} import-lens ${LENS_DIR}/profile.json --width 960 --height 540 -o ${LENS_DIR}/cal.yaml)
+set_tests_properties(cli_import_lens PROPERTIES FIXTURES_SETUP lens_cal)
+add_test(NAME cli_import_lens_file
+         COMMAND sh -c "c=\"$0\"; cat \"$c\"; grep -q 'format: rsd-calibration/1' \"$c\" && grep -q 'distortion_model: equidistant' \"$c\" && grep -q 'distortion_coeffs: \\[0.05, -0.01, 0.002, -3e-04\\]' \"$c\" && grep -q 'intrinsics: \\[500, 500, 479.5, 269.5\\]' \"$c\" && grep -q 'resolution: \\[960, 540\\]' \"$c\" && grep -m1 '^    line_delay_s:' \"$c\" | awk '{d = $2 + 0} END {exit !(d > 0.9999999e-4 * 0.4 && d < 1.0000001e-4 * 0.4)}'"
+                 ${LENS_DIR}/cal.yaml)
+set_tests_properties(cli_import_lens_file PROPERTIES FIXTURES_REQUIRED lens_cal LABELS cli)
+rsd_cli_test(cli_import_lens_other_aspect STATUS 1
+             MESSAGES "profile.json: 'calib_dimension' is 1920x1080, another aspect ratio than 960x720"
+             COMMAND ${calib} import-lens ${LENS_DIR}/profile.json --width 960 --height 720 -o ${LENS_DIR}/cal-4by3.yaml)
+rsd_cli_test(cli_import_lens_anamorphic STATUS 1 MESSAGES "anamorphic.json:1:"
+             "'input_horizontal_stretch' is not 1: an anamorphic (stretched) input is not rsd's camera model"
+             COMMAND ${calib} import-lens ${LENS_DIR}/anamorphic.json --width 1920 --height 1080 -o ${LENS_DIR}/cal-a.yaml)
+rsd_cli_test(cli_import_lens_missing_size STATUS 2 MESSAGES "--height is required"
+             COMMAND ${calib} import-lens ${LENS_DIR}/profile.json --width 1920 -o ${LENS_DIR}/cal-b.yaml)

@@ -131,6 +131,30 @@ TEST(RsProjection, CaseD_HonoursLensDistortion) {
             RsStatus::UnsupportedMotion);
 }
 
+// The same root finder through a fisheye (pinhole-equi) lens: the constraint is the lens's too,
+// and the closed forms, written for an undistorted pinhole, refuse it (an equidistant lens
+// without terms still bends the image).
+TEST(RsProjection, CaseD_HonoursAnEquidistantLens) {
+  std::mt19937 rng(9);
+  Scenario sc = scenarios()[0];
+  sc.cam.dist = Distortion::equidistant(0.0469, -0.0135, 0.0021, -0.0003);
+  const CaptureWindow win = default_capture_window(sc.timing);
+  int solved = 0;
+  for (int i = 0; i < 200; ++i) {
+    const Vector3d X = random_point(sc.cam, rng, 1, 10);
+    const Twist tw = random_twist(rng, {1, 1, 1}, {1, 1, 1}, 4, 2);
+    const auto p = project_screw(sc.cam, sc.timing, tw, X);
+    const auto bf = brute_force_project(sc.cam, sc.timing, ScrewMotion(tw), X, win.t_begin, win.t_end);
+    ASSERT_EQ(p.ok(), bf.has_value());
+    if (!bf) continue;
+    ++solved;
+    EXPECT_NEAR((p.pixel - bf->pixel).norm(), 0.0, 1e-6);
+  }
+  EXPECT_GT(solved, 150);
+  sc.cam.dist = Distortion::equidistant(0, 0, 0, 0);
+  EXPECT_EQ(project_linearised(sc.cam, sc.timing, Twist{}, Vector3d(0, 0, 1)).status, RsStatus::UnsupportedMotion);
+}
+
 TEST(RsProjection, CaseE_ArbitraryTrajectoryMatchesBruteForce) {
   // A trajectory no closed form covers: oscillating translation and a growing rotation.
   auto pose = [](double t) {

@@ -27,6 +27,8 @@
 #include <cstdio>
 #include <cstring>
 #include <map>
+#include <numbers>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -94,6 +96,42 @@ void BM_Rectify(benchmark::State& state) {
   state.counters["simd"] = rect.uses_simd();
   state.SetLabel(std::to_string(sz.w) + "x" + std::to_string(sz.h) + " " + format_name(state.range(1)) +
                  (state.range(2) ? " plane" : " infinite"));
+}
+
+// Lenses (docs/rectification.md, "Lenses and the output camera"): the same motion through a
+// pinhole-radtan lens with Brown-Conrady terms, a 143-degree pinhole-equi (fisheye) lens kept in
+// the output, and that fisheye undone to a 100-degree pinhole. The fisheye's cost per frame is
+// held to 1.25 times the radtan lens's at 1920x1080 (docs/performance.md).
+// args: size index, lens (0 radtan, 1 equidistant, 2 equidistant to a pinhole).
+void BM_RectifyLens(benchmark::State& state) {
+  const Size sz = kSizes[state.range(0)];
+  CameraModel cam = CameraModel::from_hfov(sz.w, sz.h, 1.0);
+  if (state.range(1) == 0) {
+    cam.dist = {-0.28, 0.07, 2e-4, 2e-5, 0};
+  } else {
+    cam.fx = cam.fy = 0.4 * sz.w;
+    cam.dist = Distortion::equidistant(0.0469, -0.0135, 0.0021, -0.0003);
+  }
+  const RowTiming timing = RowTiming::full_frame(sz.h, 30);
+  std::optional<Rectifier> rect;
+  if (state.range(1) == 2)
+    rect.emplace(cam, timing, CameraModel::from_hfov(sz.w, sz.h, 100 * std::numbers::pi / 180), PixelFormat::Mono8);
+  else
+    rect.emplace(cam, timing, PixelFormat::Mono8);
+  Image src = noise_image(sz.w, sz.h, PixelFormat::Mono8), dst(sz.w, sz.h, PixelFormat::Mono8);
+  const double t_ref = reference_time(timing, ReferenceRow::Middle);
+  RectifyReport rep;
+  Twist tw = motion();
+  for (auto _ : state) {
+    tw.w.y() += 1e-9;  // a new velocity every frame: the map is rebuilt, never cached
+    rep = rect->rectify(src.view(), dst.view(), tw, DepthModel::at_infinity(), t_ref);
+    benchmark::DoNotOptimize(dst.data.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["spacing"] = rep.spacing;
+  state.counters["bound_px"] = rep.error_bound_px;
+  static const char* kLens[] = {"pinhole-radtan", "pinhole-equi", "pinhole-equi to pinhole"};
+  state.SetLabel(std::to_string(sz.w) + "x" + std::to_string(sz.h) + " " + kLens[state.range(1)]);
 }
 
 // The map alone (nodes, bound, refinement): what the remap adds to is the rest.
@@ -407,6 +445,7 @@ BENCHMARK(BM_Rectify)
     ->ArgsProduct({{2}, {3, 4}, {0, 1}, {1}})       // YUYV and a Bayer mosaic at 1920x1080
     ->ArgsProduct({{0, 1, 2}, {0, 1}, {0}, {0}})  // scalar kernels, for comparison
     ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RectifyLens)->ArgsProduct({{2}, {0, 1, 2}})->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_BuildMap)->ArgsProduct({{0, 1, 2}, {0, 1}})->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Memcpy)->ArgsProduct({{0, 1, 2}, {0, 1, 2}})->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CvRemap)->ArgsProduct({{0, 1, 2}, {0, 1, 2}, {0, 1}})->Unit(benchmark::kMicrosecond);

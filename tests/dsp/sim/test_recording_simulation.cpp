@@ -62,6 +62,32 @@ TEST(RecordingSimulation, EachEffectBreaksTheNominalModelButNotTheTrueOne) {
   EXPECT_EQ(names, (std::vector<std::string>{"time_offset", "lens_distortion", "lever_arm"}));
 }
 
+// A fisheye behind a pinhole nominal (the lens_model effect), and a fisheye nominal whose k3, k4
+// differ (lens_distortion of pinhole-equi): the observations follow the true lens, not the nominal.
+TEST(RecordingSimulation, ALensOfTheOtherFamilyAndEquidistantTermsAreRenderedAsTrue) {
+  SimConfig c = base(ObservationKind::Landmarks);
+  c.effects.lens = Distortion::equidistant(0.02, -0.01, 0.004, -0.001);
+  const SimulatedRecording s = simulate_recording(c);
+  const NominalModel& n = s.rec.nominal;
+  EXPECT_EQ(n.cam.dist.model, LensModel::PinholeRadtan);
+  EXPECT_GT(landmark_rms(s.rec, {n.cam, n.time, n.lever_arm}), 0.5);
+  LandmarkSetup truth{n.cam, n.time, n.lever_arm};
+  truth.cam.dist = *c.effects.lens;
+  EXPECT_LT(landmark_rms(s.rec, truth), 1e-6);
+  EXPECT_EQ(s.truth.names(), std::vector<std::string>{"lens_model"});
+
+  SimConfig f = base(ObservationKind::Landmarks);
+  f.nominal.cam.dist = Distortion::equidistant(0.02, -0.01, 0, 0);
+  f.effects.k1k2 = Eigen::Vector2d(0.02, -0.01);
+  f.effects.k3k4 = Eigen::Vector2d(0.05, -0.02);
+  const SimulatedRecording fs = simulate_recording(f);
+  LandmarkSetup ftruth{fs.rec.nominal.cam, fs.rec.nominal.time, fs.rec.nominal.lever_arm};
+  ftruth.cam.dist = Distortion::equidistant(0.02, -0.01, 0.05, -0.02);
+  EXPECT_LT(landmark_rms(fs.rec, ftruth), 1e-6);
+  EXPECT_GT(landmark_rms(fs.rec, {fs.rec.nominal.cam, fs.rec.nominal.time, fs.rec.nominal.lever_arm}), 0.01);  // 0.016 px: k3, k4 act far off the axis
+  EXPECT_EQ(fs.truth.names(), std::vector<std::string>{"lens_distortion"});
+}
+
 TEST(RecordingSimulation, MatchesHaveOutliersAndIrregularGyro) {
   SimConfig c = base(ObservationKind::Matches);
   c.outlier_fraction = 0.1;
