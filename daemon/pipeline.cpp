@@ -193,12 +193,12 @@ void Pipeline::rectify_loop() {
     }
     Raw& r = raw_[*in];
     Out& o = out_[*out_slot];
-    o.meta = r.meta;
-    o.ready_ns = r.ready_ns;
     take_up_next_rectifier();
-    o.result = rectifier_->process(r.image.view(), o.image.view(), r.meta, velocity_, r.horizon);
-    o.timing = rectifier_->timing();
-    o.calibration = rectifier_->calibration();
+    if (!rectify(r, o)) {  // dropped, counted and said: both slots back
+      raw_free_.put(*in);
+      spare = out_slot;
+      continue;
+    }
     (o.result.rectified ? stats_.rectified : stats_.unrectified).fetch_add(1, std::memory_order_relaxed);
     o.raw_slot = cfg_.publish_raw ? static_cast<int>(*in) : -1;
     // The tap sees the raw frame after the frame has gone on (its copy adds nothing to the
@@ -264,6 +264,25 @@ void Pipeline::publish_frame(Out& o, uint64_t seq) {
       output_failed_ = true;
     }
   }
+}
+
+// One frame through the rectifier. An exception from it (a frame its maps do not fit: a defect,
+// never an input the boundary let through) drops that frame, counted in drops and
+// rectify_faults and said the first time and every tenfold: never the rectify thread's end.
+bool Pipeline::rectify(Raw& r, Out& o) {
+  o.meta = r.meta;
+  o.ready_ns = r.ready_ns;
+  try {
+    o.result = rectifier_->process(r.image.view(), o.image.view(), r.meta, velocity_, r.horizon);
+  } catch (const std::exception& e) {
+    stats_.drops.fetch_add(1, std::memory_order_relaxed);
+    const uint64_t n = stats_.rectify_faults.fetch_add(1, std::memory_order_relaxed) + 1;
+    if (rectify_fault_log_.due(n)) spdlog::error("rectifier fault, frame dropped ({} so far): {}", n, e.what());
+    return false;
+  }
+  o.timing = rectifier_->timing();
+  o.calibration = rectifier_->calibration();
+  return true;
 }
 
 void Pipeline::publish_loop() {

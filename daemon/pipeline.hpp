@@ -19,6 +19,7 @@
 #include "daemon/realtime.hpp"
 #include "daemon/velocity_buffer.hpp"
 #include "drivers/camera_source.hpp"
+#include "drivers/tenfold_log.hpp"
 
 namespace rsd::daemon {
 
@@ -54,6 +55,7 @@ struct PipelineStats {
   // frames_in = frames_out + drops + refused + the frames in flight.
   std::atomic<uint64_t> frames_in{0}, frames_out{0}, drops{0}, rectified{0}, unrectified{0};
   std::atomic<uint64_t> refused{0};  // a first-row time off the time line (drivers::frame_time_line)
+  std::atomic<uint64_t> rectify_faults{0};  // frames the rectifier threw on (counted in drops too)
   std::atomic<int64_t> last_frame_ns{0};  // CLOCK_MONOTONIC when the newest frame arrived (0: none yet)
 };
 
@@ -112,6 +114,7 @@ class Pipeline {
   uint32_t pass_on(uint32_t slot);
   void publish_frame(Out& o, uint64_t seq);
   void take_up_next_rectifier();
+  bool rectify(Raw& r, Out& o);
 
   PipelineConfig cfg_;
   drivers::CameraSource& source_;
@@ -131,6 +134,7 @@ class Pipeline {
   std::atomic<bool> camera_lost_{false}, end_of_stream_{false}, finished_{false};
   std::string camera_error_;  // written by the capture thread before camera_lost_ is set
   dsp::TimeLine frame_line_ = drivers::frame_time_line();  // capture thread; reset by start() (a reopened camera's clock may restart)
+  drivers::TenfoldLog rectify_fault_log_;  // the rectify thread's
   FrameFiles* files_ = nullptr;
   FrameTap* tap_ = nullptr;
   std::atomic<bool> output_failed_{false};

@@ -243,3 +243,27 @@ TEST(Pipeline, AnExceptionFromTheSourceIsALostCameraNotTheProcessEnd) {
   EXPECT_EQ(pipeline.stats().frames_in.load(), 2u);
 }
 
+// Issue 38: an exception from the rectifier (here a rectifier made for frames twice as wide as
+// the camera's: every frame's view fails its check) drops that frame, counted, and the thread
+// goes on to the next; it used to end the process (std::terminate).
+TEST(Pipeline, ARectifierFaultDropsThatFrameNotTheProcess) {
+  dsp::CameraModel narrow = small_camera();
+  narrow.width = 80, narrow.cx = 39.5;
+  drivers::SimSource source(small_sim(true, narrow));
+  source.open();
+  daemon::VelocityBuffer velocity;
+  daemon::LcmPublisher pub("memq://", {}, source.format());
+  daemon::FrameRectifier rect({}, small_camera(), source.timing(), source.format());
+  daemon::Pipeline pipeline({}, source, rect, pub, velocity);
+  source.start();
+  pipeline.start();
+  for (int i = 0; i < 6000 && pipeline.stats().rectify_faults.load() < 10; ++i)  // a hang guard
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  pipeline.stop();
+  const auto& st = pipeline.stats();
+  EXPECT_GE(st.rectify_faults.load(), 10u);
+  EXPECT_EQ(st.frames_out.load(), 0u);
+  EXPECT_EQ(st.frames_in.load(), st.frames_out.load() + st.drops.load() + st.refused.load());  // nothing unseen
+  EXPECT_FALSE(pipeline.camera_lost());
+}
+
