@@ -127,11 +127,8 @@ void write_calibration(const std::string& file, const Calibration& c) {
   const double k[4] = {c.cam.fx, c.cam.fy, c.cam.cx, c.cam.cy};
   cam["intrinsics"] = flow(k, 4);
   // Kalibr's names: radtan [k1, k2, p1, p2], equidistant [k1, k2, k3, k4] (pinhole-equi).
-  const dsp::Distortion& lens = c.cam.dist;
-  const bool equi = lens.model == dsp::LensModel::PinholeEqui;
-  cam["distortion_model"] = equi ? "equidistant" : "radtan";
-  const double radtan[4] = {lens.k1, lens.k2, lens.p1, lens.p2}, equidistant[4] = {lens.k1, lens.k2, lens.k3, lens.k4};
-  cam["distortion_coeffs"] = flow(equi ? equidistant : radtan, 4);
+  cam["distortion_model"] = c.cam.dist.model == dsp::LensModel::PinholeEqui ? "equidistant" : "radtan";
+  cam["distortion_coeffs"] = flow(dsp::file_terms(c.cam.dist).data(), 4);
   const double res[2] = {static_cast<double>(c.cam.width), static_cast<double>(c.cam.height)};
   cam["resolution"] = flow(res, 2);
   Eigen::Matrix<double, 4, 4, Eigen::RowMajor> T = Eigen::Matrix4d::Identity();

@@ -61,13 +61,11 @@ dsp::CameraModel read_kalibr_camera(YamlMap& c) {
 
   const std::string dmodel = required_text(c, "distortion_model");
   if (dmodel == "radtan") {
-    const std::vector<double> d = c.numbers("distortion_coeffs", 4);  // [k1, k2, r1, r2]
-    cam.dist = {d[0], d[1], d[2], d[3], 0.0};
+    cam.dist = dsp::from_file_terms(dsp::LensModel::PinholeRadtan, c.numbers("distortion_coeffs", 4).data());
   } else if (dmodel == "none") {
     // No distortion; whatever distortion_coeffs holds is unused.
   } else if (dmodel == "equidistant") {
-    const std::vector<double> d = c.numbers("distortion_coeffs", 4);  // [k1, k2, k3, k4]: pinhole-equi
-    cam.dist = dsp::Distortion::equidistant(d[0], d[1], d[2], d[3]);
+    cam.dist = dsp::from_file_terms(dsp::LensModel::PinholeEqui, c.numbers("distortion_coeffs", 4).data());
   } else {
     c.fail("distortion_model", "is '" + dmodel + "': only 'radtan', 'equidistant' (or 'none') are supported");
   }
@@ -244,10 +242,7 @@ dsp::CameraModel read_camera_section(YamlMap m, const dsp::CameraModel& defaults
     c.dist.model = *lens;
   }
   if (m.has("distortion")) {
-    const auto d = m.numbers("distortion", 4);
-    const dsp::LensModel lens = c.dist.model;
-    c.dist = lens == dsp::LensModel::PinholeEqui ? dsp::Distortion::equidistant(d[0], d[1], d[2], d[3])
-                                                 : dsp::Distortion{d[0], d[1], d[2], d[3], 0};
+    c.dist = dsp::from_file_terms(c.dist.model, m.numbers("distortion", 4).data());
   }
   if (!(c.fx > 0 && c.fy > 0)) m.fail("fx", "and fy must be positive");
   if (const dsp::CameraOutOfRange r = dsp::out_of_range(c); r.part != dsp::CameraOutOfRange::None)

@@ -4,7 +4,6 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <array>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -53,15 +52,11 @@ YAML::Node camera_node(const dsp::NominalModel& n) {
   c["cx"] = number_text(n.cam.cx);
   c["cy"] = number_text(n.cam.cy);
   // camera.model: pinhole-radtan's distortion is [k1, k2, p1, p2], pinhole-equi's [k1, k2, k3, k4].
-  const dsp::Distortion& lens = n.cam.dist;
-  const bool equi = lens.model == dsp::LensModel::PinholeEqui;
-  const std::array<double, 4> k = equi ? std::array<double, 4>{lens.k1, lens.k2, lens.k3, lens.k4}
-                                       : std::array<double, 4>{lens.k1, lens.k2, lens.p1, lens.p2};
   YAML::Node d;
-  for (double v : k) d.push_back(number_text(v));
+  for (double v : dsp::file_terms(n.cam.dist)) d.push_back(number_text(v));
   d.SetStyle(YAML::EmitterStyle::Flow);
   c["distortion"] = d;
-  if (equi) c["model"] = dsp::lens_model_name(lens.model);
+  if (n.cam.dist.model == dsp::LensModel::PinholeEqui) c["model"] = dsp::lens_model_name(n.cam.dist.model);
   return c;
 }
 

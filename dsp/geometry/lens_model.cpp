@@ -14,6 +14,15 @@ std::optional<LensModel> parse_lens_model(std::string_view name) {
   return std::nullopt;
 }
 
+std::array<double, 4> file_terms(const Distortion& d) {
+  if (d.model == LensModel::PinholeEqui) return {d.k1, d.k2, d.k3, d.k4};
+  return {d.k1, d.k2, d.p1, d.p2};
+}
+
+Distortion from_file_terms(LensModel m, const double* k) {
+  return m == LensModel::PinholeEqui ? Distortion::equidistant(k[0], k[1], k[2], k[3]) : Distortion{k[0], k[1], k[2], k[3], 0};
+}
+
 namespace {
 
 // ---- pinhole-radtan (Brown-Conrady) ----

@@ -17,6 +17,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <optional>
 #include <string_view>
 
@@ -44,6 +45,11 @@ struct Distortion {
     return {k1, k2, 0, 0, k3, k4, LensModel::PinholeEqui};
   }
 };
+
+// The four terms files write for a lens (recording-v1's camera.distortion, Kalibr's
+// distortion_coeffs): pinhole-radtan [k1, k2, p1, p2], pinhole-equi [k1, k2, k3, k4]; and back.
+std::array<double, 4> file_terms(const Distortion& d);
+Distortion from_file_terms(LensModel m, const double* k);
 
 // Normalised point -> distorted normalised point.
 Eigen::Vector2d distort(const Distortion& d, const Eigen::Vector2d& xn);
