@@ -2,7 +2,6 @@
 
 #include "drivers/lcm_receive.hpp"
 #include "drivers/monotonic_clock.hpp"
-#include "dsp/core/input_limits.hpp"
 #include "formats/image_t_codec.hpp"
 
 #include <bot_core/pose_t.hpp>
@@ -31,25 +30,16 @@ VelocityInput::~VelocityInput() {
   if (pose_sub_) lcm_unsubscribe(lcm_, pose_sub_);
 }
 
-namespace {
-
-// Stamps beyond rsd's window for times from outside (+-2^61 ns, 73 years from either epoch;
-// dsp/core/input_limits.hpp) are wild: refused before any arithmetic on them (the shift by the
-// clock offset, the scaling to ns) could overflow.
-bool stamp_in_range(int64_t us) { return dsp::limits::stamp_us_ok(us); }
-
-}  // namespace
-
-void VelocityInput::push(int64_t utime, const Eigen::Matrix3d& r, const double* w, const double* v, bool has_linear,
-                         bool live) {
-  if (!stamp_in_range(utime)) return buffer_.reject();
+void VelocityInput::push(std::optional<dsp::Stamp> t, const Eigen::Matrix3d& r, const double* w, const double* v,
+                         bool has_linear, bool live) {
+  if (!t) return buffer_.reject();  // beyond rsd's window for times (before or after the shift)
   if (live && clock_check_.load() && cfg_.max_clock_offset_s > 0 &&
-      std::abs(static_cast<double>(utime * 1000 - drivers::monotonic_ns())) > cfg_.max_clock_offset_s * 1e9)
+      std::abs(static_cast<double>(t->ns() - drivers::monotonic_ns())) > cfg_.max_clock_offset_s * 1e9)
     return buffer_.reject();  // far in the future or the past of the camera's clock
   const Eigen::Vector3d wc = r * Eigen::Vector3d(w[0], w[1], w[2]);
   const Eigen::Vector3d vc = r * Eigen::Vector3d(v[0], v[1], v[2]);
   drivers::VelocitySample s;
-  s.t_ns = utime * 1000;
+  s.t_ns = t->us() * 1000;  // on rsd.velocity_t's microsecond line, as published
   s.has_linear = has_linear && !cfg_.gyro_only;
   for (int i = 0; i < 3; ++i) s.w[i] = wc[i], s.v[i] = s.has_linear ? vc[i] : 0.0;
   buffer_.push(s);  // rejects and counts insane samples (the caller holds writer_)
@@ -71,12 +61,15 @@ void VelocityInput::on_velocity(const lcm_recv_buf_t* rbuf, const char*, void* u
   self->accept(m, true);
 }
 
-int64_t VelocityInput::camera_utime(int64_t utime_motion) {
-  const int64_t shifted = utime_motion - std::llround(cfg_.imu_time_offset_s * 1e6);
-  if (cfg_.drift_ppm == 0) return shifted;
+std::optional<dsp::Stamp> VelocityInput::camera_time(std::optional<dsp::Stamp> motion) {
+  if (!motion) return std::nullopt;
+  const std::optional<dsp::Stamp> shifted = motion->plus_ns(-std::llround(cfg_.imu_time_offset_s * 1e6) * 1000);
+  if (cfg_.drift_ppm == 0 || !shifted) return shifted;
   // t_m - offset = t_cam + d (t_cam - T0)  =>  t_cam = T0 + (t_m - offset - T0) / (1 + d).
-  if (!t0_us_) t0_us_ = shifted;
-  return *t0_us_ + std::llround(static_cast<double>(shifted - *t0_us_) / (1.0 + cfg_.drift_ppm * 1e-6));
+  if (!t0_) t0_ = shifted;
+  // In whole microseconds, rsd.velocity_t's unit (the window and kDriftPpm keep llround in range).
+  const double us = static_cast<double>((*shifted - *t0_) / 1000) / (1.0 + cfg_.drift_ppm * 1e-6);
+  return t0_->plus_ns(std::llround(us) * 1000);
 }
 
 void VelocityInput::at_camera_origin(const double* w, const double* v, double* out) const {
@@ -85,20 +78,20 @@ void VelocityInput::at_camera_origin(const double* w, const double* v, double* o
 }
 
 void VelocityInput::push_imu(int64_t utime_imu, const double* w_measured, const double* v, bool has_linear, bool live) {
-  if (!stamp_in_range(utime_imu)) return buffer_.reject();
+  const std::optional<dsp::Stamp> t = dsp::Stamp::from_us(utime_imu);
+  if (!t) return buffer_.reject();
   if (gyro_tap_) gyro_tap_->gyro(utime_imu, w_measured);
   double w[3], vc[3];
   for (int i = 0; i < 3; ++i) w[i] = cfg_.gyro_scale[i] * (w_measured[i] - cfg_.gyro_bias_rad_s[i]);
   at_camera_origin(w, v, vc);
-  push(camera_utime(utime_imu), cfg_.imu_to_camera, w, vc, has_linear, live);
+  push(camera_time(t), cfg_.imu_to_camera, w, vc, has_linear, live);
 }
 
 void VelocityInput::accept(const rsd::velocity_t& m, bool live) {
   std::lock_guard<std::mutex> lock(writer_);
-  if (m.frame == rsd::velocity_t::FRAME_CAMERA && !stamp_in_range(m.utime))
-    buffer_.reject();
-  else if (m.frame == rsd::velocity_t::FRAME_CAMERA)  // onto the camera clock
-    push(camera_utime(m.utime), Eigen::Matrix3d::Identity(), m.angular_velocity, m.linear_velocity, m.has_linear, live);
+  if (m.frame == rsd::velocity_t::FRAME_CAMERA)  // onto the camera clock
+    push(camera_time(dsp::Stamp::from_us(m.utime)), Eigen::Matrix3d::Identity(), m.angular_velocity, m.linear_velocity,
+         m.has_linear, live);
   else if (m.frame == rsd::velocity_t::FRAME_IMU)
     push_imu(m.utime, m.angular_velocity, m.linear_velocity, m.has_linear, live);
   else
@@ -118,7 +111,7 @@ void VelocityInput::deliver(const drivers::VelocitySample& s) {
   if (s.imu_frame)
     push_imu(s.t_ns / 1000, s.w, s.v, s.has_linear, false);
   else
-    push(s.t_ns / 1000, Eigen::Matrix3d::Identity(), s.w, s.v, s.has_linear, false);
+    push(dsp::Stamp::from_us(s.t_ns / 1000), Eigen::Matrix3d::Identity(), s.w, s.v, s.has_linear, false);
 }
 
 void VelocityInput::set_calibration(const VelocityInputConfig& c) {
@@ -159,13 +152,12 @@ void VelocityInput::on_pose(const lcm_recv_buf_t* rbuf, const char*, void* user)
 }
 
 void VelocityInput::push_pose(const bot_core::pose_t& m, bool live) {
-  if (!stamp_in_range(m.utime)) return buffer_.reject();
   double v[3];
   at_camera_origin(m.rotation_rate, m.vel, v);
   // A calibration learned from a trajectory holds the body-to-camera rotation in T_cam_imu;
   // velocity.body_to_camera, when set, says the same and comes first.
   const bool calibrated_rotation = cfg_.pose_calibrated && cfg_.body_to_camera.isIdentity();
-  push(camera_utime(m.utime), calibrated_rotation ? cfg_.imu_to_camera : cfg_.body_to_camera, m.rotation_rate, v, true, live);
+  push(camera_time(dsp::Stamp::from_us(m.utime)), calibrated_rotation ? cfg_.imu_to_camera : cfg_.body_to_camera, m.rotation_rate, v, true, live);
 }
 
 void VelocityInput::deliver(const bot_core::pose_t& m) {

@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "daemon/velocity_buffer.hpp"
+#include "dsp/core/stamp.hpp"
 #include "formats/lcm_log.hpp"
 
 namespace rsd::daemon {
@@ -107,9 +108,9 @@ class VelocityInput {
   static void on_pose(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
   // `live`: received over LCM (checked against the clock), not delivered by the source.
   void accept(const rsd::velocity_t& m, bool live);
-  void push(int64_t utime, const Eigen::Matrix3d& r, const double* w, const double* v, bool has_linear, bool live);
+  void push(std::optional<dsp::Stamp> t, const Eigen::Matrix3d& r, const double* w, const double* v, bool has_linear, bool live);
   // A motion-clock stamp on the camera clock, through the offset and drift.
-  int64_t camera_utime(int64_t utime_motion);
+  std::optional<dsp::Stamp> camera_time(std::optional<dsp::Stamp> motion);
   // A body's linear velocity carried to the camera's origin (the lever arm).
   void at_camera_origin(const double* w, const double* v, double* out) const;
   // A tracked body's pose message (body axes, motion clock) through the calibration.
@@ -126,7 +127,7 @@ class VelocityInput {
   std::atomic<uint64_t> malformed_{0}, ignored_{0};
   std::atomic<bool> source_feeds_{false}, source_feeds_pose_{false};
   std::atomic<bool> clock_check_{false};
-  std::optional<int64_t> t0_us_;  // camera time of the first sample (the drift's reference)
+  std::optional<dsp::Stamp> t0_;  // camera time of the first sample (the drift's reference)
   formats::LcmLogWriter* record_ = nullptr;
   GyroTap* gyro_tap_ = nullptr;
   // The source's thread and the LCM thread (pose_t) both push, and set_calibration() changes

@@ -362,10 +362,10 @@ void AravisSource::Impl::copy_image(ArvBuffer* b, const dsp::ImageView& dst) con
 }
 
 void AravisSource::Impl::stamp(ArvBuffer* b, FrameMeta& meta) {
-  const int64_t receipt_ns = host_stamp_to_monotonic(static_cast<int64_t>(arv_buffer_get_system_timestamp(b)),
+  const int64_t receipt_ns = host_stamp_to_monotonic(checked_stamp(arv_buffer_get_system_timestamp(b)),
                                                      read_host_clocks());
   const int64_t bound = receipt_ns - receipt.receipt_delay_ns();
-  const auto camera_ns = static_cast<int64_t>(arv_buffer_get_timestamp(b));
+  const int64_t camera_ns = checked_stamp(arv_buffer_get_timestamp(b));
   const int64_t stamped = cfg.use_camera_clock && camera_ns > 0 ? mapper->add(camera_ns, bound) : bound;
   meta.first_row_ns = receipt.first_row_ns(stamped);
   meta.sequence = counter.next(arv_buffer_get_frame_id(b));

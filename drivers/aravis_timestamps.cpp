@@ -1,5 +1,6 @@
 #include "drivers/aravis_timestamps.hpp"
 #include "drivers/monotonic_clock.hpp"
+#include "dsp/core/stamp.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -27,6 +28,11 @@ HostClocks read_host_clocks() {
   const int64_t rt = read_clock(CLOCK_REALTIME);
   const int64_t m1 = read_clock(CLOCK_MONOTONIC);
   return {rt, m0 + (m1 - m0) / 2};
+}
+
+int64_t checked_stamp(uint64_t raw) {
+  if (raw > static_cast<uint64_t>(dsp::Stamp::kLimitNs)) return 0;
+  return dsp::Stamp::from_ns(static_cast<int64_t>(raw))->ns();
 }
 
 int64_t host_stamp_to_monotonic(int64_t host_stamp_ns, const HostClocks& now) {

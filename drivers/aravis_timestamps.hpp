@@ -33,6 +33,10 @@ struct HostClocks {
 };
 HostClocks read_host_clocks();
 
+// A stamp from the camera or Aravis (a guint64) through rsd's one check for times from outside
+// (dsp::Stamp): 0, "no stamp", for one beyond its window, which the callers treat as absent.
+int64_t checked_stamp(uint64_t raw);
+
 // A host stamp on CLOCK_MONOTONIC. Aravis 0.8 stamps CLOCK_REALTIME; should a version stamp
 // CLOCK_MONOTONIC instead, the clock whose "now" is nearer is taken. 0 (no stamp) gives
 // `now.monotonic_ns`, the time of arrival in our hands.

@@ -1,6 +1,7 @@
 #include "drivers/images_source.hpp"
 
 #include "dsp/core/image_planes.hpp"
+#include "dsp/core/stamp.hpp"
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -29,6 +30,9 @@ void ImagesSource::open() {
   if (count() == 0) throw std::runtime_error(cfg_.video.empty() ? "images: no image files" : cfg_.video + ": no frames");
   if (!cfg_.stamps_s.empty() && cfg_.stamps_s.size() != count())
     throw std::invalid_argument("images: " + std::to_string(cfg_.stamps_s.size()) + " stamps for " + std::to_string(count()) + " pictures");
+  for (size_t k = 0; k < cfg_.stamps_s.size(); ++k)
+    if (!dsp::Stamp::from_s(cfg_.stamps_s[k]))
+      throw std::invalid_argument("images: stamp " + std::to_string(k) + " is beyond rsd's window for times (dsp::Stamp)");
   start();
   const dsp::Image first = read(0);  // names the file on error
   format_ = {first.width, first.height, first.format};
@@ -72,7 +76,7 @@ CaptureStatus ImagesSource::capture(const dsp::ImageView& dst, FrameMeta& meta, 
   dsp::copy_image(img.data.data(), img.stride(), dst);
   meta = {};
   meta.sequence = cfg_.numbers.empty() ? k : cfg_.numbers.at(k);
-  if (!cfg_.stamps_s.empty()) meta.first_row_ns = std::llround(cfg_.stamps_s[k] * 1e9);
+  if (!cfg_.stamps_s.empty()) meta.first_row_ns = dsp::Stamp::from_s(cfg_.stamps_s[k])->ns();  // checked at open
   else meta.first_row_ns = cfg_.fps > 0 ? static_cast<int64_t>(static_cast<double>(k) * 1e9 / cfg_.fps) : 0;
   return CaptureStatus::Frame;
 }

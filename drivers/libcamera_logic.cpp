@@ -2,6 +2,8 @@
 
 #include <libcamera/formats.h>
 
+#include "dsp/core/stamp.hpp"
+
 #include <algorithm>
 #include <vector>
 
@@ -101,11 +103,20 @@ std::int64_t ClockResolver::to_monotonic(std::int64_t ts, std::int64_t mono_now_
   return settled_.value_or(Clock::Boottime) == Clock::Monotonic ? ts : ts - suspended;
 }
 
+namespace {
+
+// A stamp the sensor or buffer gives, through rsd's one check for times from outside
+// (dsp::Stamp): positive and within the window, else not used.
+bool usable(std::int64_t ns) { return ns > 0 && dsp::Stamp::from_ns(ns).has_value(); }
+
+}  // namespace
+
 FirstRowStamp first_row_stamp(const Completion& c, ClockResolver& clocks, int rows, double line_delay_s,
                               double exposure_s) {
-  if (c.sensor_timestamp_ns && *c.sensor_timestamp_ns > 0)
+  if (c.sensor_timestamp_ns && usable(*c.sensor_timestamp_ns))
     return {clocks.to_monotonic(*c.sensor_timestamp_ns, c.mono_now_ns, c.boot_now_ns), StampOrigin::SensorTimestamp};
-  if (c.buffer_timestamp_ns > 0)
+  if (c.buffer_timestamp_ns <= static_cast<std::uint64_t>(dsp::Stamp::kLimitNs) &&
+      usable(static_cast<std::int64_t>(c.buffer_timestamp_ns)))
     return {clocks.to_monotonic(static_cast<std::int64_t>(c.buffer_timestamp_ns), c.mono_now_ns, c.boot_now_ns),
             StampOrigin::BufferTimestamp};
   return {v4l2::first_row_from_end_of_frame(c.mono_now_ns, rows, line_delay_s, exposure_s),

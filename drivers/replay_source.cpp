@@ -11,6 +11,7 @@
 
 #include "drivers/monotonic_clock.hpp"  // monotonic_ns
 #include "dsp/core/input_limits.hpp"
+#include "dsp/core/stamp.hpp"
 
 namespace rsd::drivers {
 
@@ -126,7 +127,7 @@ CaptureStatus ReplaySource::capture(const dsp::ImageView& dst, FrameMeta& meta, 
         ++passes_;
         continue;
       }
-      if (!dsp::limits::stamp_us_ok(ev_.timestamp_us)) {  // before any arithmetic on it
+      if (!dsp::Stamp::from_us(ev_.timestamp_us)) {  // before any arithmetic on it
         reader_->skip(formats::LogSkip::Undecodable, ev_.offset,
                       "event time " + std::to_string(ev_.timestamp_us) + " us is out of range");
         continue;
@@ -192,6 +193,13 @@ bool ReplaySource::take_frame(const dsp::ImageView& dst, FrameMeta& meta) {
   return true;
 }
 
+int64_t ReplaySource::on_this_pass(int64_t utime) const {
+  const std::optional<dsp::Stamp> t = dsp::Stamp::from_us(utime);
+  if (!t) return utime;  // out of the window already: the velocity input refuses and counts it
+  const std::optional<dsp::Stamp> moved = t->plus_ns(offset_ns_);
+  return moved ? moved->us() : INT64_MAX;  // (the same)
+}
+
 void ReplaySource::take_pose() {
   bot_core::pose_t m;
   const formats::DecodeStatus st = formats::decode_checked(ev_.data.data(), ev_.data.size(), m, why_);
@@ -199,7 +207,7 @@ void ReplaySource::take_pose() {
     reader_->skip(formats::to_skip(st), ev_.offset, "channel '" + ev_.channel + "': " + why_);
     return;
   }
-  m.utime += offset_ns_ / 1000;
+  m.utime = on_this_pass(m.utime);
   deliver_pose(m);
 }
 
@@ -210,7 +218,7 @@ void ReplaySource::take_velocity() {
     reader_->skip(formats::to_skip(st), ev_.offset, "channel '" + ev_.channel + "': " + why_);
     return;
   }
-  m.utime += offset_ns_ / 1000;
+  m.utime = on_this_pass(m.utime);
   deliver_velocity(m);
 }
 

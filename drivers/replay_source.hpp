@@ -94,6 +94,8 @@ class ReplaySource final : public MessageSource, public Playback {
   bool take_frame(const dsp::ImageView& dst, FrameMeta& meta);
   void take_velocity();
   void take_pose();
+  // A message's own utime moved by this pass's offset (--loop), through dsp::Stamp.
+  int64_t on_this_pass(int64_t utime) const;
   bool ignored_channel(const std::string& c) const;
   ReplayConfig cfg_;
   formats::RecordedFrame first_;

@@ -6,10 +6,12 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
 #include "dsp/core/image_planes.hpp"
+#include "dsp/core/stamp.hpp"
 
 namespace rsd::drivers::v4l2 {
 
@@ -390,9 +392,15 @@ std::int64_t first_row_from_end_of_frame(std::int64_t eof_ns, int rows, double l
 FirstRowTime first_row_start(const v4l2_buffer& buf, int rows, double line_delay_s, double exposure_s,
                              std::int64_t dequeue_mono_ns) {
   const bool monotonic = (buf.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
-  if (!monotonic)  // unknown or copied from elsewhere: the frame was complete by the dequeue
+  // The driver's stamp through rsd's one check for times from outside (dsp::Stamp).
+  const bool usec_ok = buf.timestamp.tv_usec >= 0 && buf.timestamp.tv_usec < 1000000;
+  const std::optional<dsp::Stamp> stamp =
+      usec_ok && std::abs(static_cast<double>(buf.timestamp.tv_sec)) <= dsp::Stamp::kLimitS - 1
+          ? dsp::Stamp::from_ns(std::int64_t{buf.timestamp.tv_sec} * 1000000000LL + std::int64_t{buf.timestamp.tv_usec} * 1000)
+          : std::nullopt;
+  if (!monotonic || !stamp)  // unknown, copied from elsewhere or absurd: the frame was complete by the dequeue
     return {first_row_from_end_of_frame(dequeue_mono_ns, rows, line_delay_s, exposure_s), false};
-  const std::int64_t ts = std::int64_t{buf.timestamp.tv_sec} * 1000000000LL + std::int64_t{buf.timestamp.tv_usec} * 1000;
+  const std::int64_t ts = stamp->ns();
   if ((buf.flags & V4L2_BUF_FLAG_TSTAMP_SRC_MASK) == V4L2_BUF_FLAG_TSTAMP_SRC_SOE) return {ts, true};
   return {first_row_from_end_of_frame(ts, rows, line_delay_s, exposure_s), true};  // SRC_EOF is 0
 }

@@ -9,6 +9,7 @@
 
 #include "dsp/core/image_planes.hpp"
 #include "dsp/core/input_limits.hpp"
+#include "dsp/core/stamp.hpp"
 #include "formats/number_text.hpp"
 
 namespace rsd::formats {
@@ -118,12 +119,12 @@ DecodeStatus check_image_t(const uint8_t* data, size_t n, std::string& why) {
 
 namespace {
 
-// Microseconds as nanoseconds, unless that overflows (a stamp beyond the year 2262).
-// Within rsd's window for times from outside (dsp/core/input_limits.hpp).
+// A time from the message as nanoseconds, through rsd's one check for times from outside
+// (dsp::Stamp): nothing for one beyond its window.
 bool us_to_ns(int64_t us, int64_t& ns) {
-  if (!dsp::limits::stamp_us_ok(us)) return false;
-  ns = us * 1000;
-  return true;
+  const std::optional<dsp::Stamp> s = dsp::Stamp::from_us(us);
+  if (s) ns = s->ns();
+  return s.has_value();
 }
 
 // The first row's time (monotonic), the Unix time and the sequence.
@@ -132,8 +133,9 @@ bool parse_times(const bot_core::image_t& img, RecordedFrame& out, std::string& 
   if (!us_to_ns(img.utime, out.meta.wall_ns))  // libbot2's convention; older rsd logs: their monotonic time
     return why = "utime " + std::to_string(img.utime) + " is out of range", false;
   if (parse_number(value_of(img, "frame_ns"), ns)) {
-    if (!dsp::limits::stamp_ok(ns)) return why = "metadata frame_ns " + std::to_string(ns) + " is out of range", false;
-    out.meta.first_row_ns = ns;
+    const std::optional<dsp::Stamp> s = dsp::Stamp::from_ns(ns);
+    if (!s) return why = "metadata frame_ns " + std::to_string(ns) + " is out of range", false;
+    out.meta.first_row_ns = s->ns();
   } else if (parse_number(value_of(img, "frame_utime"), us)) {
     if (!us_to_ns(us, out.meta.first_row_ns)) return why = "metadata frame_utime " + std::to_string(us) + " is out of range", false;
   } else {

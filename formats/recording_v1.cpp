@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "dsp/core/stamp.hpp"
 #include "formats/intrinsics_file.hpp"
 #include "formats/nominal_sections.hpp"
 #include "formats/number_text.hpp"
@@ -56,6 +57,12 @@ class CsvReader {
     const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
     if (r.ec != std::errc() || r.ptr != s.data() + s.size() || !std::isfinite(v)) fail(i, "'" + s + "' is not a finite number");
     return v;
+  }
+  // A time in seconds: finite and within rsd's window for times from outside (dsp::Stamp).
+  double time(size_t i) const {
+    const double t = number(i);
+    if (!dsp::Stamp::from_s(t)) fail(i, "time " + fields_[i] + " s is beyond +-" + number_text(dsp::Stamp::kLimitS) + " s");
+    return t;
   }
   const std::string& text(size_t i) const { return fields_[i]; }
   int integer(size_t i) const {
@@ -204,7 +211,7 @@ void read_frames(const fs::path& path, Recording& r, std::map<int, double>& by_i
   CsvReader csv(path, {"frame", "t"});
   while (csv.next()) {
     const int id = csv.integer(0);
-    const double t = csv.number(1);
+    const double t = csv.time(1);
     if (!by_id.emplace(id, t).second) csv.fail(0, "frame " + std::to_string(id) + " appears twice");
     r.frames.push_back({id, t});
   }
@@ -219,7 +226,7 @@ std::vector<dsp::PoseSample> read_poses(const fs::path& path) {
   while (csv.next()) {
     Eigen::Quaterniond q(csv.number(4), csv.number(5), csv.number(6), csv.number(7));
     if (std::abs(q.norm() - 1) > 1e-3) csv.fail(4, "quaternion is not unit length (norm " + number_text(q.norm()) + ")");
-    const double t = csv.number(0);
+    const double t = csv.time(0);
     if (!out.empty() && t < out.back().t) csv.fail(0, "time goes backwards");
     out.push_back({t, {csv.number(1), csv.number(2), csv.number(3)}, q.normalized()});
   }
@@ -232,7 +239,7 @@ void read_motion(const fs::path& path, Recording& r) {
     r.trajectory = read_poses(path);
   } else {
     CsvReader csv(path, {"t", "wx", "wy", "wz"});
-    while (csv.next()) r.gyro.push_back({csv.number(0), {csv.number(1), csv.number(2), csv.number(3)}});
+    while (csv.next()) r.gyro.push_back({csv.time(0), {csv.number(1), csv.number(2), csv.number(3)}});
     if (r.gyro.size() < 2) throw RecordingError(path.string() + ": needs at least two gyro samples");
     // The spec allows irregular, repeated samples: order them, keep repeats.
     std::stable_sort(r.gyro.begin(), r.gyro.end(), [](const auto& a, const auto& b) { return a.t < b.t; });

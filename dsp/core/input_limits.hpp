@@ -20,11 +20,9 @@ struct Range {
 
 // Times from outside (frame stamps, log event times, motion stamps), in nanoseconds: within
 // +-2^61 ns, 73 years either side of the clock's epoch (every CLOCK_MONOTONIC and Unix time of a
-// real system). Two such times, or one and an offset or duration of the same size, add and
-// subtract without overflow: the arithmetic after the boundary needs no checks of its own.
+// real system). They enter as dsp::Stamp (dsp/core/stamp.hpp), which checks this window once and
+// never overflows when combined.
 inline constexpr int64_t kStampLimitNs = int64_t{1} << 61;
-inline constexpr bool stamp_ok(int64_t ns) { return ns >= -kStampLimitNs && ns <= kStampLimitNs; }
-inline constexpr bool stamp_us_ok(int64_t us) { return us >= -(kStampLimitNs / 1000) && us <= kStampLimitNs / 1000; }
 
 // Frame sides: the rectifier's maps (4 px and up; its 16.16 fixed-point positions reach
 // +-16384 px, which 8000 px and the margins around them stay within).

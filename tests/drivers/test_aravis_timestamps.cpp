@@ -52,6 +52,15 @@ int64_t max_error(CameraClockMapper& m, SyntheticCamera& cam, int from, int to) 
 
 }  // namespace
 
+TEST(HostStamp, StampsBeyondTheWindowAreAbsent) {
+  // guint64 stamps through dsp::Stamp: within 2^61 ns kept, beyond (or negative once signed) 0.
+  EXPECT_EQ(checked_stamp(123'456'789), 123'456'789);
+  EXPECT_EQ(checked_stamp(std::uint64_t{1} << 61), std::int64_t{1} << 61);
+  EXPECT_EQ(checked_stamp((std::uint64_t{1} << 61) + 1), 0);
+  EXPECT_EQ(checked_stamp(UINT64_MAX), 0);
+  EXPECT_EQ(checked_stamp(std::uint64_t{1} << 63), 0);
+}
+
 TEST(HostStamp, RealtimeStampMovesOntoMonotonic) {
   const HostClocks now{1'700'000'000'123'456'789, 5'000'000'000'000};
   // Received 3 ms ago on CLOCK_REALTIME: 3 ms ago on CLOCK_MONOTONIC.

@@ -128,6 +128,22 @@ TEST(LibcameraTimestamp, SensorTimestampFirstThenBufferThenCompletionAsEndOfFram
   EXPECT_EQ(t.origin, lc::StampOrigin::CompletionTime);
 }
 
+TEST(LibcameraTimestamp, StampsBeyondTheWindowAreNotUsed) {
+  // A buffer stamp above INT64_MAX (negative once signed) or a sensor stamp beyond 2^61 ns
+  // (dsp::Stamp's window) falls through to the next source instead of being converted.
+  lc::ClockResolver clocks;
+  lc::Completion c = completed_at(10'000'000'000);
+  c.sensor_timestamp_ns = INT64_MAX;
+  c.buffer_timestamp_ns = UINT64_MAX;
+  auto t = lc::first_row_stamp(c, clocks, 1000, 30e-6, 5e-3);
+  EXPECT_EQ(t.origin, lc::StampOrigin::CompletionTime);
+  EXPECT_EQ(t.ns, 9'965'030'000);
+  c.buffer_timestamp_ns = (std::uint64_t{1} << 61) + 1;
+  EXPECT_EQ(lc::first_row_stamp(c, clocks, 1000, 30e-6, 5e-3).origin, lc::StampOrigin::CompletionTime);
+  c.buffer_timestamp_ns = 9'960'000'000;
+  EXPECT_EQ(lc::first_row_stamp(c, clocks, 1000, 30e-6, 5e-3).origin, lc::StampOrigin::BufferTimestamp);
+}
+
 TEST(LibcameraTimestamp, ExposureFromMetadataInMicrosecondsElseTheFallback) {
   EXPECT_DOUBLE_EQ(lc::exposure_seconds(10000, 0.5), 0.01);
   EXPECT_DOUBLE_EQ(lc::exposure_seconds(std::nullopt, 0.5), 0.5);

@@ -3,6 +3,8 @@
 // worked out by hand in the comments.
 #include <gtest/gtest.h>
 
+#include <climits>
+
 #include <cerrno>
 #include <cstring>
 #include <deque>
@@ -181,6 +183,18 @@ TEST(V4l2Timestamp, UnknownOrCopiedClocksFallBackToTheDequeueTimeAsEndOfFrame) {
     const auto b = stamped(clock | V4L2_BUF_FLAG_TSTAMP_SRC_SOE, 12, 345678);
     const auto t = v4l2::first_row_start(b, 1000, 30e-6, 5e-3, 20'000'000'000);
     EXPECT_EQ(t.ns, 19'965'030'000);
+    EXPECT_FALSE(t.from_driver_clock);
+  }
+}
+
+TEST(V4l2Timestamp, AnAbsurdDriverStampFallsBackToTheDequeueTime) {
+  // Seconds beyond rsd's window (2^61 ns, dsp::Stamp) or microseconds out of 0..999999: never
+  // multiplied into an overflow, the dequeue time stands in (as for an unknown clock).
+  struct Case { long sec; long usec; } cases[] = {{LONG_MAX, 0}, {LONG_MIN, 0}, {3'000'000'000, 0}, {12, -1}, {12, 1'000'000}};
+  for (const Case& k : cases) {
+    const auto b = stamped(V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC | V4L2_BUF_FLAG_TSTAMP_SRC_SOE, k.sec, k.usec);
+    const auto t = v4l2::first_row_start(b, 1000, 30e-6, 5e-3, 20'000'000'000);
+    EXPECT_EQ(t.ns, 19'965'030'000) << k.sec << " s " << k.usec << " us";
     EXPECT_FALSE(t.from_driver_clock);
   }
 }

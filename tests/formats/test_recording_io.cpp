@@ -91,6 +91,12 @@ TEST(RecordingIo, MalformedFilesAreNamedWithLineAndColumn) {
   fresh();
   replace_line(dir / "frames.csv", 3, "1,abc");
   EXPECT_NE(error_of(dir).find("frames.csv:3:3: field 't': 'abc' is not a finite number"), std::string::npos) << error_of(dir);
+  fresh();  // a time beyond rsd's window for times from outside (dsp::Stamp: 2^61 ns, 2.3e9 s)
+  replace_line(dir / "frames.csv", 3, "1,1e300");
+  EXPECT_NE(error_of(dir).find("frames.csv:3:3: field 't': time 1e300 s is beyond +-"), std::string::npos) << error_of(dir);
+  fresh();
+  replace_line(dir / "trajectory.csv", 2, "-3e9,0,0,0,1,0,0,0");
+  EXPECT_NE(error_of(dir).find("trajectory.csv:2:1: field 't': time -3e9 s is beyond +-"), std::string::npos) << error_of(dir);
   fresh();
   replace_line(dir / "observations.csv", 1, "frame,id,v,u");
   EXPECT_NE(error_of(dir).find("observations.csv:1:1: header is 'frame,id,v,u'"), std::string::npos) << error_of(dir);

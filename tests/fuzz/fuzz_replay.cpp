@@ -13,7 +13,7 @@
 #include "daemon/frame_rectifier.hpp"
 #include "daemon/velocity_buffer.hpp"
 #include "drivers/replay_source.hpp"
-#include "dsp/core/input_limits.hpp"
+#include "dsp/core/stamp.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
 
 namespace {
@@ -24,7 +24,7 @@ void rectify_all(drivers::ReplaySource& src) {
   daemon::VelocityBuffer velocity;
   src.set_velocity_message_sink([&](const rsd::velocity_t& m) {
     drivers::VelocitySample s;  // camera frame, as the velocity input would push it
-    if (!dsp::limits::stamp_us_ok(m.utime)) return;  // the velocity input's window
+    if (!dsp::Stamp::from_us(m.utime)) return;  // the velocity input's window
     s.t_ns = m.utime * 1000;
     for (int i = 0; i < 3; ++i) s.w[i] = m.angular_velocity[i], s.v[i] = m.linear_velocity[i];
     s.has_linear = m.has_linear;
