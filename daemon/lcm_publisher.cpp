@@ -1,5 +1,6 @@
 #include "daemon/lcm_publisher.hpp"
 
+#include "drivers/lcm_connect.hpp"
 #include "dsp/core/image_planes.hpp"
 #include "formats/image_t_codec.hpp"
 
@@ -18,8 +19,11 @@ constexpr size_t kMetaValueCapacity = 32;
 }  // namespace
 
 LcmPublisher::LcmPublisher(const std::string& url, Channels channels, const drivers::FrameFormat& fmt)
-    : lcm_(lcm_create(url.c_str())), ch_(std::move(channels)) {
-  if (!lcm_) throw std::runtime_error("lcm: cannot open '" + url + "' (use memq:// or file:///path.lcmlog?mode=w)");
+    : url_(url), ch_(std::move(channels)) {
+  std::string why;
+  lcm_ = drivers::create_lcm(url, why);
+  if (!lcm_)
+    throw std::runtime_error("lcm: cannot open '" + url + "'" + (why.empty() ? " (use memq://, tcpq://127.0.0.1:PORT or file:///path.lcmlog?mode=w)" : ": " + why));
   // Everything sized once, for the largest message we will send.
   formats::preallocate(image_, fmt, kMetaKeys, kMetaValueCapacity);
   info_.unrectified_reason.reserve(128);
@@ -29,7 +33,9 @@ LcmPublisher::LcmPublisher(const std::string& url, Channels channels, const driv
   health_buf_.resize(4096);
 }
 
-LcmPublisher::~LcmPublisher() { lcm_destroy(lcm_); }
+// lcm_destroy unsubscribes the velocity input's channels, reconnecting a lost tcpq instance:
+// drivers::destroy_lcm never lets that wait for a silent hub.
+LcmPublisher::~LcmPublisher() { drivers::destroy_lcm(lcm_, url_); }
 
 void LcmPublisher::set_meta(size_t index, const char* text) {
   auto& v = image_.metadata[index].value;
@@ -48,7 +54,19 @@ void LcmPublisher::publish(const std::string& channel, const Msg& msg, std::vect
 
 void LcmPublisher::send(const char* channel, const void* data, size_t size) {
   std::lock_guard lock(publish_mutex_);
+  if (!hub_ready()) return;  // lost with the hub, as LCM loses what it cannot send
   lcm_publish(lcm_, channel, data, static_cast<unsigned>(size));
+}
+
+// A tcpq instance that lost its hub reconnects inside lcm_publish, waiting for the hub's answer
+// without a timeout: asked first (drivers/lcm_connect), at most once a second, so that neither
+// a silent hub nor asking it holds the publishing thread for more than a moment at a time.
+bool LcmPublisher::hub_ready() {
+  if (url_.rfind("tcpq://", 0) != 0 || lcm_get_fileno(lcm_) >= 0) return true;
+  const auto now = std::chrono::steady_clock::now();
+  if (now - last_probe_ < std::chrono::seconds(1)) return false;
+  last_probe_ = now;
+  return drivers::may_reconnect(lcm_, url_, kHubProbeMs);
 }
 
 void LcmPublisher::publish_encoded(const std::string& channel, const void* data, size_t size) {

@@ -8,6 +8,7 @@
 #include <rsd/frame_info_t.hpp>
 #include <rsd/health_t.hpp>
 
+#include <chrono>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -58,7 +59,9 @@ class LcmPublisher {
   template <class Msg>
   void publish(const std::string& channel, const Msg& msg, std::vector<uint8_t>& buf, bool record = true);
   void set_meta(size_t index, const char* text);
-  lcm_t* lcm_;
+  bool hub_ready();  // under publish_mutex_
+  std::string url_;
+  lcm_t* lcm_ = nullptr;
   Channels ch_;
   bot_core::image_t image_;
   rsd::frame_info_t info_;
@@ -70,6 +73,10 @@ class LcmPublisher {
   // LCM's file:// provider does not serialise its writers: events interleaved and a frame was
   // lost. Held for one lcm_publish call (a memcpy, or a buffered write to a log).
   std::mutex publish_mutex_;
+  // A lost tcpq hub is asked whether it answers at most once a second, each time for at most
+  // this long (drivers/lcm_connect): publishing never waits longer for a silent hub.
+  static constexpr int kHubProbeMs = 200;
+  std::chrono::steady_clock::time_point last_probe_{};  // under publish_mutex_
   void send(const char* channel, const void* data, size_t size);
 };
 

@@ -18,14 +18,19 @@ bool is_rotation(const Eigen::Matrix3d& m, double tol) {
          std::abs(m.determinant() - 1.0) <= tol;
 }
 
-VelocityInput::VelocityInput(lcm_t* lcm, const std::string& channel, VelocityBuffer& buffer, VelocityInputConfig cfg)
-    : lcm_(lcm), channel_(channel), buffer_(buffer), cfg_(std::move(cfg)) {
+VelocityInput::VelocityInput(lcm_t* lcm, const std::string& channel, VelocityBuffer& buffer, VelocityInputConfig cfg,
+                             std::string lcm_url)
+    : lcm_(lcm), lcm_url_(std::move(lcm_url)), channel_(channel), buffer_(buffer), cfg_(std::move(cfg)) {
   sub_ = lcm_subscribe(lcm_, channel_.c_str(), &VelocityInput::on_velocity, this);
   if (!cfg_.pose_channel.empty()) pose_sub_ = lcm_subscribe(lcm_, cfg_.pose_channel.c_str(), &VelocityInput::on_pose, this);
 }
 
+// Unsubscribing a tcpq instance that lost its hub reconnects, and the hub may be one that never
+// answers: the subscriptions are then left to the publisher's drivers::destroy_lcm, which asks
+// the hub once (no thread handles this instance any more, so no callback reaches this object).
 VelocityInput::~VelocityInput() {
   stop();
+  if (lcm_url_.rfind("tcpq://", 0) == 0 && lcm_get_fileno(lcm_) < 0) return;
   if (sub_) lcm_unsubscribe(lcm_, sub_);
   if (pose_sub_) lcm_unsubscribe(lcm_, pose_sub_);
 }

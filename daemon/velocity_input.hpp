@@ -68,7 +68,10 @@ bool is_rotation(const Eigen::Matrix3d& m, double tol = 1e-6);
 
 class VelocityInput {
  public:
-  VelocityInput(lcm_t* lcm, const std::string& channel, VelocityBuffer& buffer, VelocityInputConfig cfg = {});
+  // lcm_url: the URL `lcm` was made from; an instance that lost its tcpq hub is not unsubscribed
+  // at the end (that would reconnect; the owner's drivers::destroy_lcm does it safely).
+  VelocityInput(lcm_t* lcm, const std::string& channel, VelocityBuffer& buffer, VelocityInputConfig cfg = {},
+                std::string lcm_url = {});
   ~VelocityInput();
   VelocityInput(const VelocityInput&) = delete;
   VelocityInput& operator=(const VelocityInput&) = delete;
@@ -118,6 +121,7 @@ class VelocityInput {
   // A motion-sensor measurement (IMU axes and clock) through the calibration.
   void push_imu(int64_t utime_imu, const double* w_measured, const double* v, bool has_linear, bool live);
   lcm_t* lcm_;
+  std::string lcm_url_;
   std::string channel_;
   VelocityBuffer& buffer_;
   VelocityInputConfig cfg_;

@@ -7,6 +7,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "drivers/lcm_connect.hpp"
 #include "drivers/lcm_receive.hpp"
 #include "drivers/monotonic_clock.hpp"  // monotonic_ns
 
@@ -17,14 +18,18 @@ LcmSource::LcmSource(LcmSourceConfig cfg) : cfg_(std::move(cfg)) {}
 LcmSource::~LcmSource() { close_lcm(); }
 
 // Unsubscribing before lcm_destroy: liblcm's tcpq provider frees a channel's name only when it is
-// unsubscribed (lcm_destroy leaves them allocated, which LeakSanitizer reports).
+// unsubscribed (lcm_destroy leaves them allocated, which LeakSanitizer reports). On an instance
+// that lost its hub, unsubscribing reconnects: never to a hub that would not answer (then
+// drivers::destroy_lcm closes the instance in the background, and this thread goes on).
 void LcmSource::close_lcm() {
   if (!lcm_) return;
+  const bool may = may_reconnect(lcm_, cfg_.url);
   for (lcm_subscription_t*& s : subs_) {
-    if (s) lcm_unsubscribe(lcm_, s);
+    if (s && may) lcm_unsubscribe(lcm_, s);
     s = nullptr;
   }
-  lcm_destroy(lcm_);
+  if (may) lcm_destroy(lcm_);
+  else destroy_lcm(lcm_, cfg_.url);
   lcm_ = nullptr;
 }
 
@@ -47,8 +52,9 @@ void LcmSource::open() {
     if (cfg_.url.rfind("udpm://", 0) == 0 && !cfg_.allow_multicast)
       throw std::runtime_error("lcm source: '" + cfg_.url + "' is multicast; set allow_multicast: true to use it");
     // Kept across reopen attempts: messages that arrive meanwhile wait in LCM's queue.
-    lcm_ = lcm_create(cfg_.url.c_str());
-    if (!lcm_) throw CameraError("lcm source: cannot open '" + cfg_.url + "'");
+    std::string why;
+    lcm_ = create_lcm(cfg_.url, why);
+    if (!lcm_) throw CameraError("lcm source: cannot open '" + cfg_.url + "'" + (why.empty() ? "" : ": " + why));
     // tcpq:// hands out an instance even when its hub is down, with no descriptor to wait on.
     if (lcm_get_fileno(lcm_) < 0) {
       close_lcm();

@@ -23,6 +23,7 @@
 #include "tools/common/cli_util.hpp"
 #include "formats/lcm_log.hpp"
 #include "formats/image_t_codec.hpp"
+#include "drivers/lcm_connect.hpp"
 #include "drivers/replay_source.hpp"
 #include "drivers/monotonic_clock.hpp"  // monotonic_ns
 
@@ -86,9 +87,10 @@ int play(const Options& o) {
     return 2;
   }
   formats::LcmLogReader reader(o.log);
-  lcm_t* lcm = lcm_create(o.url.c_str());
+  std::string hub;
+  lcm_t* lcm = create_lcm(o.url, hub);
   if (!lcm) {
-    std::fprintf(stderr, "rsd-replay: cannot open LCM URL '%s'\n", o.url.c_str());
+    std::fprintf(stderr, "rsd-replay: cannot open LCM URL '%s'%s%s\n", o.url.c_str(), hub.empty() ? "" : ": ", hub.c_str());
     return 1;
   }
   ReplayPacer pacer(o.speed);

@@ -22,55 +22,14 @@
 
 #include "drivers/lcm_receive.hpp"
 #include "drivers/lcm_source.hpp"
+#include "tests/support/tcpq_hub.hpp"
 
 namespace rsd::drivers {
 namespace {
 
-// A tcpq hub on 127.0.0.1 (an ephemeral port) that answers the handshake of every client (LCM
-// reconnects to unsubscribe from a lost connection), sends `bytes` to the first, and holds every
-// connection open until destroyed.
-class PartialHub {
- public:
-  explicit PartialHub(std::vector<uint8_t> bytes) : bytes_(std::move(bytes)) {
-    listen_fd_ = socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    EXPECT_EQ(bind(listen_fd_, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
-    EXPECT_EQ(listen(listen_fd_, 4), 0);
-    socklen_t n = sizeof a;
-    getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&a), &n);
-    port_ = ntohs(a.sin_port);
-    thread_ = std::thread([this] { serve(); });
-  }
-  ~PartialHub() {
-    shutdown(listen_fd_, SHUT_RDWR);  // accept() returns
-    thread_.join();
-    for (const int c : clients_) close(c);
-    close(listen_fd_);
-  }
-  std::string url() const { return "tcpq://127.0.0.1:" + std::to_string(port_); }
-
- private:
-  static void put32(std::vector<uint8_t>& b, uint32_t v) {
-    for (int s = 24; s >= 0; s -= 8) b.push_back(static_cast<uint8_t>(v >> s));
-  }
-  void serve() {
-    for (int c; (c = accept(listen_fd_, nullptr, nullptr)) >= 0;) {
-      clients_.push_back(c);
-      uint8_t hello[8];
-      if (recv(c, hello, sizeof hello, MSG_WAITALL) != 8) continue;
-      std::vector<uint8_t> out;
-      put32(out, 0x287617fa);  // the server's magic
-      put32(out, 0x0100);      // protocol version
-      if (clients_.size() == 1) out.insert(out.end(), bytes_.begin(), bytes_.end());
-      (void)send(c, out.data(), out.size(), MSG_NOSIGNAL);
-    }
-  }
-  std::vector<uint8_t> bytes_;
-  int listen_fd_ = -1, port_ = 0;
-  std::vector<int> clients_;  // the serving thread's until it is joined
-  std::thread thread_;
+// A hub that answers every client and sends the bytes under test to the first.
+struct PartialHub : test::TcpqHub {
+  explicit PartialHub(std::vector<uint8_t> bytes) : TcpqHub(Mode::Answering, std::move(bytes)) {}
 };
 
 // A publish message's header: type 1, a channel of `length` bytes, of which `sent` follow.
@@ -81,23 +40,12 @@ std::vector<uint8_t> partial_message(uint32_t length, const std::string& sent) {
   return b;
 }
 
-// Runs `f` and returns its value; a run that does not come back within a minute is the defect
-// itself (a thread blocked for good): the binary ends, naming it.
-int within_a_minute(const std::function<int()>& f, const char* what) {
-  auto done = std::async(std::launch::async, f);
-  if (done.wait_for(std::chrono::seconds(60)) != std::future_status::ready) {
-    std::fprintf(stderr, "%s: still blocked after 60 s\n", what);
-    std::_Exit(1);
-  }
-  return done.get();
-}
-
 void expect_lost_not_blocked(const std::vector<uint8_t>& bytes) {
   PartialHub hub(bytes);
   lcm_t* lcm = lcm_create(hub.url().c_str());
   ASSERT_NE(lcm, nullptr);
   lcm_subscription_t* sub = lcm_subscribe(lcm, "RSD_RAW", [](const lcm_recv_buf_t*, const char*, void*) {}, nullptr);
-  const int r = within_a_minute(
+  const int r = test::within_a_minute(
       [&] {
         int st = 0;
         while ((st = handle_lcm(lcm, 100)) == 0) {}  // until the partial message is read
@@ -157,7 +105,7 @@ TEST(LcmReceive, WholeMessagesUpToTheLimitsArriveIntact) {
         static_cast<decltype(got)*>(user)->emplace_back(channel, std::vector<uint8_t>(d, d + r->data_size));
       },
       &got);
-  within_a_minute(
+  test::within_a_minute(
       [&] {
         while (got.size() < sent.size() && handle_lcm(lcm, 100) >= 0) {}
         return 0;
@@ -174,7 +122,7 @@ TEST(LcmReceive, TheLcmSourceFailsItsOpenInsteadOfHanging) {
   cfg.url = hub.url();
   cfg.open_timeout_s = 30;  // longer than the guard: the loss must end the open, not this
   LcmSource source(cfg);
-  const int threw = within_a_minute(
+  const int threw = test::within_a_minute(
       [&] {
         try {
           source.open();
