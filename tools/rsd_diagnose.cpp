@@ -27,7 +27,7 @@ namespace {
 constexpr const char* kDescription =
     "rsd-diagnose: compares an observation recording (rsd-recording/1) with the nominal model its\n"
     "recording.yaml states, says where the residual lives, and names the effects that explain it\n"
-    "(rolling_shutter, readout_direction, time_offset, clock_drift, lens_distortion,\n"
+    "(rolling_shutter, readout_direction, time_offset, clock_drift, lens_distortion, lens_model,\n"
     "focal_length, gyro_bias, lever_arm, mount_rotation, gyro_scale, principal_point), fitted\n"
     "robustly and chosen by BIC, head to head where hypotheses explain the same structure (the\n"
     "report says when the data cannot tell them apart), and kept only if each predicts the half\n"

@@ -38,9 +38,21 @@ NamedEffect describe(const SelectedEffect& st, const ModelParams& p, const Nomin
       x << "the camera clock runs " << p[Param::Drift] << " ppm slow against the motion clock";
       break;
     case Effect::LensDistortion:
-      out.params = {param(Param::K1), param(Param::K2)};
-      x << "radial distortion k1 = " << p[Param::K1] << ", k2 = " << p[Param::K2];
+    case Effect::LensModel: {
+      const LensModel family = lens_family(n, p);
+      const bool equi = family == LensModel::PinholeEqui;
+      if (st.effect == Effect::LensModel) out.params.push_back({"model", 0, lens_model_name(family)});
+      for (Param q : {Param::K1, Param::K2, Param::K3, Param::K4})
+        if (equi || q == Param::K1 || q == Param::K2) out.params.push_back(param(q));
+      if (st.effect == Effect::LensModel)
+        x << "the lens is " << (equi ? "an equidistant (fisheye) lens" : "a pinhole lens with radial distortion") << ", not "
+          << lens_model_name(n.cam.dist.model) << ": ";
+      else
+        x << "radial distortion ";
+      x << "k1 = " << p[Param::K1] << ", k2 = " << p[Param::K2];
+      if (equi) x << ", k3 = " << p[Param::K3] << ", k4 = " << p[Param::K4];
       break;
+    }
     case Effect::FocalLength:
       out.params = {param(Param::Fx), param(Param::Fy)};
       x << "focal length " << p[Param::Fx] << " x " << p[Param::Fy] << " px, not " << n.cam.fx << " x " << n.cam.fy;
@@ -91,7 +103,8 @@ void split(const DiagnosisModel& m, int every, std::vector<int>& fit, std::vecto
 // at once (from the gross start), on the screening subsample.
 double estimate_sigma(const DiagnosisModel& m, const std::vector<int>& screen, const ModelParams& gross, double guess) {
   ParamMask all;
-  for (Effect e : applicable_effects(m)) all |= effect_params(e);
+  for (Effect e : applicable_effects(m))  // (lens_model's terms are the nominal lens's here: its switch stays off)
+    if (e != Effect::LensModel) all |= effect_params(e, m.recording().nominal.cam.dist.model);
   const ModelParams rich = fit_params(m, screen, gross, all, guess, 20);
   return std::max(robust_stats(m.residuals(rich, screen)).scale_px, 1e-3);
 }

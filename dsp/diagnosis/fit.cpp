@@ -86,7 +86,9 @@ std::pair<double, double> bounds(Param p, const DiagnosisModel& m) {
     case Param::Fx: return {0.5 * n.cam.fx, 2.0 * n.cam.fx};
     case Param::Fy: return {0.5 * n.cam.fy, 2.0 * n.cam.fy};
     case Param::K1:
-    case Param::K2: return {-1.0, 1.0};
+    case Param::K2:
+    case Param::K3:
+    case Param::K4: return {-1.0, 1.0};
     case Param::Drift: return {-1e4, 1e4};
     case Param::BiasX:
     case Param::BiasY:

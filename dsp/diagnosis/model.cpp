@@ -15,6 +15,7 @@ namespace rsd::dsp {
 const char* param_name(Param p) {
   static constexpr const char* kNames[] = {"line_delay_s", "time_offset_s", "drift_ppm", "k1", "k2", "fx", "fy",
                                            "x",            "y",             "z",         "bx", "by", "bz",
+                                           "k3",           "k4",
                                            "rx",           "ry",            "rz",        "sx", "sy", "sz",
                                            "cx",           "cy"};
   static_assert(sizeof kNames / sizeof kNames[0] == kParamCount);
@@ -26,8 +27,7 @@ ModelParams nominal_params(const NominalModel& n) {
   p[Param::LineDelay] = n.time.line_delay_s;
   p[Param::TimeOffset] = n.time.time_offset_s;
   p[Param::Drift] = n.time.drift_ppm;
-  p[Param::K1] = n.cam.dist.k1;
-  p[Param::K2] = n.cam.dist.k2;
+  set_lens_terms(p, n.cam.dist);
   p[Param::Fx] = n.cam.fx;
   p[Param::Fy] = n.cam.fy;
   for (int k = 0; k < 3; ++k) p.v[static_cast<int>(Param::LeverX) + k] = n.lever_arm[k];
@@ -43,7 +43,9 @@ double param_scale(Param p, const NominalModel& n) {
     case Param::TimeOffset: return 1e-3;
     case Param::Drift: return 10.0;
     case Param::K1:
-    case Param::K2: return 0.01;
+    case Param::K2:
+    case Param::K3:
+    case Param::K4: return 0.01;
     case Param::Fx:
     case Param::Fy: return 1e-3 * n.cam.fx;
     case Param::BiasX:
@@ -73,8 +75,7 @@ LandmarkSetup landmark_setup(const NominalModel& n, const ModelParams& p) {
   s.time.drift_ppm = p[Param::Drift];
   if (p.flip_readout)
     s.time.readout = n.time.readout == Readout::TopToBottom ? Readout::BottomToTop : Readout::TopToBottom;
-  s.cam.dist.k1 = p[Param::K1];
-  s.cam.dist.k2 = p[Param::K2];
+  s.cam.dist = lens_of(n, p);
   s.cam.fx = p[Param::Fx];
   s.cam.fy = p[Param::Fy];
   s.lever_arm = Eigen::Vector3d(p[Param::LeverX], p[Param::LeverY], p[Param::LeverZ]);
@@ -82,6 +83,26 @@ LandmarkSetup landmark_setup(const NominalModel& n, const ModelParams& p) {
   s.cam.cx = p[Param::Cx];
   s.cam.cy = p[Param::Cy];
   return s;
+}
+
+void set_lens_terms(ModelParams& p, const Distortion& d) {
+  p[Param::K1] = d.k1, p[Param::K2] = d.k2, p[Param::K3] = d.k3, p[Param::K4] = d.k4;
+}
+
+LensModel lens_family(const NominalModel& n, const ModelParams& p) {
+  const LensModel nominal = n.cam.dist.model;
+  if (!p.other_lens) return nominal;
+  return nominal == LensModel::PinholeEqui ? LensModel::PinholeRadtan : LensModel::PinholeEqui;
+}
+
+// lens_distortion frees the nominal family's radial terms (radtan k1, k2: its tangential terms
+// and k3 stay nominal; equi k1..k4); lens_model puts the other family's lens in its place.
+Distortion lens_of(const NominalModel& n, const ModelParams& p) {
+  if (lens_family(n, p) == LensModel::PinholeEqui)
+    return Distortion::equidistant(p[Param::K1], p[Param::K2], p[Param::K3], p[Param::K4]);
+  Distortion d = p.other_lens ? Distortion{} : n.cam.dist;
+  d.k1 = p[Param::K1], d.k2 = p[Param::K2];
+  return d;
 }
 
 // The few gyro tracks last asked for, newest first: a numeric Jacobian asks for the base bias

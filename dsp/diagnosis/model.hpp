@@ -31,6 +31,7 @@ namespace rsd::dsp {
 // The continuous parameters. Order is fixed; names are the spec's.
 enum class Param : int {
   LineDelay, TimeOffset, Drift, K1, K2, Fx, Fy, LeverX, LeverY, LeverZ, BiasX, BiasY, BiasZ,
+  K3, K4,                  // the equidistant lens's third and fourth terms (lens_distortion, lens_model)
   MountX, MountY, MountZ,  // mount_rotation: rotation vector r (rad)
   ScaleX, ScaleY, ScaleZ,  // gyro_scale (1 nominal)
   Cx, Cy,                  // principal_point (px)
@@ -44,6 +45,9 @@ const char* param_name(Param p);
 struct ModelParams {
   std::array<double, kParamCount> v{};
   bool flip_readout = false;  // readout_direction: the opposite of the nominal order
+  // lens_model: the lens is of the other family than the nominal one, with K1.. its terms
+  // (pinhole-equi K1..K4; pinhole-radtan K1, K2 and no tangential or k3 term).
+  bool other_lens = false;
   // Matches: each frame pair's translation flow is taken out of its residuals (parallax.hpp),
   // when the recording shows parallax that the rotation-only model cannot express.
   bool translation_nuisance = false;
@@ -120,6 +124,11 @@ class DiagnosisModel {
 
 // The camera and time model that `p` describes.
 LandmarkSetup landmark_setup(const NominalModel& n, const ModelParams& p);
+// The lens family `p` describes (the nominal one, or the other with lens_model), and its lens.
+LensModel lens_family(const NominalModel& n, const ModelParams& p);
+Distortion lens_of(const NominalModel& n, const ModelParams& p);
+// K1..K4 of `p` set to lens d's terms (k1, k2, k3, k4).
+void set_lens_terms(ModelParams& p, const Distortion& d);
 // Exp(r) of the mount rotation (the identity when r is zero).
 Eigen::Matrix3d mount_of(const ModelParams& p);
 

@@ -7,6 +7,7 @@
 #include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/fit.hpp"
 #include "dsp/diagnosis/plausibility.hpp"
+#include "dsp/geometry/lens_model.hpp"
 #include "dsp/observation/observation_model.hpp"
 
 namespace rsd::dsp {
@@ -14,20 +15,26 @@ namespace rsd::dsp {
 const char* effect_name(Effect e) {
   static constexpr const char* kNames[] = {"rolling_shutter", "time_offset",    "readout_direction", "clock_drift",
                                            "lens_distortion", "focal_length", "gyro_bias",         "lever_arm",
-                                           "mount_rotation",  "gyro_scale",   "principal_point"};
+                                           "mount_rotation",  "gyro_scale",   "principal_point",   "lens_model"};
   static_assert(sizeof kNames / sizeof kNames[0] == static_cast<int>(Effect::Count));
   return kNames[static_cast<int>(e)];
 }
 
-ParamMask effect_params(Effect e) {
+ParamMask effect_params(Effect e, LensModel nominal_lens) {
   ParamMask m;
   auto set = [&](Param p) { m.set(static_cast<int>(p)); };
+  auto radial = [&](LensModel family) {
+    set(Param::K1), set(Param::K2);
+    if (family == LensModel::PinholeEqui) set(Param::K3), set(Param::K4);
+  };
+  const LensModel other = nominal_lens == LensModel::PinholeEqui ? LensModel::PinholeRadtan : LensModel::PinholeEqui;
   switch (e) {
     case Effect::RollingShutter: set(Param::LineDelay); break;
     case Effect::TimeOffset: set(Param::TimeOffset); break;
     case Effect::ReadoutDirection: break;  // discrete: the flip
     case Effect::ClockDrift: set(Param::Drift); break;
-    case Effect::LensDistortion: set(Param::K1), set(Param::K2); break;
+    case Effect::LensDistortion: radial(nominal_lens); break;
+    case Effect::LensModel: radial(other); break;
     case Effect::FocalLength: set(Param::Fx), set(Param::Fy); break;
     case Effect::GyroBias: set(Param::BiasX), set(Param::BiasY), set(Param::BiasZ); break;
     case Effect::LeverArm: set(Param::LeverX), set(Param::LeverY), set(Param::LeverZ); break;
@@ -53,6 +60,15 @@ std::vector<Effect> applicable_effects(const DiagnosisModel& m) {
 
 namespace {
 
+// The largest angle off the axis (radians) that the image's corners see through the camera's lens.
+double image_field(const CameraModel& cam) {
+  double field = 0;
+  for (const Eigen::Vector2d& c : {Eigen::Vector2d(0, 0), Eigen::Vector2d(cam.width, 0), Eigen::Vector2d(0, cam.height),
+                                  Eigen::Vector2d(cam.width, cam.height)})
+    if (const auto ray = cam.ray(c)) field = std::max(field, std::acos(std::clamp(ray->normalized().z(), -1.0, 1.0)));
+  return field > 0 ? field : 0.5;
+}
+
 struct State {
   std::vector<Effect> effects;
   ModelParams params;
@@ -60,9 +76,9 @@ struct State {
   bool has(Effect e) const { return std::find(effects.begin(), effects.end(), e) != effects.end(); }
 };
 
-ParamMask mask_of(const std::vector<Effect>& effects) {
+ParamMask mask_of(const std::vector<Effect>& effects, LensModel nominal_lens) {
   ParamMask mask;
-  for (Effect e : effects) mask |= effect_params(e);
+  for (Effect e : effects) mask |= effect_params(e, nominal_lens);
   return mask;
 }
 
@@ -73,7 +89,8 @@ class Selector {
            const SelectionOptions& opt)
       : m_(m), fit_(fit), held_(held), screen_(screen), nominal_(nominal), start_(start), sigma_(sigma), opt_(opt),
         time_halves_(halves(m, screen, [&](int i) { return m.frame_time(i); })),
-        rate_halves_(m.has_gyro() ? halves(m, screen, [&](int i) { return rate_at(m, i, start); }) : Halves{}) {}
+        rate_halves_(m.has_gyro() ? halves(m, screen, [&](int i) { return rate_at(m, i, start); }) : Halves{}),
+        lens_(m.recording().nominal.cam.dist.model), field_(image_field(m.recording().nominal.cam)) {}
 
   // Two halves of the screening observations, split at the median of `key` per frame.
   struct Halves {
@@ -111,8 +128,8 @@ class Selector {
     for (int dir = 0; dir < 2; ++dir) {
       const std::vector<int>& learn = dir ? h.b : h.a;
       const std::vector<int>& judge = dir ? h.a : h.b;
-      const ModelParams p0 = fit_params(m_, learn, poorer.params, mask_of(poorer.effects), sigma_, opt_.screen_iterations);
-      const ModelParams p1 = fit_params(m_, learn, richer.params, mask_of(richer.effects), sigma_, opt_.screen_iterations);
+      const ModelParams p0 = fit_params(m_, learn, poorer.params, mask_of(poorer.effects, lens_), sigma_, opt_.screen_iterations);
+      const ModelParams p1 = fit_params(m_, learn, richer.params, mask_of(richer.effects, lens_), sigma_, opt_.screen_iterations);
       worst = std::min(worst, robust_chi2(m_.residuals(p0, judge), sigma_) - robust_chi2(m_.residuals(p1, judge), sigma_));
     }
     return worst;
@@ -131,7 +148,7 @@ class Selector {
   }
 
   // BIC = robust chi-square + k ln(2N) + the implausibility of the values (plausibility.hpp):
-  // the flip counts as one parameter.
+  // each switch (the readout's flip, the other lens family) counts as one parameter.
   double bic(const ModelParams& p, const std::vector<Effect>& effects, const std::vector<int>& idx) const {
     return robust_chi2(m_.residuals(p, idx), sigma_) + k_of({effects, p, 0}) * std::log(2.0 * idx.size()) +
            implausibility(p, effects);
@@ -145,7 +162,8 @@ class Selector {
     effects.push_back(e);
     ModelParams p = s.params;
     for (int k = 0; k < kParamCount; ++k)
-      if (effect_params(e)[k]) p.v[k] = start_.v[k];
+      if (effect_params(e, lens_)[k]) p.v[k] = start_.v[k];
+    if (e == Effect::LensModel) switch_lens(effects, p);
     if (e == Effect::ReadoutDirection) {
       p.flip_readout = true;
       // The order of rows read means nothing without a readout time: a nominal global
@@ -153,7 +171,7 @@ class Selector {
       if (!s.has(Effect::RollingShutter) && nominal_[Param::LineDelay] == 0) effects.push_back(Effect::RollingShutter);
     }
     if (e == Effect::TimeOffset) p[Param::TimeOffset] = refine_time_offset(m_, screen_, p, sigma_);
-    p = fit_params(m_, screen_, p, mask_of(effects), sigma_, opt_.screen_iterations);
+    p = fit_params(m_, screen_, p, mask_of(effects, lens_), sigma_, opt_.screen_iterations);
     return {effects, p, bic(p, effects, screen_)};
   }
 
@@ -163,16 +181,27 @@ class Selector {
     for (Effect f : s.effects)
       if (f != e) effects.push_back(f);
     ModelParams p = s.params;
-    const ParamMask drop = effect_params(e);
+    const ParamMask drop = effect_params(e, lens_);
     for (int k = 0; k < kParamCount; ++k)
       if (drop[k]) p.v[k] = nominal_.v[k];
     if (e == Effect::ReadoutDirection) p.flip_readout = false;
-    p = fit_params(m_, idx, p, mask_of(effects), sigma_, iterations);
+    if (e == Effect::LensModel) p.other_lens = false;
+    p = fit_params(m_, idx, p, mask_of(effects, lens_), sigma_, iterations);
     return {effects, p, bic(p, effects, idx)};
   }
 
+  // lens_model: the other family's lens, starting from its nearest stand-in for the lens the
+  // state has (over the image's field); it takes lens_distortion's place, whose terms it frees.
+  void switch_lens(std::vector<Effect>& effects, ModelParams& p) const {
+    const NominalModel& n = m_.recording().nominal;
+    const Distortion now = lens_of(n, p);
+    p.other_lens = true;
+    set_lens_terms(p, nearest_lens(now, lens_family(n, p), field_));
+    effects.erase(std::remove(effects.begin(), effects.end(), Effect::LensDistortion), effects.end());
+  }
+
   State refit_all(const State& screened) const {
-    const ModelParams p = fit_params(m_, fit_, screened.params, mask_of(screened.effects), sigma_, opt_.max_iterations);
+    const ModelParams p = fit_params(m_, fit_, screened.params, mask_of(screened.effects, lens_), sigma_, opt_.max_iterations);
     return {screened.effects, p, bic(p, screened.effects, fit_)};
   }
 
@@ -186,8 +215,8 @@ class Selector {
     return ((poorer.bic - k_of(poorer) * pen - prior0) - (richer.bic - k_of(richer) * pen - prior1)) / D - dk * pen -
            (prior1 - prior0);
   }
-  static double k_of(const State& s) {
-    return static_cast<double>(mask_of(s.effects).count()) + (s.params.flip_readout ? 1 : 0);
+  double k_of(const State& s) const {
+    return static_cast<double>(mask_of(s.effects, lens_).count()) + (s.params.flip_readout ? 1 : 0) + (s.params.other_lens ? 1 : 0);
   }
 
   double rms(const ModelParams& p) const { return robust_stats(m_.residuals(p, fit_)).rms_px; }
@@ -207,13 +236,15 @@ class Selector {
   double sigma_;
   const SelectionOptions& opt_;
   Halves time_halves_, rate_halves_;
+  LensModel lens_;  // the nominal lens's family
+  double field_;    // the largest angle off the axis the image sees (radians), through the nominal lens
 };
 
 // The screening subsample's BIC drop projected onto the fitting set: the chi-square drop grows
 // with the number of observations, the penalty with its logarithm.
 double projected_drop(const Selector& sel, const State& from, const State& to) {
   const double rho = static_cast<double>(sel.screen_.size()) / static_cast<double>(sel.fit_.size());
-  const double k_from = Selector::k_of(from), k_to = Selector::k_of(to);
+  const double k_from = sel.k_of(from), k_to = sel.k_of(to);
   const double prior_from = implausibility(from.params, from.effects), prior_to = implausibility(to.params, to.effects);
   const double chi2_drop = (from.bic - k_from * std::log(2.0 * sel.screen_.size()) - prior_from) -
                            (to.bic - k_to * std::log(2.0 * sel.screen_.size()) - prior_to);
@@ -238,35 +269,41 @@ struct RoundResult {
 bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, State& s, RoundResult& out) {
   State here = s;
   here.bic = sel.bic(s.params, s.effects, sel.screen_);
-  std::vector<std::pair<double, State>> screened;
+  struct Candidate {
+    double projected;
+    Effect added;
+    State state;
+  };
+  std::vector<Candidate> screened;
   for (Effect e : candidates)
-    if (!s.has(e)) {
+    // lens_model replaces lens_distortion (with the other family's terms): never the reverse.
+    if (!s.has(e) && !(e == Effect::LensDistortion && s.has(Effect::LensModel))) {
       State c = sel.screen_add(s, e);
       const double d = projected_drop(sel, here, c);
-      screened.push_back({d, std::move(c)});
+      screened.push_back({d, e, std::move(c)});
     }
   if (screened.empty()) return false;
-  std::sort(screened.begin(), screened.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-  const double best_projected = screened.front().first;
+  std::sort(screened.begin(), screened.end(), [](const auto& a, const auto& b) { return a.projected > b.projected; });
+  const double best_projected = screened.front().projected;
   if (best_projected < sel.opt_.min_bic_drop) return false;
   const double margin = 30 + 0.05 * best_projected;
-  std::vector<State> near;
-  for (const auto& [d, c] : screened) {
-    if (d < best_projected - margin) break;
-    near.push_back(sel.refit_all(c));
+  std::vector<std::pair<Effect, State>> near;
+  for (const Candidate& c : screened) {
+    if (c.projected < best_projected - margin) break;
+    near.push_back({c.added, sel.refit_all(c.state)});
   }
-  const auto best = std::min_element(near.begin(), near.end(), [](const State& a, const State& b) { return a.bic < b.bic; });
+  const auto best = std::min_element(near.begin(), near.end(), [](const auto& a, const auto& b) { return a.second.bic < b.second.bic; });
   out.rivals.clear();
-  for (const State& c : near)
-    if (&c != &*best && c.bic - best->bic < sel.opt_.min_bic_drop) out.rivals.push_back(c.effects[s.effects.size()]);
+  for (const auto& [e, c] : near)
+    if (&c != &best->second && c.bic - best->second.bic < sel.opt_.min_bic_drop) out.rivals.push_back(e);
   // The winner by BIC; accepted by the drop with the design effect (which is itself noisy
   // by a few percent, too much to rank near-degenerate candidates by).
-  out.drop = sel.drop(s, *best);
+  out.drop = sel.drop(s, best->second);
   if (out.drop < sel.opt_.min_bic_drop) return false;
   // The held-out observations must agree: the effect predicts frames the fit never saw better.
-  out.held_drop = sel.heldout_drop(s, *best);
+  out.held_drop = sel.heldout_drop(s, best->second);
   if (!sel.held_.empty() && out.held_drop <= 0) return false;
-  s = std::move(*best);
+  s = std::move(best->second);
   return true;
 }
 
@@ -274,14 +311,17 @@ std::vector<SelectedEffect> forward(const Selector& sel, const std::vector<Effec
   std::vector<SelectedEffect> steps;
   RoundResult r;
   while (true) {
-    const size_t before = s.effects.size();
+    const State before = s;
     if (!forward_round(sel, candidates, s, r)) return steps;
     const double rms = sel.rms(s.params);
-    for (size_t k = before; k < s.effects.size(); ++k) {
-      steps.push_back({s.effects[k], rms, r.drop, r.held_drop, r.rivals});
+    // An effect the round replaced (lens_model takes lens_distortion's place) leaves the list.
+    steps.erase(std::remove_if(steps.begin(), steps.end(), [&](const SelectedEffect& st) { return !s.has(st.effect); }),
+                steps.end());
+    for (Effect e : s.effects) {
+      if (before.has(e)) continue;
+      steps.push_back({e, rms, r.drop, r.held_drop, r.rivals});
       if (sel.opt_.progress)
-        sel.opt_.progress(std::string("named ") + effect_name(s.effects[k]) + " (BIC drop " +
-                          std::to_string(std::lround(r.drop)) + ")");
+        sel.opt_.progress(std::string("named ") + effect_name(e) + " (BIC drop " + std::to_string(std::lround(r.drop)) + ")");
     }
   }
 }

@@ -1,5 +1,9 @@
 #include "dsp/geometry/lens_model.hpp"
 
+#include <Eigen/QR>
+
+#include <algorithm>
+
 #include <Eigen/LU>
 #include <cmath>
 #include <numbers>
@@ -167,6 +171,39 @@ Eigen::Matrix2d distort_jacobian(const Distortion& d, const Eigen::Vector2d& xn)
 std::optional<Eigen::Vector2d> undistort(const Distortion& d, const Eigen::Vector2d& xd) {
   if (d.is_identity()) return xd;
   return d.model == LensModel::PinholeEqui ? equi_inverse(d, xd) : radtan_inverse(d, xd);
+}
+
+namespace {
+
+// The distorted radius of a point `theta` off the axis (radial terms only).
+double distorted_radius(const Distortion& d, double theta) {
+  if (d.model == LensModel::PinholeEqui) return theta_d(d, theta);
+  const double r = std::tan(theta), r2 = r * r;
+  return r * (1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3)));
+}
+
+}  // namespace
+
+Distortion nearest_lens(const Distortion& from, LensModel to, double max_theta) {
+  // rho(theta) - base(theta) = base(theta) sum_j k_j x^(2j), x = theta (equi) or tan(theta)
+  // (radtan): linear in the k_j, solved over a grid of angles.
+  const bool equi = to == LensModel::PinholeEqui;
+  const int terms = equi ? 4 : 2, samples = 200;
+  const double top = std::clamp(max_theta, 1e-3, equi ? 0.5 * std::numbers::pi - 1e-3 : 1.4);
+  Eigen::MatrixXd A(samples, terms);
+  Eigen::VectorXd b(samples);
+  for (int i = 0; i < samples; ++i) {
+    const double theta = top * (i + 1) / samples;
+    const double x = equi ? theta : std::tan(theta);
+    double xp = x * x;
+    for (int j = 0; j < terms; ++j, xp *= x * x) A(i, j) = x * xp;
+    b(i) = distorted_radius(from, theta) - x;
+  }
+  const Eigen::VectorXd k = A.colPivHouseholderQr().solve(b);
+  if (equi) return Distortion::equidistant(k(0), k(1), k(2), k(3));
+  Distortion d;
+  d.k1 = k(0), d.k2 = k(1);
+  return d;
 }
 
 }  // namespace rsd::dsp

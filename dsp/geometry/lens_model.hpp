@@ -63,4 +63,11 @@ std::optional<Eigen::Vector2d> undistort(const Distortion& d, const Eigen::Vecto
 // rises with theta, at most pi/2.
 double equi_max_theta(const Distortion& d);
 
+// The lens of family `to` whose radial mapping (normalised radius r = tan(theta) to distorted
+// radius) is nearest to `from`'s over the angles 0..max_theta off the axis, least squares in
+// the distorted radius: pinhole-equi k1..k4, pinhole-radtan k1, k2 (no tangential or k3 term).
+// `from`'s tangential terms are ignored. The other family's best stand-in for a lens: where
+// the diagnosis starts when it asks whether a recording's lens is of the other family.
+Distortion nearest_lens(const Distortion& from, LensModel to, double max_theta);
+
 }  // namespace rsd::dsp

@@ -71,5 +71,28 @@ TEST(DiagnosisCalibration, MountRotationComposesIntoTheImuRotation) {
   EXPECT_LT((ct.imu_to_camera - dsp::exp_so3(rt).transpose()).cwiseAbs().maxCoeff(), 0.002) << ct.imu_to_camera;
 }
 
+// --write-calibration writes the lens named: lens_model's family with its four terms
+// (distortion_model: equidistant), lens_distortion's terms in the nominal family.
+TEST(DiagnosisCalibration, TheNamedLensAndItsFamilyGoIntoTheFile) {
+  dsp::SimConfig c = test::simulation(dsp::ObservationKind::Matches, 3, 1.0, 0.5);
+  const dsp::SimulatedRecording sim = dsp::simulate_recording(c);  // a pinhole-radtan nominal
+  dsp::Diagnosis d;
+  d.fitted = dsp::nominal_params(sim.rec.nominal);
+  d.fitted.other_lens = true;
+  d.fitted[dsp::Param::K1] = 0.021, d.fitted[dsp::Param::K2] = -0.012;
+  d.fitted[dsp::Param::K3] = 0.0031, d.fitted[dsp::Param::K4] = -0.0009;
+  const std::string path = g_tmp.path("lens.yaml");
+  formats::write_calibration(path, tools::calibration_from(sim.rec, d, "test"));
+  const formats::Calibration cal = formats::read_calibration(path);
+  EXPECT_EQ(cal.cam.dist, dsp::Distortion::equidistant(0.021, -0.012, 0.0031, -0.0009));
+
+  d.fitted = dsp::nominal_params(sim.rec.nominal);  // lens_distortion: radtan k1, k2; the rest nominal
+  d.fitted[dsp::Param::K1] = -0.07, d.fitted[dsp::Param::K2] = 0.01;
+  formats::write_calibration(path, tools::calibration_from(sim.rec, d, "test"));
+  dsp::Distortion want = sim.rec.nominal.cam.dist;
+  want.k1 = -0.07, want.k2 = 0.01;
+  EXPECT_EQ(formats::read_calibration(path).cam.dist, want);
+}
+
 }  // namespace
 }  // namespace rsd

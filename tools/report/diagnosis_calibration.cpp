@@ -32,8 +32,7 @@ formats::Calibration calibration_from(const dsp::Recording& rec, const dsp::Diag
   formats::Calibration c = formats::calibration_of(nominal, source);
   c.cam.fx = p[Param::Fx];
   c.cam.fy = p[Param::Fy];
-  c.cam.dist.k1 = p[Param::K1];
-  c.cam.dist.k2 = p[Param::K2];
+  c.cam.dist = dsp::lens_of(nominal, p);  // the lens named: lens_distortion's terms, lens_model's family
   c.timeshift_cam_imu_s = p[Param::TimeOffset];  // t_imu = t_cam + offset, as time_offset_s
   c.line_delay_s = p[Param::LineDelay];
   c.readout = p.flip_readout ? (nominal.time.readout == dsp::Readout::TopToBottom ? dsp::Readout::BottomToTop

@@ -27,10 +27,11 @@ ModelParams without(const Diagnosis& d, const NominalModel& n, const std::string
   const ModelParams nom = nominal_params(n);
   for (int k = 0; k < static_cast<int>(Effect::Count); ++k) {
     if (effect_name(Effect(k)) != name) continue;
-    const ParamMask mask = effect_params(Effect(k));
+    const ParamMask mask = effect_params(Effect(k), n.cam.dist.model);
     for (int j = 0; j < kParamCount; ++j)
       if (mask[j]) p.v[j] = nom.v[j];
     if (Effect(k) == Effect::ReadoutDirection) p.flip_readout = false;
+    if (Effect(k) == Effect::LensModel) p.other_lens = false;
   }
   return p;
 }
