@@ -168,9 +168,13 @@ bool Rectifier::solve_node(const double* Y, double rho, double& v, double* px, d
     if (!(X[2] > 0)) return false;  // behind the camera at that instant
     const double iz = 1.0 / X[2];
     Eigen::Vector2d xn(X[0] * iz, X[1] * iz), dxn((dX[0] - xn.x() * dX[2]) * iz, (dX[1] - xn.y() * dX[2]) * iz);
+    const Eigen::Vector2d xu = xn;  // on the undistorted plane, for the gain below
+    double lens_gain = 1;  // how much the lens stretches a small move of xn: ||J||_inf
     if (distorted) {
-      dxn = cam_.distort_jacobian(xn) * dxn;
+      const Eigen::Matrix2d J = cam_.distort_jacobian(xn);
+      dxn = J * dxn;
       xn = cam_.distort(xn);
+      lens_gain = J.cwiseAbs().rowwise().sum().maxCoeff();
     }
     const double pu = cam_.fx * xn.x() + cam_.cx, pv = cam_.fy * xn.y() + cam_.cy;
     const double du = cam_.fx * dxn.x(), dF = cam_.fy * dxn.y() - 1.0;
@@ -180,7 +184,9 @@ bool Rectifier::solve_node(const double* Y, double rho, double& v, double* px, d
     if (std::abs(step) < 1e-7) {
       px[0] = pu + du * step, px[1] = pv + (dF + 1.0) * step;
       const double ny = std::sqrt(Y[0] * Y[0] + Y[1] * Y[1] + Y[2] * Y[2]);
-      *gain = (1 + std::abs(X[0] * iz) + std::abs(X[1] * iz)) * iz * (1 + (1 + std::abs(du)) / std::abs(dF)) *
+      // A pose error dX moves the undistorted point by at most iz (1 + |x| + |y|) |dX|_inf, the
+      // lens stretches that by ||J||_inf (a fisheye's corners shrink it many times over).
+      *gain = (1 + std::abs(xu.x()) + std::abs(xu.y())) * iz * lens_gain * (1 + (1 + std::abs(du)) / std::abs(dF)) *
               (table_d2R_ * ny + table_d2T_ * std::abs(rho));
       return std::abs(px[0]) <= kLimit && std::abs(px[1]) <= kLimit;
     }

@@ -131,6 +131,10 @@ RectifyReport Rectifier::build_map(const CameraMotion& motion, const DepthModel&
       rep = solve_level();
       ++solved;
       if (rep.error_bound_px <= cfg_.tolerance_px || level_ + 1 == levels_.size()) break;
+      // The table's own error leaves the grid too little of the tolerance: no finer grid can
+      // hold it (next_level would jump to the finest, many times the nodes), so the table is
+      // refined first, which costs a tenth of a level.
+      if (table_error_px_ > 0.5 * cfg_.tolerance_px && step > 1) break;
     }
     if (table_error_px_ <= 0.25 * cfg_.tolerance_px || step == 1) break;
   }

@@ -27,6 +27,8 @@
 //            changing axes: every value fitted, the mount rotation too); its thread's
 //            share of a core is reported, its allocations (thread rsd-online) are not counted
 //            (docs/online-calibration.md)
+//            --lens equi: a 143-degree fisheye (pinhole-equi, f = 0.4 width) instead of the
+//            60-degree pinhole, rectified in the same lens (issue 35)
 #include <lcm/lcm.h>
 #include <sched.h>
 #include <sys/resource.h>
@@ -193,7 +195,7 @@ int usage(const char* arg) {
 int main(int argc, char** argv) {
   double seconds = 10, warmup = 2, fps = 120;
   int width = 640, height = 480, ring = 32, cpu = 0;
-  bool plane = false, online = false;
+  bool plane = false, online = false, fisheye = false;
   dsp::PixelFormat format = dsp::PixelFormat::Mono8;
   std::string source_mode = "auto";
   for (int i = 1; i < argc; ++i) {
@@ -214,6 +216,7 @@ int main(int argc, char** argv) {
     else if (a == "--cpu" && has) cpu = std::atoi(argv[++i]);
     else if (a == "--source" && has) source_mode = argv[++i];
     else if (a == "--online") online = true;
+    else if (a == "--lens" && has) fisheye = std::string(argv[++i]) == "equi";
     else if (a == "--depth" && has) {
       const std::string d = argv[++i];
       if (d != "plane" && d != "infinite") return usage(argv[i]);
@@ -236,6 +239,10 @@ int main(int argc, char** argv) {
 
   drivers::SimSourceConfig sc;
   sc.camera = dsp::CameraModel::from_hfov(width, height, 60.0 * 3.14159265358979 / 180.0);
+  if (fisheye) {  // BM_RectifyLens's fisheye
+    sc.camera.fx = sc.camera.fy = 0.4 * width;
+    sc.camera.dist = dsp::Distortion::equidistant(0.0469, -0.0135, 0.0021, -0.0003);
+  }
   sc.fps = fps;
   sc.format = format;
   sc.realtime = true;

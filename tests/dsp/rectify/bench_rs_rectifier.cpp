@@ -445,7 +445,7 @@ BENCHMARK(BM_Rectify)
     ->ArgsProduct({{2}, {3, 4}, {0, 1}, {1}})       // YUYV and a Bayer mosaic at 1920x1080
     ->ArgsProduct({{0, 1, 2}, {0, 1}, {0}, {0}})  // scalar kernels, for comparison
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_RectifyLens)->ArgsProduct({{2}, {0, 1, 2}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RectifyLens)->ArgsProduct({{0, 2}, {0, 1, 2}})->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_BuildMap)->ArgsProduct({{0, 1, 2}, {0, 1}})->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Memcpy)->ArgsProduct({{0, 1, 2}, {0, 1, 2}})->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CvRemap)->ArgsProduct({{0, 1, 2}, {0, 1, 2}, {0, 1}})->Unit(benchmark::kMicrosecond);
