@@ -76,7 +76,7 @@ std::string located_json(const std::vector<Located>& located, const char* indent
   return o.str();
 }
 
-// The spec's "Diagnosis output", key for key.
+// The spec's "Diagnosis output", key for key, and what was withheld.
 std::string diagnosis_json(const Diagnosis& d) {
   std::ostringstream o;
   o << "{\n  \"format\": \"rsd-diagnosis/1\",\n  \"baseline\": {\"rms_px\": " << json_number(d.baseline.rms_px)
@@ -88,7 +88,11 @@ std::string diagnosis_json(const Diagnosis& d) {
     << ", \"final_rms_px\": " << json_number(d.heldout_final_rms_px) << "},\n  \"remainder\": {\"significant\": "
     << (d.remainder.significant ? "true" : "false") << ", \"rms_px\": " << json_number(d.remainder.rms_px)
     << ", \"expected_rms_px\": " << json_number(d.remainder.expected_rms_px)
-    << ", \"located\": " << located_json(d.remainder.located, "  ") << "}\n}\n";
+    << ", \"located\": " << located_json(d.remainder.located, "  ") << "}";
+  // Beyond the spec's keys: what was found and not named, with why (readers may ignore it).
+  o << ",\n  \"withheld\": [";
+  for (size_t k = 0; k < d.withheld.size(); ++k) o << (k ? ", " : "") << json_string(d.withheld[k]);
+  o << "]\n}\n";
   return o.str();
 }
 

@@ -173,6 +173,23 @@ Selection select_with_parallax(const DiagnosisModel& m, const std::vector<int>& 
   return select_effects(m, use_fit, use_held, screen, n, g, d.sigma_px, so);
 }
 
+// The diagnosis's first invariant: the final model predicts the frames no fit saw no worse than
+// the nominal model. Effects that together do worse there describe the fitting frames only
+// (stand-ins for physics outside the table): none is named, and the remainder says why.
+void never_worse_than_nominal(const DiagnosisModel& m, const ModelParams& nominal, const std::vector<int>& use_all, Diagnosis& d) {
+  if (d.effects.empty() || !(d.heldout_final_rms_px > d.heldout_baseline_rms_px)) return;
+  std::ostringstream o;
+  o << "nothing named: the effects found (";
+  for (size_t k = 0; k < d.effects.size(); ++k) o << (k ? ", " : "") << d.effects[k].name;
+  o << ") predict the held-out frames worse than the nominal model (" << d.heldout_baseline_rms_px << " -> "
+    << d.heldout_final_rms_px << " px RMS)";
+  d.withheld.push_back(o.str());
+  d.effects.clear();
+  d.fitted = nominal;
+  d.final_rms_px = robust_stats(m.residuals(nominal, use_all)).rms_px;
+  d.heldout_final_rms_px = d.heldout_baseline_rms_px;
+}
+
 }  // namespace
 
 Diagnosis diagnose(const Recording& rec, const DiagnosisOptions& opt) { return diagnose(DiagnosisModel(rec), opt); }
@@ -241,9 +258,12 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   d.heldout_observations = static_cast<int>(use_held.size());
   d.heldout_baseline_rms_px = robust_stats(m.residuals(nominal, use_held)).rms_px;
   d.heldout_final_rms_px = robust_stats(m.residuals(sel.params, use_held)).rms_px;
+  d.withheld = sel.withheld;
+  never_worse_than_nominal(m, nominal, use_all, d);
   progress("uncertainties and the remainder");
   d.uncertainties = effect_uncertainties(m, d.effects, d.fitted, d.heldout_indices, opt.heldout_every);
   d.remainder = assess_remainder(m, d.fitted, use_all, d.noise_floor_px, robust_stats(m.residuals(nominal, use_all)).rms_px);
+  for (const std::string& w : d.withheld) d.remainder.summary += (d.remainder.summary.empty() ? "" : "\n") + w + ".";
   return d;
 }
 

@@ -48,6 +48,10 @@ struct Diagnosis {
   // selected again with each frame pair's translation taken out (parallax.hpp).
   Parallax parallax;
   Remainder remainder;  // what the named effects leave: noise, or structure the table lacks
+  // Effects the fit found and the diagnosis did not name, each with why: a value real hardware
+  // does not have or one on its bound, or a final model that predicted the held-out frames worse
+  // than the nominal one (then nothing is named). Also said in remainder.summary.
+  std::vector<std::string> withheld;
 };
 
 struct DiagnosisOptions {

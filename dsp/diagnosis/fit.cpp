@@ -68,12 +68,10 @@ double design_effect(const DiagnosisModel& m, const ModelParams& p, const std::v
 
 // ---------------------------------------------------------------- the fit, by Ceres
 
-namespace {
-
 // Physical limits of a parameter: a line delay between zero and a readout filling the frame
 // period; an offset inside the motion data; focal lengths within a factor two; generous
 // ranges elsewhere (they only keep a wild step from leaving the model's domain).
-std::pair<double, double> bounds(Param p, const DiagnosisModel& m) {
+std::pair<double, double> param_bounds(Param p, const DiagnosisModel& m) {
   const NominalModel& n = m.recording().nominal;
   switch (p) {
     case Param::LineDelay: return {0.0, 1.0 / (n.frame_rate_hz * n.cam.height)};
@@ -105,6 +103,8 @@ std::pair<double, double> bounds(Param p, const DiagnosisModel& m) {
   }
 }
 
+namespace {
+
 // The fit's coordinates: x_j = (p_j - start_j) / scale_j for the free parameters.
 struct Coordinates {
   ModelParams start;
@@ -117,7 +117,7 @@ struct Coordinates {
     const int n = static_cast<int>(free.size());
     scale.resize(n), lo.resize(n), hi.resize(n);
     for (int j = 0; j < n; ++j) {
-      const auto [a, b] = bounds(free[j], m);
+      const auto [a, b] = param_bounds(free[j], m);
       start[free[j]] = std::clamp(start[free[j]], a, std::max(a, b));
       scale[j] = param_scale(free[j], m.recording().nominal);
       lo[j] = (a - start[free[j]]) / scale[j];

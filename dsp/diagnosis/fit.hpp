@@ -3,6 +3,8 @@
 // values first, so that the local fits start in the right valley.
 #pragma once
 
+#include <utility>
+
 #include <vector>
 
 #include "dsp/diagnosis/model.hpp"
@@ -34,6 +36,10 @@ double design_effect(const DiagnosisModel& m, const ModelParams& p, const std::v
 // Ceres: Levenberg-Marquardt within those bounds on the robust cost (robust_chi2's loss, one
 // residual block per observation), with a forward-difference Jacobian in param_scale units.
 // Returns the fitted parameters.
+// The fit's limits of a parameter (the physical ones: a line delay within the frame period, an
+// offset inside the motion data, focal lengths within a factor two, |k| <= 1, ...).
+std::pair<double, double> param_bounds(Param p, const DiagnosisModel& m);
+
 ModelParams fit_params(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& start,
                        const ParamMask& free, double sigma_px, int max_iterations = 30);
 

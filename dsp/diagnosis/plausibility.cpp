@@ -1,8 +1,10 @@
 #include "dsp/diagnosis/plausibility.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
+#include "dsp/diagnosis/fit.hpp"
 #include "dsp/diagnosis/select.hpp"
 
 namespace rsd::dsp {
@@ -63,5 +65,30 @@ double implausibility(const ModelParams& p, const std::vector<Effect>& effects) 
 }
 
 std::string implausible_because(const ModelParams& p, Effect e) { return excess(p, e).why; }
+
+std::string unnameable_because(const ModelParams& p, Effect e, const DiagnosisModel& m) {
+  // Past the soft bound by more than two widths (a gyro scale 7% off, a bias of 140 mrad/s):
+  // between, BIC's penalty weighs the evidence; beyond, no evidence makes it real hardware.
+  if (const Excess x = excess(p, e); x.beyond > 2) return x.why;
+  const NominalModel& n = m.recording().nominal;
+  std::ostringstream o;
+  if (e == Effect::FocalLength) {
+    const double off = std::max(std::abs(p[Param::Fx] / n.cam.fx - 1), std::abs(p[Param::Fy] / n.cam.fy - 1));
+    if (off > 0.25) return o << "a focal length " << 100 * off << "% from the nominal: a lens is known to within 25%", o.str();
+  }
+  const ParamMask mask = effect_params(e, n.cam.dist.model);
+  for (int k = 0; k < kParamCount; ++k) {
+    if (!mask[k]) continue;
+    const Param q = Param(k);
+    const auto [lo, hi] = param_bounds(q, m);
+    const double v = p[q], tol = 1e-3 * (hi - lo);
+    const bool at_lo = v <= lo + tol && q != Param::LineDelay, at_hi = v >= hi - tol;
+    if (at_lo || at_hi)
+      return o << param_name(q) << " = " << v << " is at the bound of its range [" << lo << ", " << hi
+               << "]: the data push it there, they do not measure it",
+             o.str();
+  }
+  return "";
+}
 
 }  // namespace rsd::dsp

@@ -259,6 +259,7 @@ double projected_drop(const Selector& sel, const State& from, const State& to) {
 struct RoundResult {
   double drop = 0, held_drop = 0;
   std::vector<Effect> rivals;
+  std::string refused;  // the round's winner, refused by the held-out frames: why
 };
 
 // One forward round: every candidate screened on the subsample; those whose projected drop is
@@ -302,17 +303,25 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
   if (out.drop < sel.opt_.min_bic_drop) return false;
   // The held-out observations must agree: the effect predicts frames the fit never saw better.
   out.held_drop = sel.heldout_drop(s, best->second);
-  if (!sel.held_.empty() && out.held_drop <= 0) return false;
+  if (!sel.held_.empty() && out.held_drop <= 0) {
+    out.refused = std::string(effect_name(best->first)) + " not named: it fits the fitting frames (BIC drop " +
+                  std::to_string(std::lround(out.drop)) + ") and predicts the held-out frames worse than without it";
+    return false;
+  }
   s = std::move(best->second);
   return true;
 }
 
-std::vector<SelectedEffect> forward(const Selector& sel, const std::vector<Effect>& candidates, State& s) {
+std::vector<SelectedEffect> forward(const Selector& sel, const std::vector<Effect>& candidates, State& s,
+                                    std::vector<std::string>& withheld) {
   std::vector<SelectedEffect> steps;
   RoundResult r;
   while (true) {
     const State before = s;
-    if (!forward_round(sel, candidates, s, r)) return steps;
+    if (!forward_round(sel, candidates, s, r)) {
+      if (!r.refused.empty()) withheld.push_back(r.refused);
+      return steps;
+    }
     const double rms = sel.rms(s.params);
     // An effect the round replaced (lens_model takes lens_distortion's place) leaves the list.
     steps.erase(std::remove_if(steps.begin(), steps.end(), [&](const SelectedEffect& st) { return !s.has(st.effect); }),
@@ -374,6 +383,27 @@ void consistency(const Selector& sel, State& s, std::vector<SelectedEffect>& ste
   }
 }
 
+// Drops any selected effect whose value real hardware does not have, or that sits on its fit's
+// bound (plausibility.hpp, unnameable_because), refitting the rest; the latest pick is judged
+// first. What was dropped, and why, goes to `withheld`.
+void plausible_only(const Selector& sel, State& s, std::vector<SelectedEffect>& steps, std::vector<std::string>& withheld) {
+  for (bool changed = true; changed && !s.effects.empty();) {
+    changed = false;
+    for (auto it = s.effects.rbegin(); it != s.effects.rend(); ++it) {
+      const Effect e = *it;
+      const std::string why = unnameable_because(s.params, e, sel.m_);
+      if (why.empty()) continue;
+      withheld.push_back(std::string(effect_name(e)) + " not named: " + why);
+      if (sel.opt_.progress) sel.opt_.progress(withheld.back());
+      s = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
+      steps.erase(std::remove_if(steps.begin(), steps.end(), [&](const SelectedEffect& st) { return st.effect == e; }),
+                  steps.end());
+      changed = true;
+      break;
+    }
+  }
+}
+
 }  // namespace
 
 Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
@@ -381,12 +411,14 @@ Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, c
                          double sigma_px, const SelectionOptions& opt) {
   const Selector sel(m, fit, held, screen, nominal, start, sigma_px, opt);
   State s = sel.initial();
-  std::vector<SelectedEffect> steps = forward(sel, applicable_effects(m), s);
+  std::vector<std::string> withheld;
+  std::vector<SelectedEffect> steps = forward(sel, applicable_effects(m), s, withheld);
   backward(sel, s, steps);
-  if (!opt.blocked_halves) return {steps, s.params};
+  if (!opt.blocked_halves) return {steps, s.params, withheld};
   if (opt.progress && !steps.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
   consistency(sel, s, steps);
-  return {steps, s.params};
+  plausible_only(sel, s, steps, withheld);
+  return {steps, s.params, withheld};
 }
 
 Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
@@ -398,6 +430,7 @@ Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>
   s.bic = sel.bic(s.params, s.effects, fit);
   if (opt.progress && !chosen.effects.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
   consistency(sel, s, chosen.effects);
+  plausible_only(sel, s, chosen.effects, chosen.withheld);
   chosen.params = s.params;
   return chosen;
 }

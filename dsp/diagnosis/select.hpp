@@ -50,6 +50,8 @@ struct SelectedEffect {
 struct Selection {
   std::vector<SelectedEffect> effects;  // in order of selection
   ModelParams params;                   // fitted; nominal values for the effects not selected
+  // Effects the selection chose and did not name, each with why (unnameable_because).
+  std::vector<std::string> withheld;
 };
 
 // `start` holds the gross estimates (gross_start) the candidates start from; `nominal` the
