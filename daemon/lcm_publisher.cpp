@@ -62,11 +62,11 @@ void LcmPublisher::send(const char* channel, const void* data, size_t size) {
 // without a timeout: asked first (drivers/lcm_connect), at most once a second, so that neither
 // a silent hub nor asking it holds the publishing thread for more than a moment at a time.
 bool LcmPublisher::hub_ready() {
-  if (url_.rfind("tcpq://", 0) != 0 || lcm_get_fileno(lcm_) >= 0) return true;
+  if (!drivers::lost_tcpq_hub(lcm_, url_)) return true;
   const auto now = std::chrono::steady_clock::now();
   if (now - last_probe_ < std::chrono::seconds(1)) return false;
   last_probe_ = now;
-  return drivers::may_reconnect(lcm_, url_, kHubProbeMs);
+  return drivers::probe_tcpq_hub(url_, kHubProbeMs).safe_to_connect();
 }
 
 void LcmPublisher::publish_encoded(const std::string& channel, const void* data, size_t size) {

@@ -1,5 +1,6 @@
 #include "daemon/velocity_input.hpp"
 
+#include "drivers/lcm_connect.hpp"
 #include "drivers/lcm_receive.hpp"
 #include "drivers/monotonic_clock.hpp"
 #include "formats/image_t_codec.hpp"
@@ -30,7 +31,7 @@ VelocityInput::VelocityInput(lcm_t* lcm, const std::string& channel, VelocityBuf
 // the hub once (no thread handles this instance any more, so no callback reaches this object).
 VelocityInput::~VelocityInput() {
   stop();
-  if (lcm_url_.rfind("tcpq://", 0) == 0 && lcm_get_fileno(lcm_) < 0) return;
+  if (drivers::lost_tcpq_hub(lcm_, lcm_url_)) return;
   if (sub_) lcm_unsubscribe(lcm_, sub_);
   if (pose_sub_) lcm_unsubscribe(lcm_, pose_sub_);
 }

@@ -123,9 +123,17 @@ lcm_t* create_lcm(const std::string& url, std::string& why, int timeout_ms) {
   return lcm_create(url.c_str());
 }
 
+bool lost_tcpq_hub(lcm_t* lcm, const std::string& url) {
+  return url.rfind("tcpq://", 0) == 0 && lcm_get_fileno(lcm) < 0;
+}
+
 bool may_reconnect(lcm_t* lcm, const std::string& url, int timeout_ms) {
-  if (url.rfind("tcpq://", 0) != 0 || lcm_get_fileno(lcm) >= 0) return true;
-  return probe_tcpq_hub(url, timeout_ms).safe_to_connect();
+  return !lost_tcpq_hub(lcm, url) || probe_tcpq_hub(url, timeout_ms).safe_to_connect();
+}
+
+void destroy_lcm_detached(lcm_t* lcm, const std::string& url) {
+  spdlog::warn("lcm {}: the hub does not answer; the lost connection's instance is closed in the background", url);
+  std::thread([lcm] { lcm_destroy(lcm); }).detach();
 }
 
 bool destroy_lcm(lcm_t* lcm, const std::string& url, int timeout_ms) {
@@ -134,8 +142,7 @@ bool destroy_lcm(lcm_t* lcm, const std::string& url, int timeout_ms) {
     lcm_destroy(lcm);
     return true;
   }
-  spdlog::warn("lcm {}: the hub does not answer; the lost connection's instance is closed in the background", url);
-  std::thread([lcm] { lcm_destroy(lcm); }).detach();
+  destroy_lcm_detached(lcm, url);
   return false;
 }
 

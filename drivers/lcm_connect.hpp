@@ -51,6 +51,10 @@ HubProbe probe_tcpq_hub(const std::string& url, int timeout_ms = kHubAnswerTimeo
 // hub did (LCM's own failures: nullptr, `why` empty).
 lcm_t* create_lcm(const std::string& url, std::string& why, int timeout_ms = kHubAnswerTimeoutMs);
 
+// Whether `lcm` is a tcpq instance (made from `url`) that lost its hub: the next call that
+// sends reconnects it.
+bool lost_tcpq_hub(lcm_t* lcm, const std::string& url);
+
 // Before a call that reconnects a tcpq instance that lost its hub (lcm_publish, lcm_subscribe,
 // lcm_unsubscribe, and lcm_destroy, which unsubscribes what is left): true when the call cannot
 // wait for good (the instance is connected, is not tcpq, or its hub answers now or is gone).
@@ -62,5 +66,7 @@ bool may_reconnect(lcm_t* lcm, const std::string& url, int timeout_ms = kHubAnsw
 // the caller goes on at once. No callback of the instance runs after this returns either way
 // (LCM calls them only from lcm_handle). Returns false when destroying was left to that thread.
 bool destroy_lcm(lcm_t* lcm, const std::string& url, int timeout_ms = kHubAnswerTimeoutMs);
+// The background half of destroy_lcm, for a caller that has already asked the hub.
+void destroy_lcm_detached(lcm_t* lcm, const std::string& url);
 
 }  // namespace rsd::drivers

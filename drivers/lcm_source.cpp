@@ -29,7 +29,7 @@ void LcmSource::close_lcm() {
     s = nullptr;
   }
   if (may) lcm_destroy(lcm_);
-  else destroy_lcm(lcm_, cfg_.url);
+  else destroy_lcm_detached(lcm_, cfg_.url);  // the hub was asked just now
   lcm_ = nullptr;
 }
 

@@ -335,6 +335,11 @@ std::vector<SelectedEffect> forward(const Selector& sel, const std::vector<Effec
   }
 }
 
+// The steps without effect e's (it left the selection).
+void forget(std::vector<SelectedEffect>& steps, Effect e) {
+  steps.erase(std::remove_if(steps.begin(), steps.end(), [&](const SelectedEffect& st) { return st.effect == e; }), steps.end());
+}
+
 // Drops any selected effect whose removal (with a refit of the rest) costs less BIC than
 // the selection threshold: an earlier pick that later ones made redundant. Screened on the
 // subsample, confirmed on the fitting set.
@@ -350,8 +355,7 @@ void backward(const Selector& sel, State& s, std::vector<SelectedEffect>& steps)
       State c = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
       if (sel.drop(c, s) >= sel.opt_.min_bic_drop) continue;
       s = std::move(c);
-      steps.erase(std::remove_if(steps.begin(), steps.end(), [&](const SelectedEffect& st) { return st.effect == e; }),
-                  steps.end());
+      forget(steps, e);
       changed = true;
       break;
     }
@@ -375,8 +379,7 @@ void consistency(const Selector& sel, State& s, std::vector<SelectedEffect>& ste
       if (holds) continue;
       if (sel.opt_.progress) sel.opt_.progress(std::string("dropped ") + effect_name(e) + ": it does not hold on the blocked halves");
       s = without;
-      steps.erase(std::remove_if(steps.begin(), steps.end(), [&](const SelectedEffect& st) { return st.effect == e; }),
-                  steps.end());
+      forget(steps, e);
       changed = true;
       break;
     }
@@ -396,8 +399,7 @@ void plausible_only(const Selector& sel, State& s, std::vector<SelectedEffect>& 
       withheld.push_back(std::string(effect_name(e)) + " not named: " + why);
       if (sel.opt_.progress) sel.opt_.progress(withheld.back());
       s = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
-      steps.erase(std::remove_if(steps.begin(), steps.end(), [&](const SelectedEffect& st) { return st.effect == e; }),
-                  steps.end());
+      forget(steps, e);
       changed = true;
       break;
     }
