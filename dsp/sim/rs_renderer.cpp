@@ -23,8 +23,9 @@ Eigen::Vector3f RsRenderer::shade(const Scene& scene, const Eigen::Vector3d& cen
   const Eigen::Vector3d d = R_wc * *ray_c;
   double best = std::numeric_limits<double>::infinity();
   Eigen::Vector3f colour = scene.background;
-  for (const Plane& p : scene.planes) {
-    const Eigen::Vector3d n = p.normal();
+  for (size_t k = 0; k < scene.planes.size(); ++k) {
+    const Plane& p = scene.planes[k];
+    const Eigen::Vector3d& n = normals_[k];
     const double den = n.dot(d);
     if (std::abs(den) < 1e-12) continue;
     const double lambda = n.dot(p.origin - centre) / den;
@@ -41,6 +42,8 @@ Eigen::Vector3f RsRenderer::shade(const Scene& scene, const Eigen::Vector3d& cen
 void RsRenderer::render(const Scene& scene, const CameraMotion& motion, double t_frame, const ImageView& out) {
   const int n = opt_.supersample, ne = opt_.exposure_samples;
   const float weight = 1.0f / static_cast<float>(n * n * ne);
+  normals_.clear();
+  for (const Plane& p : scene.planes) normals_.push_back(p.normal());
   for (int y = 0; y < cam_.height; ++y) {
     Eigen::Vector3f* row = &accum_[static_cast<size_t>(y) * cam_.width];
     std::fill(row, row + cam_.width, Eigen::Vector3f::Zero());

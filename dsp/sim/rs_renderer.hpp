@@ -48,6 +48,9 @@ class RsRenderer {
   RowTiming timing_;
   RenderOptions opt_;
   std::vector<Eigen::Vector3f> accum_;  // the frame in linear float, allocated once
+  // The scene's plane normals, taken once per frame rather than once per ray (allocated at the
+  // first frame: a scene keeps its planes).
+  std::vector<Eigen::Vector3d> normals_;
   std::mt19937 rng_;
   std::normal_distribution<float> noise_{0.0f, 1.0f};
 };

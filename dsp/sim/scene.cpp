@@ -22,40 +22,57 @@ std::vector<Eigen::Vector2d> CheckerboardTexture::inner_corners() const {
 
 NoiseTexture::NoiseTexture(unsigned seed, double cell_m) : seed_(seed), cell_(cell_m) {}
 
-// Integer hash -> [0, 1): a deterministic lattice of random values.
-float NoiseTexture::lattice(long i, long j, int channel) const {
-  std::uint64_t h = static_cast<std::uint64_t>(i) * 0x9E3779B97F4A7C15ull ^
-                    (static_cast<std::uint64_t>(j) + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full ^
-                    (static_cast<std::uint64_t>(seed_) << 8 | static_cast<unsigned>(channel));
+// Integer hash -> [0, 1): a deterministic lattice of random values, one per channel. The
+// channel enters the hash last, by xor (seed << 8 keeps the low byte free), so the three
+// channels share the multiplications at each lattice point.
+std::uint64_t NoiseTexture::lattice_key(long i, long j) const {
+  return static_cast<std::uint64_t>(i) * 0x9E3779B97F4A7C15ull ^
+         (static_cast<std::uint64_t>(j) + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full ^ static_cast<std::uint64_t>(seed_) << 8;
+}
+
+float NoiseTexture::lattice(std::uint64_t key, int channel) {
+  std::uint64_t h = key ^ static_cast<unsigned>(channel);
   h ^= h >> 33;
   h *= 0xFF51AFD7ED558CCDull;
   h ^= h >> 33;
   return static_cast<float>(h >> 40) / static_cast<float>(1ull << 24);
 }
 
-float NoiseTexture::octave(double s, double t, int channel) const {
-  const double fs = std::floor(s), ft = std::floor(t);
-  const double a = s - fs, b = t - ft;
+namespace {
+// std::floor, without the library call x86-64's baseline instruction set needs for it: exact
+// for every |x| below 2^62 (plane coordinates in lattice units are far below).
+long floor_to_long(double x) {
+  const long i = static_cast<long>(x);
+  return x < static_cast<double>(i) ? i - 1 : i;
+}
+}  // namespace
+
+// One octave of value noise at (s, t) in lattice units, for every channel at once: the cell and
+// its smoothstep weights are the channels' common part.
+void NoiseTexture::octave(double s, double t, float v[3]) const {
+  const long i = floor_to_long(s), j = floor_to_long(t);
+  const double a = s - static_cast<double>(i), b = t - static_cast<double>(j);
   // smoothstep weights: continuous gradient, so features are corners rather than seams
   const double wa = a * a * (3 - 2 * a), wb = b * b * (3 - 2 * b);
-  const long i = static_cast<long>(fs), j = static_cast<long>(ft);
-  const double v = (1 - wa) * (1 - wb) * lattice(i, j, channel) + wa * (1 - wb) * lattice(i + 1, j, channel) +
-                   (1 - wa) * wb * lattice(i, j + 1, channel) + wa * wb * lattice(i + 1, j + 1, channel);
-  return static_cast<float>(v);
+  const std::uint64_t k00 = lattice_key(i, j), k10 = lattice_key(i + 1, j), k01 = lattice_key(i, j + 1),
+                      k11 = lattice_key(i + 1, j + 1);
+  for (int ch = 0; ch < 3; ++ch)
+    v[ch] = static_cast<float>((1 - wa) * (1 - wb) * lattice(k00, ch) + wa * (1 - wb) * lattice(k10, ch) +
+                               (1 - wa) * wb * lattice(k01, ch) + wa * wb * lattice(k11, ch));
 }
 
 Eigen::Vector3f NoiseTexture::colour(double s, double t) const {
-  Eigen::Vector3f c;
-  for (int ch = 0; ch < 3; ++ch) {
-    float v = 0, amp = 0.5f, sum = 0;
-    double scale = 1.0 / cell_;
-    for (int o = 0; o < 4; ++o, amp *= 0.5f, scale *= 2.0) {
-      v += amp * octave(s * scale, t * scale, ch);
-      sum += amp;
-    }
-    // stretch contrast: value noise concentrates around 0.5
-    c[ch] = std::clamp(0.5f + 2.2f * (v / sum - 0.5f), 0.0f, 1.0f);
+  float v[3] = {0, 0, 0}, amp = 0.5f, sum = 0;
+  double scale = 1.0 / cell_;
+  for (int o = 0; o < 4; ++o, amp *= 0.5f, scale *= 2.0) {
+    float ov[3];
+    octave(s * scale, t * scale, ov);
+    for (int ch = 0; ch < 3; ++ch) v[ch] += amp * ov[ch];
+    sum += amp;
   }
+  // stretch contrast: value noise concentrates around 0.5
+  Eigen::Vector3f c;
+  for (int ch = 0; ch < 3; ++ch) c[ch] = std::clamp(0.5f + 2.2f * (v[ch] / sum - 0.5f), 0.0f, 1.0f);
   return c;
 }
 

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -39,8 +40,9 @@ class NoiseTexture final : public Texture {
   Eigen::Vector3f colour(double s, double t) const override;
 
  private:
-  float lattice(long i, long j, int channel) const;
-  float octave(double s, double t, int channel) const;
+  std::uint64_t lattice_key(long i, long j) const;
+  static float lattice(std::uint64_t key, int channel);
+  void octave(double s, double t, float v[3]) const;
   unsigned seed_;
   double cell_;
 };
