@@ -1,10 +1,49 @@
 // source.sim: the built-in simulated camera's section, read and printed by one visit.
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 #include "drivers/sim_source.hpp"
 #include "dsp/core/input_limits.hpp"
 
 namespace rsd::drivers {
+
+namespace {
+
+void visit_lens(formats::ConfigSection& l, dsp::Distortion& d) {
+  l.choice("model", d.model, {{"pinhole-radtan", dsp::LensModel::PinholeRadtan}, {"pinhole-equi", dsp::LensModel::PinholeEqui}});
+  l.value("k1", d.k1);
+  l.value("k2", d.k2);
+  if (d.model == dsp::LensModel::PinholeRadtan) {
+    l.value("p1", d.p1);
+    l.value("p2", d.p2);
+  } else {
+    l.check(!l.has("p1") && !l.has("p2"), "p1", "and p2 are pinhole-radtan's: pinhole-equi has no tangential terms");
+  }
+  l.value("k3", d.k3);
+  if (d.model == dsp::LensModel::PinholeEqui) l.value("k4", d.k4);
+  else l.check(!l.has("k4"), "k4", "is pinhole-equi's: pinhole-radtan has k1, k2, p1, p2, k3");
+}
+
+// The lens within rsd's limits, and a ray for every pixel: a radtan polynomial past its monotonic
+// range, or an equidistant lens whose field ends inside the image, cannot be rendered.
+void check_lens(formats::ConfigSection& c, const dsp::CameraModel& cam) {
+  const dsp::CameraOutOfRange bad = dsp::out_of_range(cam);
+  c.check(bad.part == dsp::CameraOutOfRange::None, "lens", bad.why);
+  const double w = cam.width - 1, h = cam.height - 1;
+  for (const Eigen::Vector2d& px : {Eigen::Vector2d(0, 0), Eigen::Vector2d(w, 0), Eigen::Vector2d(0, h), Eigen::Vector2d(w, h),
+                                    Eigen::Vector2d(0, h / 2), Eigen::Vector2d(w, h / 2)})
+    if (!cam.ray(px)) {
+      char where[64];
+      std::snprintf(where, sizeof where, "(%g, %g)", px.x(), px.y());
+      c.check(false, "lens", std::string("has no ray through pixel ") + where +
+                                 ": its field ends inside the image at this hfov_deg (the equidistant model ends at 90 "
+                                 "degrees off the axis)");
+      return;
+    }
+}
+
+}  // namespace
 
 void visit_config(formats::ConfigSection& c, SimSourceConfig& s) {
   int w = s.camera.width, h = s.camera.height;
@@ -12,9 +51,16 @@ void visit_config(formats::ConfigSection& c, SimSourceConfig& s) {
   c.value("height", h);
   c.check(w >= 16 && h >= 16 && w <= dsp::limits::kMaxSide && h <= dsp::limits::kMaxSide, "width",
           "and height must be 16.." + std::to_string(dsp::limits::kMaxSide) + " pixels");
-  c.value("hfov_deg", s.hfov_deg);
+  c.value("hfov_deg", s.hfov_deg, "the field of view the lens sees across the width");
   c.check(s.hfov_deg > 1 && s.hfov_deg < 179, "hfov_deg", "must be between 1 and 179 degrees");
-  if (!c.file().empty()) s.camera = dsp::CameraModel::from_hfov(w, h, s.hfov_deg * M_PI / 180.0);
+  dsp::Distortion lens = s.camera.dist;
+  c.section("lens", [&](formats::ConfigSection& l) { visit_lens(l, lens); },
+            "the simulated camera's true lens (docs/geometry.md): pinhole-radtan terms k1 k2 p1 p2 k3, or a "
+            "fisheye, pinhole-equi k1..k4");
+  if (!c.file().empty()) {
+    s.camera = dsp::CameraModel::from_hfov(w, h, s.hfov_deg * M_PI / 180.0, lens);
+    check_lens(c, s.camera);
+  }
   c.value("fps", s.fps);
   c.check(dsp::limits::kFrameRateHz.contains(s.fps), "fps", std::string("must be ") + dsp::limits::kFrameRateHz.text);
   c.value("line_delay_s", s.line_delay_s, "0: rows read over the whole frame period");

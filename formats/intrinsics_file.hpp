@@ -28,8 +28,9 @@ struct Intrinsics {
 // cam0, cam1, ...: Kalibr camchain). `camera` selects a Kalibr camera ("cam1"); empty means
 // cam0, or the only camera. For a ROS file a non-empty `camera` must equal its camera_name.
 //
-// Kalibr: camera_model pinhole, distortion_model radtan ([k1, k2, p1, p2]) or none; equidistant
-// (fisheye) and others are refused. Extra keys are allowed (Kalibr writes several).
+// Kalibr: camera_model pinhole, distortion_model radtan ([k1, k2, p1, p2]), equidistant
+// (pinhole-equi, [k1, k2, k3, k4]) or none; others are refused. Extra keys are allowed (Kalibr
+// writes several); T_cam_imu is not read here (rsd-extract takes --imu-to-camera).
 // ROS: distortion_model plumb_bob ([k1, k2, p1, p2, k3]), or rational_polynomial when k4..k6
 // are all zero; camera_matrix without skew. Unknown top-level keys are refused.
 Intrinsics load_intrinsics(const std::string& file, const std::string& camera = "");

@@ -8,11 +8,12 @@
 
 namespace rsd::dsp {
 
-CameraModel CameraModel::from_hfov(int width, int height, double hfov_rad) {
+CameraModel CameraModel::from_hfov(int width, int height, double hfov_rad, const Distortion& lens) {
   CameraModel c;
   c.width = width;
   c.height = height;
-  c.fx = c.fy = 0.5 * width / std::tan(0.5 * hfov_rad);
+  c.dist = lens;
+  c.fx = c.fy = 0.5 * width / distorted_radius(lens, 0.5 * hfov_rad);
   c.cx = 0.5 * (width - 1);
   c.cy = 0.5 * (height - 1);
   return c;

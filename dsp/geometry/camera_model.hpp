@@ -21,8 +21,11 @@ struct CameraModel {
   double cx = 319.5, cy = 239.5;
   Distortion dist;
 
-  // A distortion-free camera whose horizontal field of view is hfov_rad, principal point centred.
-  static CameraModel from_hfov(int width, int height, double hfov_rad);
+  // A camera whose lens sees hfov_rad across the image's width (the focal length puts the
+  // distorted radius of hfov_rad / 2 at half the width), principal point centred. Without a lens:
+  // the pinhole, f = (width / 2) / tan(hfov_rad / 2); an equidistant lens without terms,
+  // f = (width / 2) / (hfov_rad / 2).
+  static CameraModel from_hfov(int width, int height, double hfov_rad, const Distortion& lens = {});
 
   // Normalised image-plane point (x/z, y/z) -> distorted normalised point (the lens).
   Eigen::Vector2d distort(const Eigen::Vector2d& xn) const { return dsp::distort(dist, xn); }

@@ -173,16 +173,11 @@ std::optional<Eigen::Vector2d> undistort(const Distortion& d, const Eigen::Vecto
   return d.model == LensModel::PinholeEqui ? equi_inverse(d, xd) : radtan_inverse(d, xd);
 }
 
-namespace {
-
-// The distorted radius of a point `theta` off the axis (radial terms only).
 double distorted_radius(const Distortion& d, double theta) {
   if (d.model == LensModel::PinholeEqui) return theta_d(d, theta);
   const double r = std::tan(theta), r2 = r * r;
   return r * (1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3)));
 }
-
-}  // namespace
 
 Distortion nearest_lens(const Distortion& from, LensModel to, double max_theta) {
   // rho(theta) - base(theta) = base(theta) sum_j k_j x^(2j), x = theta (equi) or tan(theta)

@@ -59,6 +59,11 @@ Eigen::Matrix2d distort_jacobian(const Distortion& d, const Eigen::Vector2d& xn)
 // monotonic region, an equidistant point beyond the lens's field (equi_max_theta).
 std::optional<Eigen::Vector2d> undistort(const Distortion& d, const Eigen::Vector2d& xd);
 
+// The distorted normalised radius of a point `theta` radians off the axis (the radial terms
+// only): theta_d for pinhole-equi, r (1 + k1 r^2 + k2 r^4 + k3 r^6) with r = tan(theta) for
+// pinhole-radtan.
+double distorted_radius(const Distortion& d, double theta);
+
 // The equidistant lens's field: the largest angle off the axis (radians) up to which theta_d
 // rises with theta, at most pi/2.
 double equi_max_theta(const Distortion& d);

@@ -91,6 +91,39 @@ TEST(Config, EachDriverReadsItsOwnSection) {
   EXPECT_EQ(c.source.camera->width, 320);
 }
 
+// source.sim.lens: the simulated camera looks through a fisheye whose hfov_deg spans the width:
+// a ray hfov / 2 off the axis, horizontal, projects onto the image's edge (half a pixel past
+// the last pixel centre), through the lens's own projection.
+TEST(Config, TheSimulatedCameraLooksThroughTheLensItIsGiven) {
+  const daemon::Config c = load("fisheye.yaml",
+                                "source:\n  sim:\n    hfov_deg: 120\n"
+                                "    lens: {model: pinhole-equi, k1: 0.02, k2: -0.004, k3: 0.001, k4: 0}\n");
+  const dsp::CameraModel& cam = c.source.settings_of<drivers::SimSourceConfig>("sim").camera;
+  EXPECT_EQ(cam.dist, dsp::Distortion::equidistant(0.02, -0.004, 0.001, 0));
+  const double half = 60 * M_PI / 180;
+  const auto edge = cam.project({std::sin(half), 0, std::cos(half)});
+  ASSERT_TRUE(edge.has_value());
+  EXPECT_NEAR(edge->x(), 639.5, 1e-9);
+  EXPECT_NEAR(edge->y(), 239.5, 1e-9);
+  // Without a lens, the pinhole as before.
+  const daemon::Config p = load("pinhole.yaml", "source:\n  sim: {hfov_deg: 90}\n");
+  EXPECT_NEAR(p.source.settings_of<drivers::SimSourceConfig>("sim").camera.fx, 320.0, 1e-12);
+}
+
+TEST(Config, ASimulatedLensThatCannotBeRenderedIsRefusedNamingIt) {
+  EXPECT_NE(error_of("source:\n  sim:\n    lens: {model: pinhole-equi, p1: 0.1}\n")
+                .find("'source.sim.lens.p1' and p2 are pinhole-radtan's: pinhole-equi has no tangential terms"),
+            std::string::npos);
+  EXPECT_NE(error_of("source:\n  sim:\n    lens: {model: pinhole-radtan, k4: 0.1}\n").find("'source.sim.lens.k4' is pinhole-equi's"),
+            std::string::npos);
+  EXPECT_NE(error_of("source:\n  sim:\n    lens: {model: fisheye}\n").find("'source.sim.lens.model' must be pinhole-radtan or pinhole-equi"),
+            std::string::npos)
+      << error_of("source:\n  sim:\n    lens: {model: fisheye}\n");
+  // 160 degrees across 640 px puts the corners 100 degrees off the axis: beyond the model.
+  const std::string wide = error_of("source:\n  sim:\n    hfov_deg: 160\n    lens: {model: pinhole-equi}\n");
+  EXPECT_NE(wide.find("bad.yaml:4:11: 'source.sim.lens' has no ray through pixel (0, 0)"), std::string::npos) << wide;
+}
+
 // source.calibration_file: the camera's intrinsics, the drivers' row timing (replacing their
 // own), the velocity input's IMU corrections; intrinsics given twice are refused.
 TEST(Config, ACalibrationFileReachesCameraDriversAndVelocityInput) {
