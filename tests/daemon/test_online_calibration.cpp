@@ -79,7 +79,7 @@ TEST(OnlineCalibration, LearnsWhileAnImagesRecordingReplays) {
   const SimRig r = hand_held();
   const fs::path dir = fs::temp_directory_path() / ("rsd-online-" + std::to_string(::getpid()));
   fs::remove_all(dir);
-  const int64_t t0 = record(r, 150, dir);  // 5 s: it converges in about two
+  const int64_t t0 = record(r, 120, dir);  // 4 s: it converges in about two
   const daemon::RunSummary run = replay_learning(dir, r);
   ASSERT_TRUE(run.online.has_value());
   EXPECT_TRUE(run.online->converged) << run.online->reason;
