@@ -19,9 +19,23 @@ struct VideoReader::Impl {
   bool have_first = false;
 };
 
+namespace {
+
+// OpenCV's FFmpeg reader can give no frame once in the middle of a file and the next frame on the
+// next call (GoPro's MP4s, whose metadata tracks interleave with the video, do it about a second
+// in): a few calls without a frame, not one, are the end. Without this an images recording read
+// 28 of a GoPro clip's 362 frames.
+bool read_frame(cv::VideoCapture& cap, cv::Mat& m) {
+  for (int attempt = 0; attempt < 4; ++attempt)
+    if (cap.read(m) && !m.empty()) return true;
+  return false;
+}
+
+}  // namespace
+
 VideoReader::VideoReader(const std::string& path) : impl_(std::make_unique<Impl>()), path_(path) {
   if (!std::filesystem::exists(path)) throw std::runtime_error(path + ": no such video file");
-  if (!impl_->cap.open(path, cv::CAP_FFMPEG) || !impl_->cap.read(impl_->first) || impl_->first.empty())
+  if (!impl_->cap.open(path, cv::CAP_FFMPEG) || !read_frame(impl_->cap, impl_->first))
     throw std::runtime_error(path + ": cannot decode a frame (not a video FFmpeg can read?)");
   impl_->have_first = true;
 }
@@ -36,7 +50,7 @@ bool VideoReader::next(dsp::Image& out) {
   if (impl_->have_first) {
     m = impl_->first;
     impl_->have_first = false;
-  } else if (!impl_->cap.read(m) || m.empty()) {
+  } else if (!read_frame(impl_->cap, m)) {
     return false;
   }
   if (m.cols != width() || m.rows != height())

@@ -19,6 +19,7 @@ PACKAGES=(
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev  # LCM messages, lcm-gen, lcm-logger, lcm-spy
   default-jdk-headless libjchart2d-java  # Java LCM types for lcm-spy
   libopencv-dev libopencv-contrib-dev    # AprilTag codes (aruco), feature tracking, reference remap
+  libavformat-dev                        # GoPro MP4s: the GPMF gyro track (formats/gpmf_mp4)
   libsystemd-dev systemd python3         # sd_notify; unit verification and notify tests
   help2man dpkg-dev procps               # man pages from --help; the Debian package (cpack, dpkg-shlibdeps); kill
   libcamera-dev                          # the libcamera driver

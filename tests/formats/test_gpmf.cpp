@@ -12,11 +12,16 @@
 #include <vector>
 
 #include "formats/gpmf.hpp"
+#include "formats/gpmf_mp4.hpp"
+#include "formats/video_file.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace rsd::formats {
 namespace {
 
 using Bytes = std::vector<std::uint8_t>;
+
+const test::TempDir& g_tmp = test::register_temp_dir("rsd_test_gpmf_");
 
 // One KLV item: key, type, structure size, repeat (big-endian), data padded to four bytes.
 Bytes klv(const char* key, char type, int struct_size, int repeat, const Bytes& data) {
@@ -151,6 +156,58 @@ TEST(Gpmf, GoProsSamplePayloadsReadAsPublished) {
     EXPECT_EQ(g[0].rate_rad_s.back(), c.last) << c.file;
     EXPECT_EQ(g[0].stmp_us, c.stmp) << c.file;
   }
+}
+
+// A whole recording: the Karma drone's gimbal camera (a HERO5 Black, 12 s at 854x480). The first
+// payload is karma.raw; the frames are as many as OpenCV's decoder finds; the gyro is GoPro's 400 Hz
+// nominal rate, spread over the payloads' spans on the MP4's clock.
+TEST(GpmfVideo, TheKarmaClipsGyroAndFramesOnTheMp4sClock) {
+  const std::string file = std::string(RSD_REAL_DATA_DIR) + "/gpmf/karma.mp4";
+  const GpmfVideo v = read_gpmf_video(file);
+  EXPECT_EQ(v.width, 854);
+  EXPECT_EQ(v.height, 480);
+  EXPECT_EQ(v.payloads, 13);
+  EXPECT_EQ(v.device, "Camera");
+  EXPECT_EQ(v.orin, "");  // a HERO5 writes none: its order is documented (Z, X, Y)
+  // The first payload's samples, read from the MP4, are karma.raw's.
+  const Bytes raw = real_payload("karma.raw");
+  const std::vector<GpmfGyro> first = read_gpmf_gyro(raw.data(), raw.size(), "karma.raw");
+  ASSERT_GE(v.gyro_rad_s.size(), first.at(0).rate_rad_s.size());
+  for (std::size_t i = 0; i < first[0].rate_rad_s.size(); ++i) ASSERT_EQ(v.gyro_rad_s[i], first[0].rate_rad_s[i]) << i;
+  // Times rise; the rate is GoPro's nominal 400 Hz within the 1% its clocks keep.
+  for (std::size_t i = 1; i < v.gyro_t_s.size(); ++i) ASSERT_GT(v.gyro_t_s[i], v.gyro_t_s[i - 1]) << i;
+  const double rate = static_cast<double>(v.gyro_t_s.size() - 1) / (v.gyro_t_s.back() - v.gyro_t_s.front());
+  EXPECT_NEAR(rate, 400, 4) << rate;
+  // Every frame a decoder finds has its time, 30000/1001 frames a second apart.
+  VideoReader decoder(file);
+  dsp::Image frame;
+  long decoded = 0;
+  while (decoder.next(frame)) ++decoded;
+  EXPECT_EQ(static_cast<long>(v.frame_t_s.size()), decoded);
+  for (std::size_t k = 1; k < v.frame_t_s.size(); ++k) ASSERT_NEAR(v.frame_t_s[k] - v.frame_t_s[k - 1], 1001.0 / 30000, 1e-4) << k;
+  // The gyro covers the frames.
+  EXPECT_LE(v.gyro_t_s.front(), v.frame_t_s.front());
+  EXPECT_GE(v.gyro_t_s.back(), v.frame_t_s.back());
+}
+
+TEST(GpmfVideo, FilesWithoutAGoProsTracksAreRefusedNamingThem) {
+  const std::string plain = g_tmp.path("plain.mp4");
+  {
+    VideoWriter w(plain, 64, 48, 30);
+    dsp::Image f(64, 48, dsp::PixelFormat::Mono8);
+    for (int k = 0; k < 3; ++k) w.write(f.view());
+  }
+  auto error_of_file = [](const std::string& path) -> std::string {
+    try {
+      read_gpmf_video(path);
+    } catch (const std::runtime_error& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  EXPECT_EQ(error_of_file(plain), plain + ": no GPMF metadata track (a GoPro camera's 'gpmd' data stream)");
+  const std::string not_video = std::string(RSD_REAL_DATA_DIR) + "/gpmf/karma.raw";
+  EXPECT_NE(error_of_file(not_video).find(not_video + ": cannot open as an MP4: "), std::string::npos) << error_of_file(not_video);
 }
 
 }  // namespace
