@@ -1,0 +1,63 @@
+#include "dsp/diagnosis/imu_axes.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "dsp/diagnosis/fit.hpp"
+#include "dsp/diagnosis/model.hpp"
+#include "dsp/diagnosis/robust_stats.hpp"
+
+namespace rsd::dsp {
+
+std::vector<Eigen::Matrix3d> axis_rotations() {
+  std::vector<Eigen::Matrix3d> out;
+  std::array<int, 3> perm = {0, 1, 2};
+  do {
+    for (int signs = 0; signs < 8; ++signs) {
+      Eigen::Matrix3d R = Eigen::Matrix3d::Zero();
+      for (int row = 0; row < 3; ++row) R(row, perm[row]) = (signs >> row & 1) ? -1.0 : 1.0;
+      if (R.determinant() > 0) out.push_back(R);
+    }
+  } while (std::next_permutation(perm.begin(), perm.end()));
+  return out;
+}
+
+namespace {
+
+// The candidate's best robust residual scale over clock offsets, coarse then fine.
+AxesCandidate score(Recording rec, const Eigen::Matrix3d& R, int max_observations) {
+  rec.nominal.imu_to_camera = R;
+  const DiagnosisModel m(rec);
+  std::vector<int> all(static_cast<size_t>(m.size()));
+  for (int i = 0; i < m.size(); ++i) all[static_cast<size_t>(i)] = i;
+  const std::vector<int> idx = subsample(all, static_cast<size_t>(max_observations));
+  const auto [lo, hi] = m.offset_range();
+  ModelParams p = nominal_params(rec.nominal);
+  const double t0 = p[Param::TimeOffset];
+  AxesCandidate best{R, std::numeric_limits<double>::infinity(), t0};
+  auto at = [&](double offset) {
+    if (offset < lo || offset > hi) return;
+    p[Param::TimeOffset] = offset;
+    const double s = robust_stats(m.residuals(p, idx)).scale_px;
+    if (s < best.scale_px) best.scale_px = s, best.time_offset_s = offset;
+  };
+  for (double d = -0.1; d <= 0.1 + 1e-9; d += 0.01) at(t0 + d);
+  const double coarse = best.time_offset_s;
+  for (double d = -0.01; d <= 0.01 + 1e-9; d += 0.002) at(coarse + d);
+  return best;
+}
+
+}  // namespace
+
+AxesSearch search_imu_axes(const Recording& rec, int max_observations) {
+  if (rec.kind != ObservationKind::Matches) throw std::invalid_argument("search_imu_axes: a matches recording (gyro motion) is needed");
+  AxesSearch s;
+  for (const Eigen::Matrix3d& R : axis_rotations()) s.ranked.push_back(score(rec, R, max_observations));
+  std::stable_sort(s.ranked.begin(), s.ranked.end(), [](const AxesCandidate& a, const AxesCandidate& b) { return a.scale_px < b.scale_px; });
+  return s;
+}
+
+}  // namespace rsd::dsp
