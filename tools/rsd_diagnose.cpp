@@ -15,6 +15,7 @@
 #include "tools/report/diagnosis_calibration.hpp"
 #include "tools/report/diagnosis_report.hpp"
 #include "dsp/diagnosis/diagnosis.hpp"
+#include "dsp/diagnosis/imu_axes.hpp"
 #include "formats/calibration_v1.hpp"
 #include "formats/recording_v1.hpp"
 
@@ -51,8 +52,39 @@ constexpr const char* kDescription =
 
 struct Options {
   std::string dir, json, report, calibration;
+  std::string imu_axes = "check";
   int heldout_every = kHeldoutEvery;
 };
+
+std::string matrix_text(const Eigen::Matrix3d& R) {
+  std::ostringstream o;
+  for (int k = 0; k < 9; ++k) o << (k ? "," : "") << R(k / 3, k % 3);
+  return o.str();
+}
+
+// A gyro's axes against the camera's, asked of the pictures (matches recordings): a wrong
+// motion.imu_to_camera is a set-up mistake no effect can stand in for. `check` says so;
+// `search` diagnoses with the axes the pictures follow. What was found goes into the JSON.
+std::string check_imu_axes(Recording& rec, const std::string& mode) {
+  if (mode == "given" || rec.kind != ObservationKind::Matches) return "";
+  const AxesSearch s = search_imu_axes(rec);
+  const AxesCandidate& best = s.ranked.front();
+  const bool differs = !best.imu_to_camera.isApprox(rec.nominal.imu_to_camera, 1e-6);
+  double given_px = 0;
+  for (const AxesCandidate& c : s.ranked)
+    if (c.imu_to_camera.isApprox(rec.nominal.imu_to_camera, 1e-6)) given_px = c.scale_px;
+  std::ostringstream what;
+  what << "the pictures follow imu_to_camera " << matrix_text(best.imu_to_camera) << " (" << format_number(best.scale_px)
+       << " px; the runner-up " << format_number(s.ranked[1].scale_px) << " px";
+  if (differs && given_px > 0) what << ", motion.imu_to_camera's " << format_number(given_px) << " px";
+  what << ")";
+  if (!s.decisive()) what << ": not decisive, diagnosing with motion.imu_to_camera";
+  else if (!differs) what << ": motion.imu_to_camera";
+  else if (mode == "search") rec.nominal.imu_to_camera = best.imu_to_camera, what << ": diagnosing with them (--imu-axes search)";
+  else what << ": NOT motion.imu_to_camera; diagnosing as given (--imu-axes search diagnoses with the axes found)";
+  std::cerr << "rsd-diagnose: the gyro's axes: " << what.str() << "\n";
+  return what.str();
+}
 
 std::string effect_json(const NamedEffect& e) {
   std::ostringstream o;
@@ -77,7 +109,7 @@ std::string located_json(const std::vector<Located>& located, const char* indent
 }
 
 // The spec's "Diagnosis output", key for key, and what was withheld.
-std::string diagnosis_json(const Diagnosis& d) {
+std::string diagnosis_json(const Diagnosis& d, const std::string& imu_axes) {
   std::ostringstream o;
   o << "{\n  \"format\": \"rsd-diagnosis/1\",\n  \"baseline\": {\"rms_px\": " << json_number(d.baseline.rms_px)
     << ", \"observations\": " << d.baseline.observations << "},\n  \"located\": " << located_json(d.located, "  ")
@@ -92,7 +124,9 @@ std::string diagnosis_json(const Diagnosis& d) {
   // Beyond the spec's keys: what was found and not named, with why (readers may ignore it).
   o << ",\n  \"withheld\": [";
   for (size_t k = 0; k < d.withheld.size(); ++k) o << (k ? ", " : "") << json_string(d.withheld[k]);
-  o << "]\n}\n";
+  o << "]";
+  if (!imu_axes.empty()) o << ",\n  \"imu_axes\": " << json_string(imu_axes);
+  o << "\n}\n";
   return o.str();
 }
 
@@ -111,6 +145,11 @@ int run(int argc, char** argv) {
   app.add_option("--write-calibration", o.calibration,
                  "Write the nominal model with every named effect applied as an rsd-calibration/1 file "
                  "(docs/formats/calibration-v1.md), for rsd and the other tools");
+  app.add_option("--imu-axes", o.imu_axes,
+                 "Matches recordings: the gyro's axes against the camera's. check: rank the 24 axis orders by how well "
+                 "each predicts the pictures and say when motion.imu_to_camera is not the clear best; search: diagnose "
+                 "with the clear best; given: take motion.imu_to_camera as it is")
+      ->check(CLI::IsMember({"check", "search", "given"}))->capture_default_str();
   app.add_option("--heldout-every", o.heldout_every, "Hold out every n-th frame (0: none)")
       ->check(int_range(0, 1000))->capture_default_str();
   if (const auto rc = parse_command_line(app, argc, argv)) return *rc;
@@ -118,9 +157,10 @@ int run(int argc, char** argv) {
   if (!o.calibration.empty()) require_writable(o.calibration, "--write-calibration");
   std::cerr << "rsd-diagnose: reading " << o.dir << "\n";
   // An images recording's observations are made from its pictures, as rsd-extract makes them.
-  const Recording rec = formats::is_images_recording(o.dir)
-                            ? observations_from_pictures(formats::read_images_recording(o.dir), rsd::dsp::TrackOptions{})
-                            : formats::read_recording(o.dir);
+  Recording rec = formats::is_images_recording(o.dir)
+                      ? observations_from_pictures(formats::read_images_recording(o.dir), rsd::dsp::TrackOptions{})
+                      : formats::read_recording(o.dir);
+  const std::string axes = check_imu_axes(rec, o.imu_axes);
   // The model is built first so that an unsupported recording fails before the long part.
   const DiagnosisModel model(rec);
   std::cerr << "rsd-diagnose: diagnosing " << model.size() << " observations...\n";
@@ -134,7 +174,7 @@ int run(int argc, char** argv) {
   const Diagnosis d = diagnose(model, opt);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << "rsd-diagnose: diagnosed in " << format_number(secs, 3) << " s\n";
-  write_file(o.json, diagnosis_json(d));
+  write_file(o.json, diagnosis_json(d, axes));
   if (!o.calibration.empty()) {
     formats::write_calibration(o.calibration, calibration_from(rec, d, "rsd-diagnose: " + o.dir + "/recording.yaml"));
     std::cerr << "rsd-diagnose: wrote the calibration to " << o.calibration << "\n";

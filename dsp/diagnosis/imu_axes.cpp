@@ -27,7 +27,12 @@ std::vector<Eigen::Matrix3d> axis_rotations() {
 
 namespace {
 
-// The candidate's best robust residual scale over clock offsets, coarse then fine.
+// Clock offsets are searched this far either side of the nominal one (within the data): a camera
+// and an IMU on separate clocks can be a third of a second apart.
+constexpr double kOffsetSpanS = 1.0;
+
+// The candidate's best robust residual scale over clock offsets, 10 ms apart, then 2 ms apart
+// around the best (a wrong offset blurs every axis order alike; a wrong order stays wrong).
 AxesCandidate score(Recording rec, const Eigen::Matrix3d& R, int max_observations) {
   rec.nominal.imu_to_camera = R;
   const DiagnosisModel m(rec);
@@ -44,7 +49,7 @@ AxesCandidate score(Recording rec, const Eigen::Matrix3d& R, int max_observation
     const double s = robust_stats(m.residuals(p, idx)).scale_px;
     if (s < best.scale_px) best.scale_px = s, best.time_offset_s = offset;
   };
-  for (double d = -0.1; d <= 0.1 + 1e-9; d += 0.01) at(t0 + d);
+  for (double d = -kOffsetSpanS; d <= kOffsetSpanS + 1e-9; d += 0.01) at(t0 + d);
   const double coarse = best.time_offset_s;
   for (double d = -0.01; d <= 0.01 + 1e-9; d += 0.002) at(coarse + d);
   return best;

@@ -3,9 +3,9 @@
 // ORIN, a drone's flight controller), and motion.imu_to_camera must say so before any effect can
 // be measured; mount_rotation fits what remains, a degree or two. Of the 24 rotations that take
 // axes onto axes (signed permutations of determinant +1), the search ranks each by how well the
-// nominal model with it predicts a matches recording, over clock offsets within +-0.1 s (a wrong
-// axis order predicts turns about the wrong axis: tens of pixels; the right one leaves the clock
-// offset's and the lens's error, a few).
+// nominal model with it predicts a matches recording, at its best clock offset within +-1 s of the
+// nominal one (a wrong axis order predicts turns about the wrong axis: tens of pixels; the right
+// one leaves what the other effects do, the readout's and the bias's, a few).
 #pragma once
 
 #include <Eigen/Core>
@@ -33,6 +33,6 @@ std::vector<Eigen::Matrix3d> axis_rotations();
 
 // Ranks the 24 axis orders for a matches recording (gyro motion), on at most `max_observations`
 // matches spread over the recording. Throws std::invalid_argument for a recording of another kind.
-AxesSearch search_imu_axes(const Recording& rec, int max_observations = 3000);
+AxesSearch search_imu_axes(const Recording& rec, int max_observations = 1000);
 
 }  // namespace rsd::dsp

@@ -50,3 +50,19 @@ set_tests_properties(diagnosis_benchmark_reduced PROPERTIES TIMEOUT 400 LABELS "
 if(RSD_SANITIZE)
   set_tests_properties(diagnosis_benchmark_reduced PROPERTIES DISABLED TRUE)
 endif()
+
+# The gyro's axes from the pictures (--imu-axes): the phone scenario (gyro mounted 0,-1,0,-1,0,0,
+# 0,0,-1, clock 0.35 s apart, a readout, a bias) told the identity: `search` finds the mount and
+# names the three effects down to the noise. Ten seconds at full speed: not in the sanitizer trees,
+# where test_diagnosis_gyro's ImuAxes tests run the search.
+if(NOT RSD_SANITIZE)
+  add_test(NAME cli_diagnose_imu_axes_prepare
+           COMMAND sh -c "rm -rf \"$1/axes\" && \"$0\" recording \"$2\" \"$1/axes\" > /dev/null && sed -i 's/imu_to_camera: \\[0, -1, 0, -1, 0, 0, 0, 0, -1\\]/imu_to_camera: [1, 0, 0, 0, 1, 0, 0, 0, 1]/' \"$1/axes/recording.yaml\" && grep -q 'imu_to_camera: \\[1, 0, 0, 0, 1, 0, 0, 0, 1\\]' \"$1/axes/recording.yaml\""
+                   $<TARGET_FILE:rsd-sim> ${DIAG} ${PROJECT_SOURCE_DIR}/config/scenarios/matches-phone.yaml)
+  set_tests_properties(cli_diagnose_imu_axes_prepare PROPERTIES FIXTURES_SETUP diagnose_axes LABELS e2e)
+  rsd_cli_test(cli_diagnose_imu_axes STATUS 0 LABELS e2e
+               MESSAGES "the gyro's axes: the pictures follow imu_to_camera 0,-1,0,-1,0,0,0,0,-1 (" "diagnosing with them (--imu-axes search)"
+                        "effects: time_offset rolling_shutter gyro_bias; final RMS 1.0"
+               COMMAND ${diagnose} ${DIAG}/axes --json ${DIAG}/axes.json --imu-axes search)
+  set_tests_properties(cli_diagnose_imu_axes PROPERTIES FIXTURES_REQUIRED diagnose_axes TIMEOUT 300)
+endif()
