@@ -12,7 +12,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -21,6 +23,7 @@
 
 #include "tools/common/cli_util.hpp"
 #include "formats/image_file.hpp"
+#include "formats/gpmf_mp4.hpp"
 #include "formats/image_t_codec.hpp"
 #include "formats/intrinsics_file.hpp"
 #include "formats/lcm_log.hpp"
@@ -281,8 +284,64 @@ int run_on_recording(const Options& o) {
   return 0;
 }
 
+// An MP4 (ISO base media file: "ftyp" at byte 4).
+bool looks_like_mp4(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char head[8] = {};
+  return in.read(head, 8) && std::memcmp(head + 4, "ftyp", 4) == 0;
+}
+
+// A GoPro clip's frames and GPMF gyro as the motion log the rest of rsd-extract reads.
+MotionLog motion_of(const formats::GpmfVideo& v, const std::string& clip) {
+  MotionLog s;
+  for (double t : v.frame_t_s) s.frames.push_back({t, std::nullopt, std::nullopt, v.width, v.height});
+  for (size_t i = 0; i < v.gyro_t_s.size(); ++i) s.gyro.push_back({v.gyro_t_s[i], v.gyro_rad_s[i]});
+  s.gyro_frame = rsd::velocity_t::FRAME_IMU;
+  s.channels = {{clip + " video", static_cast<int>(v.frame_t_s.size())}, {clip + " GPMF", v.payloads}};
+  s.events = static_cast<int>(v.frame_t_s.size()) + v.payloads;
+  return s;
+}
+
+// rsd-extract CLIP.mp4 OUT: a GoPro clip (its GPMF gyro) as an images recording whose pictures stay
+// in the clip (observations.video), for rsd-diagnose OUT and rsd --replay OUT. The gyro's axes in
+// the camera are what --imu-to-camera (or --nominal's motion.imu_to_camera) says, else the
+// identity: rsd-diagnose --imu-axes search asks the pictures.
+int run_on_gopro_clip(const Options& o) {
+  if (!o.target.empty()) throw UsageError(o.log + " is a GoPro clip: its motion is its gyro; --target needs a trajectory");
+  std::fprintf(stderr, "rsd-extract: reading the GoPro clip %s\n", o.log.c_str());
+  const formats::GpmfVideo v = formats::read_gpmf_video(o.log);
+  const MotionLog s = motion_of(v, o.log);
+  std::fprintf(stderr, "rsd-extract: %zu frames at %dx%d, %zu gyro samples in %d GPMF payloads (%s, ORIN '%s')\n", v.frame_t_s.size(),
+               v.width, v.height, v.gyro_t_s.size(), v.payloads, v.device.c_str(), v.orin.c_str());
+  Nominal n = nominal_model(o, s);
+  if (n.imu_to_camera) n.model.imu_to_camera = *n.imu_to_camera;
+  else
+    n.notes.push_back("the gyro's axes in the camera: not given, taken as the identity (rsd-diagnose --imu-axes search "
+                      "finds them from the pictures; --imu-to-camera states them)");
+  dsp::Recording rec;
+  rec.kind = dsp::ObservationKind::Matches;
+  rec.motion = dsp::MotionKind::Gyro;
+  rec.gyro = s.gyro;
+  rec.noise_px = o.noise_px;
+  rec.nominal = n.model;
+  for (const std::string& note : n.notes) std::fprintf(stderr, "rsd-extract: %s\n", note.c_str());
+  const std::vector<bool> ok = covered(s, n, true);
+  for (size_t k = 0; k < s.frames.size(); ++k)
+    if (ok[k]) rec.frames.push_back({static_cast<int>(k), s.frames[k].t});
+  if (rec.frames.empty()) throw std::runtime_error(o.log + ": the gyro does not cover any frame's readout");
+  formats::ImagesRecording out;
+  out.rec = rec;
+  out.video = o.log;
+  std::filesystem::create_directories(o.out);
+  formats::write_images_recording(o.out, out);
+  std::printf("rsd-extract: wrote an images recording (%zu of %zu frames, the pictures in %s; %zu gyro samples) to %s\n",
+              rec.frames.size(), s.frames.size(), o.log.c_str(), rec.gyro.size(), o.out.c_str());
+  return 0;
+}
+
 int run(const Options& o) {
   if (std::filesystem::is_directory(o.log)) return run_on_recording(o);
+  if (looks_like_mp4(o.log)) return run_on_gopro_clip(o);
   std::optional<TargetSpec> target;
   if (!o.target.empty()) {
     try {
@@ -344,7 +403,7 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   Options o;
   CLI::App app(kDescription, "rsd-extract");
-  app.add_option("INPUT", o.log, "LCM log with raw frames and motion, or an images recording directory")
+  app.add_option("INPUT", o.log, "LCM log with raw frames and motion, an images recording directory, or a GoPro MP4 (its GPMF gyro)")
       ->required()->check(CLI::ExistingPath);
   app.add_option("OUTDIR", o.out, "Observation recording directory to write (created)")->required();
   app.add_option("--nominal", o.nominal, "YAML with recording.yaml's camera: / timing: / motion: keys (a recording.yaml will do)")

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include "dsp/diagnosis/fit.hpp"
 #include "dsp/diagnosis/model.hpp"
@@ -39,12 +40,12 @@ AxesCandidate score(Recording rec, const Eigen::Matrix3d& R, int max_observation
   std::vector<int> all(static_cast<size_t>(m.size()));
   for (int i = 0; i < m.size(); ++i) all[static_cast<size_t>(i)] = i;
   const std::vector<int> idx = subsample(all, static_cast<size_t>(max_observations));
-  const auto [lo, hi] = m.offset_range();
+  const std::pair<double, double> range = m.offset_range();
   ModelParams p = nominal_params(rec.nominal);
   const double t0 = p[Param::TimeOffset];
   AxesCandidate best{R, std::numeric_limits<double>::infinity(), t0};
   auto at = [&](double offset) {
-    if (offset < lo || offset > hi) return;
+    if (offset < range.first || offset > range.second) return;
     p[Param::TimeOffset] = offset;
     const double s = robust_stats(m.residuals(p, idx)).scale_px;
     if (s < best.scale_px) best.scale_px = s, best.time_offset_s = offset;
