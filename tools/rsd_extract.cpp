@@ -296,7 +296,7 @@ MotionLog motion_of(const formats::GpmfVideo& v, const std::string& clip) {
   MotionLog s;
   for (double t : v.frame_t_s) s.frames.push_back({t, std::nullopt, std::nullopt, v.width, v.height});
   for (size_t i = 0; i < v.gyro_t_s.size(); ++i) s.gyro.push_back({v.gyro_t_s[i], v.gyro_rad_s[i]});
-  s.gyro_frame = rsd::velocity_t::FRAME_IMU;
+  s.gyro_frame = static_cast<int>(rsd::velocity_t::FRAME_IMU);  // a value: the constant has no definition to bind to
   s.channels = {{clip + " video", static_cast<int>(v.frame_t_s.size())}, {clip + " GPMF", v.payloads}};
   s.events = static_cast<int>(v.frame_t_s.size()) + v.payloads;
   return s;
