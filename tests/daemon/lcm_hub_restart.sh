@@ -23,9 +23,13 @@ start_hub() {
   for _ in $(seq 300); do grep -q "clients" "$work/hub.log" && return 0; kill -0 "$server" 2>/dev/null || break; sleep 0.1; done
   fail "the hub did not start on port $port: $(cat "$work/hub.log")"
 }
-wait_clients() {  # the hub counts rsd (and nobody else) as connected
-  for _ in $(seq 300); do grep -q " $1 clients" "$work/hub.log" && return 0; sleep 0.1; done
-  fail "the hub never saw $1 client(s): $(tail -3 "$work/hub.log")"
+# rsd is connected once the hub counts a client. At least one, not exactly one: a CI run saw the
+# hub count two for 30 s with one lcm_create in rsd (rsd's hub probe, a connection it closes, is
+# the likely second under load; under study, docs/reliability.md). What the test asserts is what
+# comes out of rsd across the restart, below.
+wait_clients() {
+  for _ in $(seq 300); do grep -qE " [1-9][0-9]* clients" "$work/hub.log" && return 0; sleep 0.1; done
+  fail "the hub never saw a client: $(tail -3 "$work/hub.log")"
 }
 start_hub
 printf 'source:\n  driver: lcm\n  lcm:\n    url: tcpq://127.0.0.1:%s\n    open_timeout_s: 2\n' "$port" >"$work/rsd.yaml"
