@@ -184,7 +184,8 @@ struct ToolsCase {
   std::string lens;          // source.sim's lens and field of view, as YAML lines
   std::string nominal_file;  // what the user tells rsd-extract: a file name and its text
   std::string nominal_text;
-  std::string extract_option;  // --nominal or --intrinsics, then any further options
+  std::string extract_option;  // --nominal or --intrinsics
+  std::string extract_more;    // any further options of rsd-extract
   dsp::NominalModel told;      // the same, as a model
   double nominal_at_least_px;
   double from_best_px = 0.15;  // the learned calibration's rectified RMS at most this above the true one's
@@ -227,8 +228,7 @@ formats::Calibration through_the_tools(const ToolsCase& c) {
   std::ofstream(dir / c.nominal_file) << c.nominal_text;
   auto sh = [&](const std::string& cmd) { run_command(cmd, d); };
   sh(std::string(RSD_BIN) + " -q -c " + d + "/hidden.yaml --frames " + std::to_string(c.frames) + " --record " + d + "/run.lcmlog");
-  sh(std::string(RSD_EXTRACT_BIN) + " " + d + "/run.lcmlog " + d + "/matches " + c.extract_option.substr(0, c.extract_option.find(' ')) + " " + d +
-     "/" + c.nominal_file + (c.extract_option.find(' ') == std::string::npos ? "" : c.extract_option.substr(c.extract_option.find(' '))));
+  sh(std::string(RSD_EXTRACT_BIN) + " " + d + "/run.lcmlog " + d + "/matches " + c.extract_option + " " + d + "/" + c.nominal_file + c.extract_more);
   sh(std::string(RSD_DIAGNOSE_BIN) + " " + d + "/matches --json " + d + "/d.json --write-calibration " + d + "/cal.yaml");
   const formats::Calibration learned = formats::read_calibration(d + "/cal.yaml");
   std::printf("[%s] learned: f %.2f, line delay %.4g (true 6.25e-05), offset %.5f (true 0.012), bias (%.4f %.4f %.4f)\n", c.name,
@@ -256,7 +256,7 @@ formats::Calibration through_the_tools(const ToolsCase& c) {
 }
 
 TEST(ClosedLoop, ThroughAnLcmRecordingAndTheTools) {
-  ToolsCase c{"fast-lcm", "", "nominal.yaml", "", "--nominal", {}, 1.0};
+  ToolsCase c{"fast-lcm", "", "nominal.yaml", "", "--nominal", "", {}, 1.0};
   const double hfov_deg = 2 * std::atan(320 / (1.03 * 320 / std::tan(M_PI / 6))) * 180 / M_PI;  // f 3% longer than 60 deg's
   c.lens = "    hfov_deg: " + std::to_string(hfov_deg) + "\n";
   c.nominal_text =
@@ -276,7 +276,7 @@ TEST(ClosedLoop, AFisheyeRigFromItsKalibrCamchain) {
   const dsp::Distortion lens = dsp::Distortion::equidistant(0.03, -0.01, 0.002, 0);
   const dsp::CameraModel cam = dsp::CameraModel::from_hfov(640, 480, 120 * M_PI / 180, lens);
   // rsd-extract reads no T_cam_imu from a camchain: the gyro's axes are given as an option.
-  ToolsCase c{"fisheye-lcm", "", "camchain.yaml", "", "--intrinsics --imu-to-camera 1,0,0,0,1,0,0,0,1", {}, 0.4};
+  ToolsCase c{"fisheye-lcm", "", "camchain.yaml", "", "--intrinsics", " --imu-to-camera 1,0,0,0,1,0,0,0,1", {}, 0.4};
   c.from_best_px = 0.05;  // the bound: within the map's 0.05 px of the best the calibration allows
   c.frames = 60;
   c.lens = "    hfov_deg: 120\n    lens: {model: pinhole-equi, k1: 0.03, k2: -0.01, k3: 0.002, k4: 0}\n";
