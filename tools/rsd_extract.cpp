@@ -212,6 +212,17 @@ std::vector<bool> covered(const MotionLog& s, const Nominal& n, bool by_gyro) {
                            n.model);
 }
 
+// The frames whose readout the motion covers, as the recording's frames (numbered by their place
+// in the input); none is an error.
+std::vector<dsp::FrameStamp> covered_frames(const MotionLog& s, const std::vector<bool>& ok, const std::string& input) {
+  std::vector<dsp::FrameStamp> frames;
+  for (size_t k = 0; k < s.frames.size(); ++k)
+    if (ok[k]) frames.push_back({static_cast<int>(k), s.frames[k].t});
+  if (frames.empty())
+    throw std::runtime_error(input + ": the motion does not cover any frame's readout (frames and motion on different clocks?)");
+  return frames;
+}
+
 // ---------------------------------------------------------------- the run
 
 dsp::ObservationKind choose_kind(const Options& o, const MotionLog& s) {
@@ -326,9 +337,7 @@ int run_on_gopro_clip(const Options& o) {
   rec.nominal = n.model;
   for (const std::string& note : n.notes) std::fprintf(stderr, "rsd-extract: %s\n", note.c_str());
   const std::vector<bool> ok = covered(s, n, true);
-  for (size_t k = 0; k < s.frames.size(); ++k)
-    if (ok[k]) rec.frames.push_back({static_cast<int>(k), s.frames[k].t});
-  if (rec.frames.empty()) throw std::runtime_error(o.log + ": the gyro does not cover any frame's readout");
+  rec.frames = covered_frames(s, ok, o.log);
   formats::ImagesRecording out;
   out.rec = rec;
   out.video = o.log;
@@ -379,9 +388,7 @@ int run(const Options& o) {
   rec.nominal = n.model;
   for (const std::string& note : n.notes) std::fprintf(stderr, "rsd-extract: %s\n", note.c_str());
   const std::vector<bool> ok = covered(s, n, kind == dsp::ObservationKind::Matches);
-  for (size_t k = 0; k < s.frames.size(); ++k)
-    if (ok[k]) rec.frames.push_back({static_cast<int>(k), s.frames[k].t});
-  if (rec.frames.empty()) throw std::runtime_error(o.log + ": the motion does not cover any frame's readout (frames and motion on different clocks?)");
+  rec.frames = covered_frames(s, ok, o.log);
   if (rec.frames.size() < s.frames.size())
     std::fprintf(stderr, "rsd-extract: %zu of %zu frames lie outside the motion's time span (with 50 ms to spare) and are left out\n",
                  s.frames.size() - rec.frames.size(), s.frames.size());
