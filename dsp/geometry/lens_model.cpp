@@ -92,12 +92,24 @@ double equi_scale(const Distortion& d, double r) {
 Eigen::Vector2d equi(const Distortion& d, const Eigen::Vector2d& xn) { return equi_scale(d, xn.norm()) * xn; }
 
 // x_d = s(r) x_n: J = s I + (s'(r) / r) x_n x_n^T, with s'(r) = (theta_d'(theta) / (1 + r^2) - s) / r.
-Eigen::Matrix2d equi_jacobian(const Distortion& d, const Eigen::Vector2d& xn) {
+// The point and its Jacobian share the arc tangent.
+Eigen::Vector2d equi_with_jacobian(const Distortion& d, const Eigen::Vector2d& xn, Eigen::Matrix2d& J) {
   const double r = xn.norm();
-  const double s = equi_scale(d, r);
-  const double ds_over_r = r < kSmallR ? 2 * (d.k1 - 1.0 / 3.0)
-                                       : (theta_d_slope(d, std::atan(r)) / (1 + r * r) - s) / (r * r);
-  return s * Eigen::Matrix2d::Identity() + ds_over_r * xn * xn.transpose();
+  double s, ds_over_r;
+  if (r < kSmallR) {
+    s = equi_scale(d, r), ds_over_r = 2 * (d.k1 - 1.0 / 3.0);
+  } else {
+    const double t = std::atan(r);
+    s = theta_d(d, t) / r, ds_over_r = (theta_d_slope(d, t) / (1 + r * r) - s) / (r * r);
+  }
+  J = s * Eigen::Matrix2d::Identity() + ds_over_r * xn * xn.transpose();
+  return s * xn;
+}
+
+Eigen::Matrix2d equi_jacobian(const Distortion& d, const Eigen::Vector2d& xn) {
+  Eigen::Matrix2d J;
+  equi_with_jacobian(d, xn, J);
+  return J;
 }
 
 // theta with theta_d(theta) = rho on [0, theta_max]: Newton's method kept inside a bracket that
@@ -166,6 +178,12 @@ Eigen::Vector2d distort(const Distortion& d, const Eigen::Vector2d& xn) {
 
 Eigen::Matrix2d distort_jacobian(const Distortion& d, const Eigen::Vector2d& xn) {
   return d.model == LensModel::PinholeEqui ? equi_jacobian(d, xn) : radtan_jacobian(d, xn);
+}
+
+Eigen::Vector2d distort(const Distortion& d, const Eigen::Vector2d& xn, Eigen::Matrix2d& jacobian) {
+  if (d.model == LensModel::PinholeEqui) return equi_with_jacobian(d, xn, jacobian);
+  jacobian = radtan_jacobian(d, xn);
+  return radtan(d, xn);
 }
 
 std::optional<Eigen::Vector2d> undistort(const Distortion& d, const Eigen::Vector2d& xd) {

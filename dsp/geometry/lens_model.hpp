@@ -55,6 +55,8 @@ Distortion from_file_terms(LensModel m, const double* k);
 Eigen::Vector2d distort(const Distortion& d, const Eigen::Vector2d& xn);
 // d(distort)/d(xn), analytic (the rectifier's map steps and the solvers use it).
 Eigen::Matrix2d distort_jacobian(const Distortion& d, const Eigen::Vector2d& xn);
+// Both at once, sharing the work (the rectifier's Newton steps need both at every node).
+Eigen::Vector2d distort(const Distortion& d, const Eigen::Vector2d& xn, Eigen::Matrix2d& jacobian);
 // The inverse of distort(); nullopt where there is none: a radtan polynomial far outside its
 // monotonic region, an equidistant point beyond the lens's field (equi_max_theta).
 std::optional<Eigen::Vector2d> undistort(const Distortion& d, const Eigen::Vector2d& xd);

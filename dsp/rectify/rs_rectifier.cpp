@@ -95,18 +95,22 @@ void Rectifier::allocate_levels() {
     levels_.push_back(std::move(L));
   }
   if (levels_.empty()) throw std::invalid_argument("Rectifier: output too small for min_spacing");
-  for (Branch* b : {&plane_b_, &inf_b_}) {
-    b->x.resize(most), b->y.resize(most), b->ok.resize(most);
-    b->d2x.resize(2 * most), b->d2y.resize(2 * most);
+  for (Grid* g : {&coarse_, &fine_}) {
+    for (Branch* b : {&g->plane, &g->inf}) {
+      b->x.resize(most), b->y.resize(most), b->ok.resize(most);
+      b->d2x.resize(2 * most), b->d2y.resize(2 * most);
+    }
+    g->rho.resize(most);
+    g->cell_mode.resize(most);
   }
-  rho_.resize(most);
-  cell_mode_.resize(most);
+  cell_error_.resize(most), split_.resize(most), split_row_.resize(most), fine_done_.resize(most);
   v_start_.resize(widest);
-  for (RowScratch& b : bands_) {
-    for (auto* v : {&b.px, &b.py, &b.ix, &b.iy, &b.rho}) v->resize(widest);
-    for (auto* v : {&b.fpx, &b.fpy, &b.fix, &b.fiy}) v->resize(widest);
-    b.plane_cells.resize(widest), b.inf_cells.resize(widest);
-  }
+  for (RowScratch& b : bands_)
+    for (NodeRow* r : {&b.coarse, &b.fine}) {
+      for (auto* v : {&r->px, &r->py, &r->ix, &r->iy, &r->rho}) v->resize(widest);
+      for (auto* v : {&r->fpx, &r->fpy, &r->fix, &r->fiy}) v->resize(widest);
+      r->plane_cells.resize(widest), r->inf_cells.resize(widest);
+    }
 }
 
 // ---- The exact map at one node ---------------------------------------------------------
@@ -171,9 +175,9 @@ bool Rectifier::solve_node(const double* Y, double rho, double& v, double* px, d
     const Eigen::Vector2d xu = xn;  // on the undistorted plane, for the gain below
     double lens_gain = 1;  // how much the lens stretches a small move of xn: ||J||_inf
     if (distorted) {
-      const Eigen::Matrix2d J = cam_.distort_jacobian(xn);
+      Eigen::Matrix2d J;
+      xn = dsp::distort(cam_.dist, xn, J);
       dxn = J * dxn;
-      xn = cam_.distort(xn);
       lens_gain = J.cwiseAbs().rowwise().sum().maxCoeff();
     }
     const double pu = cam_.fx * xn.x() + cam_.cx, pv = cam_.fy * xn.y() + cam_.cy;
@@ -201,7 +205,7 @@ bool Rectifier::solve_node(const double* Y, double rho, double& v, double* px, d
 // Node columns [i0, i1): each column solved top to bottom, Newton starting from the row above;
 // returns the largest table-error gain.
 double Rectifier::solve_columns(Branch& b, bool plane_branch, int i0, int i1) {
-  const Level& L = levels_[level_];
+  const Level& L = levels_[coarse_.level];
   double gain_max = 0;
   for (int i = i0; i < i1; ++i) v_start_[i] = 0;
   for (int j = 0; j < L.ny; ++j)
@@ -210,24 +214,41 @@ double Rectifier::solve_columns(Branch& b, bool plane_branch, int i0, int i1) {
       b.ok[n] = 0, b.x[n] = b.y[n] = 0;
       double& v = v_start_[i];
       v += L.spacing * (j > 0);
-      if (!L.ray_ok[n]) continue;
-      const double r[3] = {L.ray_x[n], L.ray_y[n], 1.0};
-      const double rho = plane_branch ? rho_[n] : 0.0;
-      double Y[3];
-      for (int e = 0; e < 3; ++e)
-        Y[e] = Rt_ref_[3 * e] * r[0] + Rt_ref_[3 * e + 1] * r[1] + Rt_ref_[3 * e + 2] * r[2] + rho * o_ref_[e];
       double root = v, px[2], gain = 0;
-      if (!solve_node(Y, rho, root, px, &gain)) continue;
+      if (!solve_at(coarse_, n, plane_branch, root, px, &gain)) continue;
       b.x[n] = px[0], b.y[n] = px[1], b.ok[n] = 1, v = root;
       gain_max = std::max(gain_max, gain);
     }
   return gain_max;
 }
 
+// The signed inverse depth of node n's point on the plane (0 without one).
+double Rectifier::node_rho(const Level& L, std::size_t n) const {
+  if (!plane_) return 0.0;
+  const double a[3] = {L.ray_x[n], L.ray_y[n], 1.0};
+  double na = 0;
+  for (int e = 0; e < 3; ++e)
+    na += plane_n_[e] * (Rt_ref_[3 * e] * a[0] + Rt_ref_[3 * e + 1] * a[1] + Rt_ref_[3 * e + 2] * a[2]);
+  return na / plane_den_;
+}
+
+// Node n of grid g for one depth choice: its ray at t_ref meets the plane (at g.rho[n]) or
+// infinity in Y, whose rolling-shutter image solve_node finds from row v.
+bool Rectifier::solve_at(const Grid& g, std::size_t n, bool plane_branch, double& v, double* px, double* gain) const {
+  const Level& L = levels_[g.level];
+  if (!L.ray_ok[n]) return false;
+  const double r[3] = {L.ray_x[n], L.ray_y[n], 1.0};
+  const double rho = plane_branch ? g.rho[n] : 0.0;
+  double Y[3];
+  for (int e = 0; e < 3; ++e)
+    Y[e] = Rt_ref_[3 * e] * r[0] + Rt_ref_[3 * e + 1] * r[1] + Rt_ref_[3 * e + 2] * r[2] + rho * o_ref_[e];
+  return solve_node(Y, rho, v, px, gain);
+}
+
 // The columns are independent (each column's Newton starts follow its own rows), so bands of
 // them go to the executor's threads as the rows of the remap do; the result is the same.
 void Rectifier::solve_branch(Branch& b, bool plane_branch) {
-  const int nx = levels_[level_].nx;
+  const int nx = levels_[coarse_.level].nx;
   const int parts = executor_ ? std::clamp(std::min(RectifierConfig::bands_for(executor_->concurrency()), nx), 1,
                                            static_cast<int>(bands_.size()))
                               : 1;
@@ -252,7 +273,7 @@ void Rectifier::solve_branch(Branch& b, bool plane_branch) {
 // |second difference| of the node values along x and y (vector norms), centred at the node or,
 // on the grid's edge, at its inward neighbour; NaN where a stencil node has no solution.
 void Rectifier::second_differences(Branch& b) const {
-  const Level& L = levels_[level_];
+  const Level& L = levels_[coarse_.level];
   const float nan = std::numeric_limits<float>::quiet_NaN();
   auto d2 = [&](std::size_t a, std::size_t c, std::size_t e, float* out) {
     if (!b.ok[a] || !b.ok[c] || !b.ok[e]) {

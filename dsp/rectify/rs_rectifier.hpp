@@ -64,8 +64,12 @@ struct RectifierConfig {
 
 struct RectifyReport {
   bool rectified = false;       // false: the frame was copied unrectified
-  int spacing = 0;              // node spacing of the map used
+  int spacing = 0;              // node spacing of the map used (of its coarse cells, if some are split)
   int levels_solved = 0;        // grids solved to reach it (levels predicted to miss are skipped)
+  // Cells of `spacing` whose bound missed the tolerance, each split into four of fine_spacing
+  // (the next level, solved only there); 0: one spacing over the whole map.
+  int refined_cells = 0;
+  int fine_spacing = 0;         // the finest spacing the map uses (= spacing when none is split)
   double error_bound_px = 0;    // bound on the map error over every cell that is sampled
   int invalid_nodes = 0;        // nodes without a solution in the capture window (cells black)
   int unbounded_cells = 0;      // cells whose bound could not be estimated (invalid neighbours)
@@ -138,11 +142,20 @@ class Rectifier {
   struct Affine {                        // source positions along a cell of a row: a + k s, 16.16
     std::int32_t ax, ay, sx, sy;
   };
-  struct RowScratch {                    // one band's state: node values at the row, positions
+  struct Grid {                          // one level's node solutions and cell classes
+    std::size_t level = 0;               // index into levels_
+    Branch plane, inf;
+    std::vector<double> rho;             // inverse depth of each node's point on the plane
+    std::vector<std::uint8_t> cell_mode; // CellMode of each cell (fixed_point.hpp)
+  };
+  struct NodeRow {                       // one grid's node columns interpolated to a row
     std::vector<double> px, py, ix, iy, rho;
     std::vector<std::int32_t> fpx, fpy, fix, fiy;  // the same in 16.16, rounded once per node
-    std::vector<std::int32_t> xs, ys;
     std::vector<Affine> plane_cells, inf_cells;  // the row's cells of each branch (cell_affines.hpp)
+  };
+  struct RowScratch {                    // one band's state: node values at the row, positions
+    NodeRow coarse, fine;                // fine: for the cells split into the next level
+    std::vector<std::int32_t> xs, ys;
     double gain = 0;                     // its node columns' largest table-error gain
   };
 
@@ -150,20 +163,28 @@ class Rectifier {
   void allocate_levels();
   void build_pose_table(const CameraMotion& motion, int step_rows);
   bool solve_node(const double* Y, double rho, double& v, double* px, double* gain) const;
+  double node_rho(const Level& L, std::size_t n) const;
+  bool solve_at(const Grid& g, std::size_t n, bool plane_branch, double& v, double* px, double* gain) const;
   void solve_branch(Branch& b, bool plane_branch);
   double solve_columns(Branch& b, bool plane_branch, int i0, int i1);
   void second_differences(Branch& b) const;
   RectifyReport solve_level();
   RectifyReport assess_level();
+  std::uint8_t classify_cell(const Grid& g, const std::size_t* c) const;
+  // Local refinement: the cells of coarse_ that miss, split into fine_'s next level.
+  bool refine_cells(RectifyReport& rep);
+  bool solve_fine_node(int a, int b);
+  double patch_bound(const Branch& fine, const Branch& coarse, int i, int j) const;
   // max_displacement_px, points_checked and points_inside of the current map.
   void measure_displacement(RectifyReport& rep) const;
   double cell_bound(const Branch& b, int i, int j) const;
   static double fixed_point_error(int spacing);
   std::size_t next_level(std::size_t level, double bound) const;
-  int interpolate_row(double y, RowScratch& s) const;
-  void cell_columns(int i, const SamplePlane& g, int& c0, int& c1) const;
+  int interpolate_row(const Grid& g, double y, NodeRow& r) const;
+  bool split(int i, int j) const { return refined_ && split_[static_cast<std::size_t>(j) * (levels_[coarse_.level].nx - 1) + i]; }
   void generate_row(double y, const SamplePlane& g, RowScratch& s) const;
-  void kink_segment(int i, int c0, int c1, const SamplePlane& g, RowScratch& s) const;
+  void generate_cell(const Grid& g, const NodeRow& r, int j, int i, const SamplePlane& p, RowScratch& s) const;
+  void kink_segment(const Grid& g, const NodeRow& r, int i, int c0, int c1, const SamplePlane& p, RowScratch& s) const;
   void remap_rows(const SamplePlane& src, const SamplePlane& dst, int j0, int j1, RowScratch& s) const;
   void check_views(const ImageView& src, const ImageView& dst) const;
 
@@ -178,7 +199,6 @@ class Rectifier {
   void (*sample_cells_[kKinds])(const SamplePlane&, const Affine*, int, int, std::uint8_t*) = {};
 
   std::vector<Level> levels_;
-  std::size_t level_ = 0;
   std::vector<Pose> table_;                // allocated for a step of one row
   std::size_t table_n_ = 0;                // entries in use
   double table_v0_ = 0, table_inv_step_ = 0;
@@ -188,9 +208,13 @@ class Rectifier {
   double Rt_ref_[9] = {}, o_ref_[3] = {};  // R_ref^T and the camera centre at t_ref
   bool plane_ = false, need_infinite_ = false;
   double plane_n_[3] = {}, plane_den_ = 1;
-  std::vector<double> rho_;
-  Branch plane_b_, inf_b_;
-  std::vector<std::uint8_t> cell_mode_;
+  Grid coarse_;                            // the level every cell starts from
+  Grid fine_;                              // the next level, solved in the split cells only
+  bool refined_ = false;                   // some cells of coarse_ are split
+  std::vector<float> cell_error_;          // coarse_'s bound per cell (interpolation part)
+  std::vector<std::uint8_t> split_;        // per cell of coarse_: sampled through fine_
+  std::vector<std::uint8_t> split_row_;    // per cell row of coarse_: any cell split
+  std::vector<std::uint8_t> fine_done_;    // per node of fine_: solved this frame
   double gain_max_ = 0;                    // table-error sensitivity, max over nodes
   std::vector<double> v_start_;            // Newton's start per node column (row solved last)
   bool map_ready_ = false;

@@ -27,77 +27,113 @@ void linear_segment(const Affine& a, std::int32_t* xs, std::int32_t* ys, int cou
 
 }  // namespace
 
-// The node columns interpolated to image row y (linear in y between two node rows; y is
+// Grid g's node columns interpolated to image row y (linear in y between two node rows; y is
 // fractional for the rows of 4:2:0 chroma); returns the cell row.
-int Rectifier::interpolate_row(double y, RowScratch& s) const {
-  const Level& L = levels_[level_];
+int Rectifier::interpolate_row(const Grid& g, double y, NodeRow& r) const {
+  const Level& L = levels_[g.level];
   const int j = std::min(static_cast<int>(y) >> L.shift, L.ny - 2);
   const double wy = (y - j * L.spacing) / L.spacing;
   const std::size_t top = static_cast<std::size_t>(j) * L.nx, bot = top + L.nx;
   auto lerp = [&](const std::vector<double>& v, std::vector<double>& out, std::vector<std::int32_t>* fixed) {
     lerp_node_row(&v[top], &v[bot], wy, L.nx, out.data(), fixed ? fixed->data() : nullptr);
   };
-  if (plane_) lerp(plane_b_.x, s.px, &s.fpx), lerp(plane_b_.y, s.py, &s.fpy);
-  if (need_infinite_) lerp(inf_b_.x, s.ix, &s.fix), lerp(inf_b_.y, s.iy, &s.fiy);
-  if (plane_ && need_infinite_) lerp(rho_, s.rho, nullptr);  // picks the branch in kink cells only
+  if (plane_) lerp(g.plane.x, r.px, &r.fpx), lerp(g.plane.y, r.py, &r.fpy);
+  if (need_infinite_) lerp(g.inf.x, r.ix, &r.fix), lerp(g.inf.y, r.iy, &r.fiy);
+  if (plane_ && need_infinite_) lerp(g.rho, r.rho, nullptr);  // picks the branch in kink cells only
   return j;
 }
 
-// The samples [c0, c1) of plane g whose image positions lie in cell i (a cell spans an even
-// number of pixels, so every half-resolution plane has half of them in each).
-void Rectifier::cell_columns(int i, const SamplePlane& g, int& c0, int& c1) const {
-  const int sp = levels_[level_].spacing;
+namespace {
+
+// The samples [c0, c1) of plane g whose image positions lie in cell i of a grid of `spacing`
+// (a cell spans an even number of pixels, so every half-resolution plane has half of them in each).
+void cell_columns(int spacing, int i, const SamplePlane& g, int& c0, int& c1) {
   const int shift = g.scale_x - 1;  // scale 1 or 2: a shift, not a division, per cell
-  c0 = (i * sp) >> shift, c1 = std::min(((i + 1) * sp) >> shift, g.width);
+  c0 = (i * spacing) >> shift, c1 = std::min(((i + 1) * spacing) >> shift, g.width);
 }
 
+}  // namespace
+
 // Source positions of plane g's samples on image row y into s.xs, s.ys (16.16 in the plane's
-// coordinates; kSentinel where the output is black).
+// coordinates; kSentinel where the output is black). A split cell's pixels come from its fine cells.
 void Rectifier::generate_row(double y, const SamplePlane& g, RowScratch& s) const {
-  const Level& L = levels_[level_];
-  const std::uint8_t* modes = &cell_mode_[static_cast<std::size_t>(interpolate_row(y, s)) * (L.nx - 1)];
-  const PlaneScale scale(g);
+  const Level& L = levels_[coarse_.level];
+  const int j = interpolate_row(coarse_, y, s.coarse);
+  const int jf = refined_ && split_row_[j] ? interpolate_row(fine_, y, s.fine) : 0;
   for (int i = 0; i + 1 < L.nx; ++i) {
-    int c0, c1;
-    cell_columns(i, g, c0, c1);
-    if (c0 >= c1) break;
-    if (modes[i] == kZero)
-      std::fill(&s.xs[c0], &s.xs[c1], kSentinel), std::fill(&s.ys[c0], &s.ys[c1], kSentinel);
-    else if (modes[i] == kKink)
-      kink_segment(i, c0, c1, g, s);
-    else
-      linear_segment(modes[i] == kPlane ? cell_affine(s.fpx.data(), s.fpy.data(), i, L.shift, scale)
-                                        : cell_affine(s.fix.data(), s.fiy.data(), i, L.shift, scale),
-                     &s.xs[c0], &s.ys[c0], c1 - c0);
+    if (!split(i, j)) {
+      generate_cell(coarse_, s.coarse, j, i, g, s);
+      continue;
+    }
+    for (int f = 2 * i; f <= std::min(2 * i + 1, levels_[fine_.level].nx - 2); ++f) generate_cell(fine_, s.fine, jf, f, g, s);
   }
+}
+
+// Cell (i, j) of grid g on the row whose node values r holds.
+void Rectifier::generate_cell(const Grid& g, const NodeRow& r, int j, int i, const SamplePlane& p, RowScratch& s) const {
+  const Level& L = levels_[g.level];
+  int c0, c1;
+  cell_columns(L.spacing, i, p, c0, c1);
+  if (c0 >= c1) return;
+  const std::uint8_t mode = g.cell_mode[static_cast<std::size_t>(j) * (L.nx - 1) + i];
+  const PlaneScale scale(p);
+  if (mode == kZero)
+    std::fill(&s.xs[c0], &s.xs[c1], kSentinel), std::fill(&s.ys[c0], &s.ys[c1], kSentinel);
+  else if (mode == kKink)
+    kink_segment(g, r, i, c0, c1, p, s);
+  else
+    linear_segment(mode == kPlane ? cell_affine(r.fpx.data(), r.fpy.data(), i, L.shift, scale)
+                                  : cell_affine(r.fix.data(), r.fiy.data(), i, L.shift, scale),
+                   &s.xs[c0], &s.ys[c0], c1 - c0);
 }
 
 // A cell the horizon crosses: both branches are smooth there, so each is interpolated and the
 // sign of the (interpolated) inverse depth picks, per pixel, the one the depth model means.
-void Rectifier::kink_segment(int i, int c0, int c1, const SamplePlane& g, RowScratch& s) const {
-  const double sp = levels_[level_].spacing;
+void Rectifier::kink_segment(const Grid& g, const NodeRow& r, int i, int c0, int c1, const SamplePlane& p,
+                             RowScratch& s) const {
+  const double sp = levels_[g.level].spacing;
   for (int c = c0; c < c1; ++c) {
-    const double a = (g.scale_x * c + g.offset_x - i * sp) / sp;
-    const bool plane = s.rho[i] + a * (s.rho[i + 1] - s.rho[i]) > 0;
-    const std::vector<double>& X = plane ? s.px : s.ix;
-    const std::vector<double>& Y = plane ? s.py : s.iy;
-    s.xs[c] = to_fixed((X[i] + a * (X[i + 1] - X[i]) - g.offset_x) / g.scale_x);
-    s.ys[c] = to_fixed((Y[i] + a * (Y[i + 1] - Y[i]) - g.offset_y) / g.scale_y);
+    const double a = (p.scale_x * c + p.offset_x - i * sp) / sp;
+    const bool plane = r.rho[i] + a * (r.rho[i + 1] - r.rho[i]) > 0;
+    const std::vector<double>& X = plane ? r.px : r.ix;
+    const std::vector<double>& Y = plane ? r.py : r.iy;
+    s.xs[c] = to_fixed((X[i] + a * (X[i + 1] - X[i]) - p.offset_x) / p.scale_x);
+    s.ys[c] = to_fixed((Y[i] + a * (Y[i + 1] - Y[i]) - p.offset_y) / p.scale_y);
   }
 }
 
 // Sample rows [j0, j1) of one plane with one band's scratch. Cells of 16 px and more are sampled
 // straight from their affine segments (cell_affines, a row's cells at once), each run of
-// consecutive cells of one branch in one kernel call; narrower cells go through the row arrays,
-// so that the kernels still see runs of 16 pixels.
+// consecutive cells of one grid and branch in one kernel call; narrower cells go through the
+// row arrays, so that the kernels still see runs of 16 pixels. A split cell's row is its two
+// fine cells'.
 void Rectifier::remap_rows(const SamplePlane& src, const SamplePlane& dst, int j0, int j1, RowScratch& s) const {
-  const Level& L = levels_[level_];
+  const Level& L = levels_[coarse_.level];
   const int kind = static_cast<int>(sample_kind(src));
   const auto row = sample_row_[kind];
   const auto cells = sample_cells_[kind];
-  const int cell_n = L.spacing >> (dst.scale_x - 1);  // samples per cell (spacings are even)
-  const int n_cells = std::min(L.nx - 1, (dst.width + cell_n - 1) / cell_n);  // those with samples of this plane
   const PlaneScale scale(dst);
+  struct Tier {  // one grid's cells on this row
+    const Grid* g;
+    NodeRow* r;
+    int cell_n = 0, n_cells = 0, j = 0;
+    const std::uint8_t* modes = nullptr;
+  };
+  auto tier = [&](const Grid& g, NodeRow& r) {
+    const Level& G = levels_[g.level];
+    Tier t{&g, &r};
+    t.cell_n = G.spacing >> (dst.scale_x - 1);  // samples per cell (spacings are even)
+    t.n_cells = std::min(G.nx - 1, (dst.width + t.cell_n - 1) / t.cell_n);  // those with samples of this plane
+    return t;
+  };
+  Tier coarse = tier(coarse_, s.coarse), fine = refined_ ? tier(fine_, s.fine) : Tier{};
+  auto prepare = [&](Tier& t, double y) {
+    const Level& G = levels_[t.g->level];
+    t.j = interpolate_row(*t.g, y, *t.r);
+    t.modes = &t.g->cell_mode[static_cast<std::size_t>(t.j) * (G.nx - 1)];
+    if (plane_) cell_affines(t.r->fpx.data(), t.r->fpy.data(), t.n_cells, G.shift, scale, t.r->plane_cells.data());
+    if (need_infinite_) cell_affines(t.r->fix.data(), t.r->fiy.data(), t.n_cells, G.shift, scale, t.r->inf_cells.data());
+  };
   for (int j = j0; j < j1; ++j) {
     std::uint8_t* out = dst.row(j);
     const double y = dst.scale_y * j + dst.offset_y;
@@ -106,37 +142,51 @@ void Rectifier::remap_rows(const SamplePlane& src, const SamplePlane& dst, int j
       row(src, s.xs.data(), s.ys.data(), out, dst.width);
       continue;
     }
-    const std::uint8_t* modes = &cell_mode_[static_cast<std::size_t>(interpolate_row(y, s)) * (L.nx - 1)];
-    if (plane_) cell_affines(s.fpx.data(), s.fpy.data(), n_cells, L.shift, scale, s.plane_cells.data());
-    if (need_infinite_) cell_affines(s.fix.data(), s.fiy.data(), n_cells, L.shift, scale, s.inf_cells.data());
-    int run = 0;  // cells [i - run, i) are affine, of branch run_mode, and not yet sampled
+    prepare(coarse, y);
+    const bool mixed = refined_ && split_row_[coarse.j];
+    if (mixed) prepare(fine, y);
+    const Tier* run_tier = nullptr;  // cells [first, first + run) of run_tier, of branch run_mode, not yet sampled
+    int first = 0, run = 0;
     std::uint8_t run_mode = kZero;
-    auto flush = [&](int i) {
+    auto flush = [&] {
       if (run == 0) return;
-      const int c0 = (i - run) * cell_n, c1 = std::min(i * cell_n, dst.width);
-      cells(src, (run_mode == kPlane ? s.plane_cells : s.inf_cells).data() + (i - run), cell_n, c1 - c0, out + c0 * dst.step);
+      const int c0 = first * run_tier->cell_n, c1 = std::min((first + run) * run_tier->cell_n, dst.width);
+      const NodeRow& r = *run_tier->r;
+      cells(src, (run_mode == kPlane ? r.plane_cells : r.inf_cells).data() + first, run_tier->cell_n, c1 - c0,
+            out + c0 * dst.step);
       run = 0;
     };
-    int i = 0;
-    for (; i < n_cells; ++i) {
-      const std::uint8_t m = modes[i];
+    auto cell = [&](const Tier& t, int i) {
+      const std::uint8_t m = t.modes[i];
       if (m == kPlane || m == kInfinite) {  // the common case
-        if (m != run_mode) flush(i), run_mode = m;
+        if (m != run_mode || &t != run_tier || first + run != i) flush(), run_mode = m, run_tier = &t, first = i;
         ++run;
-        continue;
+        return;
       }
-      flush(i);
+      flush();
       int c0, c1;
-      cell_columns(i, dst, c0, c1);
+      cell_columns(levels_[t.g->level].spacing, i, dst, c0, c1);
       std::uint8_t* o = out + c0 * dst.step;
       if (m == kZero) {
         fill_samples(dst, o, c1 - c0);
       } else {
-        kink_segment(i, c0, c1, dst, s);
+        kink_segment(*t.g, *t.r, i, c0, c1, dst, s);
         row(src, &s.xs[c0], &s.ys[c0], o, c1 - c0);
       }
+    };
+    for (int i = 0; i < coarse.n_cells; ++i) {
+      if (mixed && split(i, coarse.j)) {
+        for (int f = 2 * i; f < std::min(2 * i + 2, fine.n_cells); ++f) cell(fine, f);
+        continue;
+      }
+      const std::uint8_t m = coarse.modes[i];
+      if (m == run_mode && run_tier == &coarse && (m == kPlane || m == kInfinite)) {  // the common case: the run grows
+        ++run;
+        continue;
+      }
+      cell(coarse, i);
     }
-    flush(i);
+    flush();
   }
 }
 

@@ -41,6 +41,9 @@ inline std::vector<Case> cases() {
   CameraModel distorted = cam;
   distorted.dist = {-0.2, 0.05, 0.0005, -0.0003, 0};
   const RowTiming bt = RowTiming::full_frame(360, 30, Readout::BottomToTop);
+  CameraModel fisheye = cam;  // 143 degrees across, kept in the output
+  fisheye.fx = fisheye.fy = 0.4 * cam.width;
+  fisheye.dist = Distortion::equidistant(0.0469, -0.0135, 0.0021, -0.0003);
   return {
       {"fast_pan", cam, tb, twist({0, 0, 0}, {0.3, 6.0, 0.2}), DepthModel::at_infinity(), mid},
       {"fast_roll", cam, tb, twist({0, 0, 0}, {0.2, -0.4, 2 * M_PI}), DepthModel::at_infinity(), 0.0},
@@ -48,6 +51,10 @@ inline std::vector<Case> cases() {
       {"ground_plane", cam, tb, twist({0.3, 0, 15.0}, {0.05, 0.5, 0.1}), ground_plane(1.2), mid},
       {"distorted_bottom_to_top", distorted, bt, twist({0.3, 0.1, 0}, {1.0, 2.0, 0.5}),
        DepthModel::fronto_parallel(3.0), 0.0},
+      // Maps whose coarse grid holds the tolerance in most cells: those that miss are split
+      // (the fisheye's edges; the rows read last in a brisk pan).
+      {"fisheye_split_cells", fisheye, tb, twist({0.3, 0, 0}, {0.3, 4.0, 0.4}), DepthModel::at_infinity(), mid},
+      {"pan_split_cells", cam, tb, twist({0.3, 0, 0}, {0.3, 2.0, 0.4}), DepthModel::at_infinity(), mid},
   };
 }
 

@@ -69,12 +69,14 @@ TEST(RsRectifier, MapMatchesTheExactInverseAtEveryPixel) {
   // Under a sanitizer or qemu every third pixel of every third row: the exact inverse (the reference)
   // costs a minute there, the map's own code runs whole either way.
   const int step = rsd::test::kSlowBuild ? 3 : 1;
+  int split_maps = 0;
   for (const Case& c : cases()) {
     Rectifier rect(c.cam, c.timing, PixelFormat::Mono8);
     const RectifyReport rep = rect.build_map(ScrewMotion(c.tw), c.depth, c.t_ref);
     const MapCheck m = check_map(c, rect, step);
-    std::printf("[ map ] %-24s spacing %2d  worst %.4f px  bound %.4f px  (%ld px compared)\n", c.name,
-                rep.spacing, m.worst, rep.error_bound_px, m.compared);
+    std::printf("[ map ] %-24s spacing %2d (%3d cells split to %2d)  worst %.4f px  bound %.4f px  (%ld px compared)\n",
+                c.name, rep.spacing, rep.refined_cells, rep.fine_spacing, m.worst, rep.error_bound_px, m.compared);
+    split_maps += rep.refined_cells > 0;
     EXPECT_GT(m.compared, c.cam.width * c.cam.height / (2 * step * step)) << c.name;
     EXPECT_EQ(m.black_but_inside, 0) << c.name;
     EXPECT_EQ(rep.invalid_nodes, 0) << c.name;
@@ -82,6 +84,7 @@ TEST(RsRectifier, MapMatchesTheExactInverseAtEveryPixel) {
     EXPECT_LE(m.worst, rep.error_bound_px) << c.name;  // the bound holds
     EXPECT_LT(m.worst, 0.05) << c.name;
   }
+  EXPECT_GE(split_maps, 2);  // the cases include maps whose missing cells alone are split
 }
 
 // The largest correction the map reports is the largest |exact source - output pixel| over the
@@ -124,10 +127,11 @@ TEST(RsRectifier, RefinesTheGridOnlyWhenTheBoundNeedsIt) {
   EXPECT_LE(m.worst, fast.error_bound_px);
 }
 
-// The refinement skips the levels the bound's scaling predicts to miss; on these cases it lands
-// on the level a search one level at a time finds (the coarsest within the tolerance: rectifiers
-// that each have a single spacing, the independent path), so it costs no accuracy and wastes no
-// resolution, and the fast motions solve fewer grids than that search.
+// The refinement skips the levels the bound's scaling predicts to miss; on these cases its
+// finest cells are those of the level a search one level at a time finds (the coarsest within
+// the tolerance: rectifiers that each have a single spacing, the independent path), or coarser
+// where only the cells that miss are split, so it costs no accuracy and wastes no resolution,
+// and the fast motions solve fewer grids than that search.
 TEST(RsRectifier, SkippedLevelsWouldHaveMissedTheTolerance) {
   std::vector<Case> all = cases();
   const CameraModel hd = camera(1920, 1080, 60);
@@ -140,15 +144,20 @@ TEST(RsRectifier, SkippedLevelsWouldHaveMissedTheTolerance) {
     Rectifier rect(c.cam, c.timing, PixelFormat::Mono8);
     const RectifyReport rep = rect.build_map(ScrewMotion(c.tw), c.depth, c.t_ref);
     int coarsest = 0, searched = 0;
-    for (int s = RectifierConfig{}.initial_spacing; s >= RectifierConfig{}.min_spacing && !coarsest; s /= 2, ++searched) {
+    for (int s = RectifierConfig{}.initial_spacing; s >= RectifierConfig{}.min_spacing && !coarsest; s /= 2) {
       RectifierConfig one;
       one.initial_spacing = one.min_spacing = s;
       Rectifier single(c.cam, c.timing, PixelFormat::Mono8, one);
-      if (single.build_map(ScrewMotion(c.tw), c.depth, c.t_ref).within_tolerance()) coarsest = s;
+      const RectifyReport r = single.build_map(ScrewMotion(c.tw), c.depth, c.t_ref);
+      searched += r.levels_solved;  // its grids, once per pose table tried (a fisheye's is refined)
+      if (r.within_tolerance()) coarsest = s;
     }
-    std::printf("[ level ] %-24s spacing %2d after %d grids; one at a time %2d after %d\n", c.name, rep.spacing,
-                rep.levels_solved, coarsest, searched);
-    EXPECT_EQ(rep.spacing, coarsest) << c.name;
+    std::printf("[ level ] %-24s spacing %2d (%3d cells split to %2d) after %d grids; one at a time %2d after %d\n",
+                c.name, rep.spacing, rep.refined_cells, rep.fine_spacing, rep.levels_solved, coarsest, searched);
+    if (rep.refined_cells == 0) EXPECT_EQ(rep.spacing, coarsest) << c.name;
+    else EXPECT_EQ(rep.spacing, 2 * rep.fine_spacing) << c.name;  // split cells: the next level
+    EXPECT_GE(rep.fine_spacing, coarsest) << c.name;
+    EXPECT_LE(rep.spacing, std::max(2 * coarsest, RectifierConfig{}.min_spacing)) << c.name;
     EXPECT_TRUE(rep.within_tolerance()) << c.name;
     EXPECT_LE(rep.levels_solved, searched) << c.name;
     skipped += searched - rep.levels_solved;
@@ -356,14 +365,17 @@ TEST(RsRectifier, RectifyAllocatesNothingAfterConstruction) {
   Twist bad;
   bad.v.x() = std::nan("");
   auto frame = [&](int i) {
-    const Twist tw = twist({0.1 * (i % 7), 0, 3}, {0.2, 0.5 + 0.01 * (i % 50), 0.3});
+    const Twist tw = twist({0.1 * (i % 7), 0, 3}, {0.2, 0.5 + 0.05 * (i % 50), 0.3});
     if (i % 10 == 9) return rect.rectify(src.view(), dst.view(), bad, depths[0], mid);
     return rect.rectify(src.view(), dst.view(), tw, depths[i % 3], mid);
   };
   for (int i = 0; i < 10; ++i) frame(i);  // warm-up
+  int split = 0;  // frames whose map split some cells into the next level (its own arrays)
   const uint64_t before = g_allocations.load();
-  for (int i = 0; i < 1000; ++i) frame(i);
+  for (int i = 0; i < 1000; ++i) split += frame(i).refined_cells > 0;
   const uint64_t allocations = g_allocations.load() - before;
-  std::printf("[ alloc ] %llu allocations in 1000 rectify() calls\n", static_cast<unsigned long long>(allocations));
+  std::printf("[ alloc ] %llu allocations in 1000 rectify() calls (%d with split cells)\n",
+              static_cast<unsigned long long>(allocations), split);
   EXPECT_EQ(allocations, 0u);
+  EXPECT_GT(split, 100);
 }
