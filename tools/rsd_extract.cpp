@@ -24,6 +24,8 @@
 #include "tools/common/cli_util.hpp"
 #include "formats/image_file.hpp"
 #include "formats/gpmf_mp4.hpp"
+#include "formats/sensor_csv.hpp"
+#include "formats/video_file.hpp"
 #include "formats/image_t_codec.hpp"
 #include "formats/intrinsics_file.hpp"
 #include "formats/lcm_log.hpp"
@@ -63,12 +65,15 @@ constexpr const char* kDescription =
     "that assumption, e.g. --assume-global-shutter.\n"
     "With --images it writes an images recording instead: the frames as PNG files and the motion.\n"
     "Given an images recording directory (a phone's frames and gyro, say), it makes the observations\n"
-    "from the pictures, with the recording's own recording.yaml as the nominal model.\n\n"
+    "from the pictures, with the recording's own recording.yaml as the nominal model.\n"
+    "Given a GoPro MP4, or any video with --frame-times and --gyro-csv (a phone logger's files), it\n"
+    "writes an images recording whose pictures stay in the video.\n\n"
     "Examples:\n"
     "  rsd-extract run.lcmlog rec/ --nominal nominal.yaml --assume-global-shutter \\\n"
     "      --target checkerboard:9x7:0.05 && rsd-diagnose rec/ --json diagnosis.json\n"
     "  rsd-extract run.lcmlog pictures/ --nominal nominal.yaml --images\n"
     "  rsd-extract pictures/ rec/\n"
+    "  rsd-extract video.mp4 rec/ --frame-times frames.txt --gyro-csv gyro.csv --time-unit ns --nominal phone.yaml\n"
     "Exit status: 0 on success, 2 on bad arguments, 1 on other errors. See docs/extract.md.";
 
 struct Options {
@@ -78,6 +83,9 @@ struct Options {
   bool images = false;  // write an images recording (the pictures) instead of observations
   std::optional<double> line_delay_s, frame_rate_hz, time_offset_s, noise_px;
   std::string readout, imu_to_camera, lever_arm;
+  // A video with its frames' times and gyro as text (a phone logger's files).
+  std::string frame_times, gyro_csv, gyro_columns = "t,wx,wy,wz", time_unit = "s";
+  long first_frame_index = 0;
   TrackOptions track;
 };
 
@@ -313,17 +321,11 @@ MotionLog motion_of(const formats::GpmfVideo& v, const std::string& clip) {
   return s;
 }
 
-// rsd-extract CLIP.mp4 OUT: a GoPro clip (its GPMF gyro) as an images recording whose pictures stay
-// in the clip (observations.video), for rsd-diagnose OUT and rsd --replay OUT. The gyro's axes in
-// the camera are what --imu-to-camera (or --nominal's motion.imu_to_camera) says, else the
-// identity: rsd-diagnose --imu-axes search asks the pictures.
-int run_on_gopro_clip(const Options& o) {
-  if (!o.target.empty()) throw UsageError(o.log + " is a GoPro clip: its motion is its gyro; --target needs a trajectory");
-  std::fprintf(stderr, "rsd-extract: reading the GoPro clip %s\n", o.log.c_str());
-  const formats::GpmfVideo v = formats::read_gpmf_video(o.log);
-  const MotionLog s = motion_of(v, o.log);
-  std::fprintf(stderr, "rsd-extract: %zu frames at %dx%d, %zu gyro samples in %d GPMF payloads (%s, ORIN '%s')\n", v.frame_t_s.size(),
-               v.width, v.height, v.gyro_t_s.size(), v.payloads, v.device.c_str(), v.orin.c_str());
+// A video's frames and a gyro in IMU axes (s) as an images recording whose pictures stay in the
+// video (observations.video), for rsd-diagnose OUT and rsd --replay OUT. The gyro's axes in the
+// camera are what --imu-to-camera (or --nominal's motion.imu_to_camera) says, else the identity:
+// rsd-diagnose --imu-axes search asks the pictures.
+int write_video_recording(const Options& o, const MotionLog& s) {
   Nominal n = nominal_model(o, s);
   if (n.imu_to_camera) n.model.imu_to_camera = *n.imu_to_camera;
   else
@@ -348,8 +350,52 @@ int run_on_gopro_clip(const Options& o) {
   return 0;
 }
 
+// rsd-extract CLIP.mp4 OUT: a GoPro clip (its GPMF gyro) as an images recording.
+int run_on_gopro_clip(const Options& o) {
+  if (!o.target.empty()) throw UsageError(o.log + " is a GoPro clip: its motion is its gyro; --target needs a trajectory");
+  std::fprintf(stderr, "rsd-extract: reading the GoPro clip %s\n", o.log.c_str());
+  const formats::GpmfVideo v = formats::read_gpmf_video(o.log);
+  std::fprintf(stderr, "rsd-extract: %zu frames at %dx%d, %zu gyro samples in %d GPMF payloads (%s, ORIN '%s')\n", v.frame_t_s.size(),
+               v.width, v.height, v.gyro_t_s.size(), v.payloads, v.device.c_str(), v.orin.c_str());
+  return write_video_recording(o, motion_of(v, o.log));
+}
+
+// rsd-extract VIDEO OUT --frame-times F --gyro-csv G: a phone logger's video with its frames' times
+// and its gyro as text (formats/sensor_csv.hpp); video frame k is line first_frame_index + k of F.
+int run_on_video_with_csv(const Options& o) {
+  if (!o.target.empty()) throw UsageError("--gyro-csv: the motion is a gyro; --target needs a trajectory");
+  if (o.frame_times.empty()) throw UsageError("--gyro-csv needs --frame-times (the video's frames' times)");
+  formats::GyroColumns columns;
+  try {
+    columns = formats::parse_gyro_columns(o.gyro_columns);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--gyro-columns: ") + e.what());
+  }
+  const double unit_s = formats::time_unit_seconds(o.time_unit);  // the option's check allows only known units
+  const std::vector<double> times = formats::read_frame_times(o.frame_times, unit_s);
+  MotionLog s;
+  s.gyro = formats::read_gyro_csv(o.gyro_csv, columns, unit_s);
+  s.gyro_frame = static_cast<int>(rsd::velocity_t::FRAME_IMU);
+  std::fprintf(stderr, "rsd-extract: counting the frames of %s\n", o.log.c_str());
+  formats::VideoReader video(o.log);
+  dsp::Image frame;
+  long n = 0;
+  while (video.next(frame)) ++n;
+  if (o.first_frame_index + n > static_cast<long>(times.size()))
+    throw std::runtime_error(o.log + ": " + std::to_string(n) + " frames, but " + o.frame_times + " lists " + std::to_string(times.size()) +
+                             " times, " + std::to_string(o.first_frame_index) + " of them before the video's first frame (--first-frame-index)");
+  for (long k = 0; k < n; ++k) s.frames.push_back({times[o.first_frame_index + k], std::nullopt, std::nullopt, video.width(), video.height()});
+  s.channels = {{o.log + " video", static_cast<int>(n)}, {o.gyro_csv, static_cast<int>(s.gyro.size())}};
+  s.events = static_cast<int>(n + s.gyro.size());
+  std::fprintf(stderr, "rsd-extract: %ld frames at %dx%d (times from line %ld of %s on), %zu gyro samples from %s\n", n, video.width(),
+               video.height(), o.first_frame_index, o.frame_times.c_str(), s.gyro.size(), o.gyro_csv.c_str());
+  return write_video_recording(o, s);
+}
+
 int run(const Options& o) {
   if (std::filesystem::is_directory(o.log)) return run_on_recording(o);
+  if (!o.gyro_csv.empty()) return run_on_video_with_csv(o);
+  if (!o.frame_times.empty()) throw UsageError("--frame-times goes with --gyro-csv (a video with its gyro as text)");
   if (looks_like_mp4(o.log)) return run_on_gopro_clip(o);
   std::optional<TargetSpec> target;
   if (!o.target.empty()) {
@@ -410,7 +456,9 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   Options o;
   CLI::App app(kDescription, "rsd-extract");
-  app.add_option("INPUT", o.log, "LCM log with raw frames and motion, an images recording directory, or a GoPro MP4 (its GPMF gyro)")
+  app.add_option("INPUT", o.log,
+                 "LCM log with raw frames and motion, an images recording directory, a GoPro MP4 (its GPMF gyro), or a video "
+                 "with --frame-times and --gyro-csv")
       ->required()->check(CLI::ExistingPath);
   app.add_option("OUTDIR", o.out, "Observation recording directory to write (created)")->required();
   app.add_option("--nominal", o.nominal, "YAML with recording.yaml's camera: / timing: / motion: keys (a recording.yaml will do)")
@@ -431,6 +479,15 @@ int main(int argc, char** argv) {
   app.add_option("--imu-to-camera", o.imu_to_camera, "9 numbers, row-major R with w_camera = R w_imu (IMU-frame velocity)");
   app.add_option("--lever-arm", o.lever_arm, "camera origin in the tracked body's frame, m")->check(vec3("x,y,z in m"));
   app.add_option("--noise-px", o.noise_px, "state the known pixel noise sigma in recording.yaml (default: omitted)")->check(positive("px"));
+  app.add_option("--frame-times", o.frame_times, "a video's frames' times, one per line (a phone logger's; with --gyro-csv)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--gyro-csv", o.gyro_csv, "the gyro of a video as text, rad/s in IMU axes (columns: --gyro-columns)")->check(CLI::ExistingFile);
+  app.add_option("--gyro-columns", o.gyro_columns, "the order of --gyro-csv's columns; '-' skips one, e.g. t,-,wx,wy,wz")
+      ->capture_default_str();
+  app.add_option("--time-unit", o.time_unit, "unit of the times in --frame-times and --gyro-csv")
+      ->check(CLI::IsMember({"s", "ms", "us", "ns"}))->capture_default_str();
+  app.add_option("--first-frame-index", o.first_frame_index, "the line of --frame-times (from 0) that is the video's first frame")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--image-channel", o.image_channel, "bot_core.image_t channel")->capture_default_str();
   app.add_option("--velocity-channel", o.velocity_channel, "rsd.velocity_t channel (matches kind)")->capture_default_str();
   app.add_option("--pose-channel", o.pose_channel, "bot_core.pose_t channel (landmarks kind)")->capture_default_str();
