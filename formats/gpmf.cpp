@@ -124,6 +124,15 @@ class PayloadReader {
     return v.front();
   }
 
+  // A count or a time stamp: a whole number in [0, limit], as a converted integer must be (a
+  // damaged payload can hold any double here).
+  double whole_number(const Klv& k, double limit) const {
+    const double x = first_number(k);
+    if (!(x >= 0 && x <= limit) || x != std::floor(x))
+      fail(k.offset, k.key, "holds " + std::to_string(x) + ": not a whole number from 0 to " + std::to_string(limit));
+    return x;
+  }
+
   static std::string text(const Klv& k) {
     std::string s(reinterpret_cast<const char*>(k.data), k.bytes());
     return s.substr(0, s.find('\0'));
@@ -147,8 +156,8 @@ class PayloadReader {
       if (k.is("SCAL")) scal = numbers(k);
       else if (k.is("ORIN") && k.type == 'c') g.orin = text(k);
       else if (k.is("SIUN") && k.type == 'c') g.siun = text(k);
-      else if (k.is("STMP")) g.stmp_us = static_cast<std::uint64_t>(first_number(k));
-      else if (k.is("TSMP")) g.tsmp = static_cast<std::uint32_t>(first_number(k));
+      else if (k.is("STMP")) g.stmp_us = static_cast<std::uint64_t>(whole_number(k, 0x1p63));
+      else if (k.is("TSMP")) g.tsmp = static_cast<std::uint32_t>(whole_number(k, 4294967295.0));
       else if (k.is("GYRO")) {
         has_gyro = true;
         gyro(k, scal, g);

@@ -118,6 +118,13 @@ TEST(Gpmf, DamagedPayloadsAreRefusedNamingTheByteAndTheKey) {
   EXPECT_NE(error_of(none).find("byte 16: 'GYRO' has no SCAL before it"), std::string::npos) << error_of(none);
   const Bytes binary = nest("DEVC", {klv("\x01\x02\x03\x04", 'L', 4, 1, be32({1}))});
   EXPECT_NE(error_of(binary).find("byte 8 is not a GPMF key"), std::string::npos) << error_of(binary);
+  // A sample count or time stamp no integer can hold (a float TSMP of 5e10, a negative STMP): the
+  // fuzzer's find (tests/fuzz/corpus/gpmf/crash-5af7dc8e...), refused instead of converted.
+  const Bytes huge = nest("DEVC", {nest("STRM", {klv("TSMP", 'f', 4, 1, Bytes{0x51, 0x42, 0x00, 0x00})})});
+  EXPECT_NE(error_of(huge).find("'TSMP' holds 52076478464.000000: not a whole number from 0 to 4294967295"), std::string::npos)
+      << error_of(huge);
+  const Bytes negative = nest("DEVC", {nest("STRM", {klv("STMP", 'l', 4, 1, be32({-5}))})});
+  EXPECT_NE(error_of(negative).find("'STMP' holds -5.000000: not a whole number"), std::string::npos) << error_of(negative);
   // Zero padding after the last item ends the list; what rsd does not know is skipped.
   Bytes padded = good;
   padded.insert(padded.end(), 8, 0);
