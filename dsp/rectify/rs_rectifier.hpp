@@ -178,6 +178,7 @@ class Rectifier {
   // max_displacement_px, points_checked and points_inside of the current map.
   void measure_displacement(RectifyReport& rep) const;
   double cell_bound(const Branch& b, int i, int j) const;
+  double table_error() const;
   static double fixed_point_error(int spacing);
   std::size_t next_level(std::size_t level, double bound) const;
   int interpolate_row(const Grid& g, double y, NodeRow& r) const;

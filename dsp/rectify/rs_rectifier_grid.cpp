@@ -87,11 +87,14 @@ RectifyReport Rectifier::assess_level() {
     }
   for (std::size_t n = 0; n < static_cast<std::size_t>(L.nx) * L.ny; ++n)  // the branch the model means
     rep.invalid_nodes += !(plane_ && coarse_.rho[n] > 0 ? coarse_.plane.ok[n] : coarse_.inf.ok[n]);
-  // Table: linear interpolation errs by 1/8 of a second difference (times the node's gain).
-  table_error_px_ = std::max(cam_.fx, cam_.fy) / 8.0 * gain_max_;
+  table_error_px_ = table_error();
   rep.error_bound_px = worst + table_error_px_ + fixed_point_error(L.spacing);
   return rep;
 }
+
+// The pose table's share of the bound: linear interpolation errs by 1/8 of a second difference,
+// times the largest gain of a node solved this frame.
+double Rectifier::table_error() const { return std::max(cam_.fx, cam_.fy) / 8.0 * gain_max_; }
 
 // Fixed point: rounding to 1/256 px, plus the 16.16 step's rounding accumulated over a cell.
 double Rectifier::fixed_point_error(int spacing) {
@@ -229,7 +232,7 @@ bool Rectifier::refine_cells(RectifyReport& rep) {
         for (int b = 2 * j; b <= std::min(2 * j + 2, F.ny - 1); ++b)
           for (int a = 2 * i; a <= std::min(2 * i + 2, F.nx - 1); ++a)
             if (!solve_fine_node(a, b)) return false;
-  table_error_px_ = std::max(cam_.fx, cam_.fy) / 8.0 * gain_max_;  // the new nodes' gains too
+  table_error_px_ = table_error();  // the new nodes' gains too
   budget = cfg_.tolerance_px - table_error_px_ - fixed_point_error(C.spacing);
   double coarse_worst = 0, fine_worst = 0;
   for (int j = 0; j < ch; ++j)
@@ -250,7 +253,8 @@ bool Rectifier::refine_cells(RectifyReport& rep) {
           if (mode != kZero) fine_worst = std::max({fine_worst, mode != kInfinite ? e_plane : 0.0, mode != kPlane ? e_inf : 0.0});
         }
     }
-  if (!(fine_worst <= budget)) return false;
+  // The new nodes' gains may have raised the table's share: every cell, split or not, must hold.
+  if (!(std::max(coarse_worst, fine_worst) <= budget)) return false;
   refined_ = true;
   rep.refined_cells = missing, rep.fine_spacing = F.spacing, rep.unbounded_cells = 0;
   rep.error_bound_px = std::max(coarse_worst, fine_worst) + table_error_px_ + fixed_point_error(C.spacing);
