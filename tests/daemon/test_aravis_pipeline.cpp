@@ -103,32 +103,60 @@ Received run_pipeline(drivers::CameraSource& source, int frames) {
   return rx;
 }
 
+// The stamps against the camera's grid of frame periods. A fake camera whose frames take longer
+// to fill than a period (the simulator's renderer at sanitizer speed) skips slots of its grid and
+// counts only the frames it delivers, and the pipeline drops frames it cannot keep up with (newest
+// wins); so each frame's slot is found from its step, rounded to whole periods, and the period is
+// the least-squares slope of the stamps against those slots: a late software stamp moves it by its
+// lateness over the run's length, not by a whole step.
+struct StampGrid {
+  std::vector<double> slot, t_s;  // per frame
+  std::vector<int> slot_steps;     // per step
+  double period_s = 0, t0_s = 0;   // the fit
+};
+StampGrid fit_grid(const std::vector<rsd::frame_info_t>& infos, double period_s) {
+  StampGrid g;
+  for (const auto& m : infos) {
+    const double t = (m.utime - infos.front().utime) * 1e-6;
+    if (!g.t_s.empty()) g.slot_steps.push_back(std::max(1, static_cast<int>(std::lround((t - g.t_s.back()) / period_s))));
+    g.slot.push_back(g.slot.empty() ? 0.0 : g.slot.back() + g.slot_steps.back());
+    g.t_s.push_back(t);
+  }
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  const double n = static_cast<double>(g.slot.size());
+  for (size_t i = 0; i < g.slot.size(); ++i) sx += g.slot[i], sy += g.t_s[i], sxx += g.slot[i] * g.slot[i], sxy += g.slot[i] * g.t_s[i];
+  g.period_s = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  g.t0_s = (sy - g.period_s * sx) / n;
+  return g;
+}
+
 void expect_streamed_stamped_rectified(const Received& rx, int frames, double period_s) {
   ASSERT_GE(static_cast<int>(rx.infos.size()), frames);
   EXPECT_EQ(rx.images, static_cast<int>(rx.infos.size()));
-  int rectified = 0, on_grid = 0;
-  std::vector<double> steps;
+  int rectified = 0;
   for (size_t i = 1; i < rx.infos.size(); ++i) {
     const auto& a = rx.infos[i - 1];
     const auto& b = rx.infos[i];
-    // Stamps rise on the camera's grid of frame periods. The fakes stamp in software when
-    // they wake, so on a busy host a late wake-up puts one stamp (two steps) off the grid.
-    const double dt = (b.utime - a.utime) * 1e-6;
-    EXPECT_GT(dt, 0) << "frame " << i;
-    steps.push_back(dt);
-    on_grid += std::abs(dt / period_s - std::max(1.0, std::round(dt / period_s))) < 0.25;
+    EXPECT_GT(b.utime, a.utime) << "frame " << i;
+    EXPECT_GT(b.source_sequence, a.source_sequence) << "frame " << i;
     rectified += b.rectified;
     if (b.rectified) {
       EXPECT_NEAR(b.angular_velocity[1], kRate[1], 1e-9);
     }
   }
-  std::sort(steps.begin(), steps.end());
-  // At sanitizer speed the pipeline cannot keep up and drops frames (newest wins): the median
-  // step is then a whole number of periods, still on the camera's grid.
-  const double median_periods = steps[steps.size() / 2] / period_s;
-  const double expected_periods = test::kSanitized ? std::max(1.0, std::round(median_periods)) : 1.0;
-  EXPECT_NEAR(median_periods, expected_periods, 0.02) << (test::kSanitized ? test::kSanitizedNote : "");
-  EXPECT_GE(on_grid, static_cast<int>(steps.size()) / 2);  // see test_aravis_fake.cpp: software stamps
+  const StampGrid g = fit_grid(rx.infos, period_s);
+  EXPECT_NEAR(g.period_s / period_s, 1.0, 0.02);
+  // The fakes stamp in software when they wake, so on a busy host a late wake-up puts a stamp
+  // off the grid: most stamps (not all) must lie within a quarter period of the fit.
+  int on_grid = 0;
+  for (size_t i = 0; i < g.slot.size(); ++i) on_grid += std::abs(g.t_s[i] - g.t0_s - g.period_s * g.slot[i]) < 0.25 * period_s;
+  EXPECT_GE(on_grid, static_cast<int>(g.slot.size()) / 2);  // see test_aravis_fake.cpp: software stamps
+  // At full speed the camera fills every slot and the pipeline keeps up: most steps are one period.
+  if (!test::kSanitized) {
+    std::vector<int> steps = g.slot_steps;
+    std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+    EXPECT_EQ(steps[steps.size() / 2], 1);
+  }
   EXPECT_GE(rectified, frames - 2);
 }
 
