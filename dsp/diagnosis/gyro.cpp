@@ -46,7 +46,7 @@ Eigen::Vector3d step(const Eigen::Vector3d& w0, const Eigen::Vector3d& s0, const
 
 GyroTrack::GyroTrack(const std::vector<GyroSample>& g, const Eigen::Vector3d& bias, const Eigen::Matrix3d& imu_to_camera,
                      double max_interval, const Eigen::Vector3d& scale)
-    : bias_(bias), scale_(scale), imu_to_camera_t_(imu_to_camera.transpose()) {
+    : bias_(bias), scale_(scale), imu_to_camera_t_(imu_to_camera.transpose()), imu_to_camera_(imu_to_camera) {
   if (g.empty()) throw std::invalid_argument("gyro track: no gyro samples");
   const size_t n = g.size();
   knots_.resize(n);
@@ -81,14 +81,42 @@ GyroTrack::GyroTrack(const std::vector<GyroSample>& g, const Eigen::Vector3d& bi
   }
 }
 
-Eigen::Matrix3d GyroTrack::camera_at(double t) const {
-  auto hi = std::upper_bound(knots_.begin(), knots_.end(), t, [](double tt, const Knot& k) { return tt < k.t; });
-  if (hi == knots_.begin()) return knots_.front().R * imu_to_camera_t_;
-  if (hi == knots_.end()) return knots_.back().R * imu_to_camera_t_;
-  const Knot &a = *(hi - 1), &b = *hi;
+const GyroTrack::Knot& GyroTrack::interval(double t, Eigen::Vector3d& phi, size_t& hint) const {
+  phi.setZero();
+  if (t < knots_.front().t) return knots_.front();
+  if (t >= knots_.back().t) return knots_.back();
+  // knots_[hint].t <= t < knots_[hint + 1].t, from the hint or its neighbour, else searched.
+  if (hint + 1 >= knots_.size() || !(knots_[hint].t <= t && t < knots_[hint + 1].t)) {
+    if (hint + 2 < knots_.size() && knots_[hint + 1].t <= t && t < knots_[hint + 2].t) {
+      ++hint;
+    } else {
+      auto hi = std::upper_bound(knots_.begin(), knots_.end(), t, [](double tt, const Knot& k) { return tt < k.t; });
+      hint = static_cast<size_t>(hi - knots_.begin()) - 1;
+    }
+  }
+  const Knot &a = knots_[hint], &b = knots_[hint + 1];
   const double h = b.t - a.t;
-  const Eigen::Vector3d phi = step(a.w, a.s, b.w, b.s, h, (t - a.t) / h);
+  phi = step(a.w, a.s, b.w, b.s, h, (t - a.t) / h);
+  return a;
+}
+
+Eigen::Matrix3d GyroTrack::camera_at(double t) const {
+  Eigen::Vector3d phi;
+  size_t hint = 0;
+  const Knot& a = interval(t, phi, hint);
   return a.R * exp_so3_fast(phi) * imu_to_camera_t_;
+}
+
+Eigen::Vector3d GyroTrack::to_world(double t, const Eigen::Vector3d& v, size_t& hint) const {
+  Eigen::Vector3d phi;
+  const Knot& a = interval(t, phi, hint);
+  return a.R * rotate_so3(phi, imu_to_camera_t_ * v);
+}
+
+Eigen::Vector3d GyroTrack::to_camera(double t, const Eigen::Vector3d& d, size_t& hint) const {
+  Eigen::Vector3d phi;
+  const Knot& a = interval(t, phi, hint);
+  return imu_to_camera_ * rotate_so3(-phi, a.R.transpose() * d);
 }
 
 }  // namespace rsd::dsp

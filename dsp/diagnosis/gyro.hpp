@@ -34,6 +34,13 @@ class GyroTrack {
             const Eigen::Vector3d& scale = Eigen::Vector3d::Ones());
   // World-from-camera rotation R_c(t) on the motion clock; held at the ends.
   Eigen::Matrix3d camera_at(double t) const;
+  // R_c(t) v and R_c(t)^T d without forming R_c(t): the diagnosis turns one direction per call,
+  // and three matrix products (the interval's rotation, its exponential, the axes) cost more
+  // than Rodrigues' formula on the vector itself. Equal to camera_at to rounding.
+  // `hint`: the interval the caller's previous time fell in (any value at first): the fixed
+  // point's iterations stay in one or two intervals, so the search starts there.
+  Eigen::Vector3d to_world(double t, const Eigen::Vector3d& v, size_t& hint) const;
+  Eigen::Vector3d to_camera(double t, const Eigen::Vector3d& d, size_t& hint) const;
   const Eigen::Vector3d& bias() const { return bias_; }
   const Eigen::Vector3d& scale() const { return scale_; }
   double t_begin() const { return knots_.front().t; }
@@ -45,9 +52,13 @@ class GyroTrack {
     Eigen::Matrix3d R;     // world-from-IMU at t
     Eigen::Vector3d w, s;  // bias-free rate and its slope
   };
+  // The knot whose interval holds t (knots_.front() before, knots_.back() after the data) and
+  // the rotation vector from it to t (zero outside the data).
+  const Knot& interval(double t, Eigen::Vector3d& phi, size_t& hint) const;
   std::vector<Knot> knots_;
   Eigen::Vector3d bias_, scale_;
   Eigen::Matrix3d imu_to_camera_t_;  // R_ic^T: R_c = R_imu R_ic^T
+  Eigen::Matrix3d imu_to_camera_;    // R_ic
 };
 
 }  // namespace rsd::dsp

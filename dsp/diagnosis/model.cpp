@@ -111,6 +111,45 @@ struct DiagnosisModel::TrackCache {
   std::vector<std::unique_ptr<GyroTrack>> tracks;
 };
 
+// The rays of frame_a's pixels for the last few cameras, each computed when first asked for: a
+// numeric Jacobian asks for the base camera again after every parameter that is not the
+// camera's, and undistorting every pixel anew cost a tenth of a diagnosis.
+struct DiagnosisModel::RayCache {
+  struct Slot {
+    CameraModel cam;
+    std::vector<Eigen::Vector3d> ray;
+    std::vector<unsigned char> state;  // 0 not yet, 1 ray, 2 none (no undistortion there)
+    const Eigen::Vector3d* get(int i) {
+      if (state[i] == 0) {
+        const auto r = cam.ray(px_a->at(i));
+        state[i] = r ? 1 : 2;
+        if (r) ray[i] = *r;
+      }
+      return state[i] == 1 ? &ray[i] : nullptr;
+    }
+    const std::vector<Eigen::Vector2d>* px_a = nullptr;
+  };
+  std::vector<Eigen::Vector2d> px_a;  // per observation
+  std::vector<Slot> slots;            // newest first
+  Slot& slot(const CameraModel& c) {
+    auto same = [&](const Slot& s) {
+      return s.cam.fx == c.fx && s.cam.fy == c.fy && s.cam.cx == c.cx && s.cam.cy == c.cy && s.cam.dist == c.dist;
+    };
+    for (size_t k = 0; k < slots.size(); ++k)
+      if (same(slots[k])) {
+        std::rotate(slots.begin(), slots.begin() + k, slots.begin() + k + 1);
+        return slots.front();
+      }
+    if (slots.size() < 4) slots.emplace_back();
+    std::rotate(slots.begin(), slots.end() - 1, slots.end());  // the oldest (or the new one) first
+    Slot& s = slots.front();
+    s.cam = c, s.px_a = &px_a;
+    s.ray.resize(px_a.size());
+    s.state.assign(px_a.size(), 0);
+    return s;
+  }
+};
+
 DiagnosisModel::~DiagnosisModel() = default;
 
 namespace {
@@ -166,7 +205,8 @@ double gap_limit(const std::vector<GyroSample>& g) {
 
 }  // namespace
 
-DiagnosisModel::DiagnosisModel(const Recording& rec) : rec_(rec), tracks_(std::make_unique<TrackCache>()) {
+DiagnosisModel::DiagnosisModel(const Recording& rec)
+    : rec_(rec), tracks_(std::make_unique<TrackCache>()), rays_(std::make_unique<RayCache>()) {
   check_motion(rec);
   if (rec.kind == ObservationKind::Landmarks) body_.emplace(rec.trajectory), body_slow_.emplace(sampled(rec));
   if (rec.frames.empty()) throw std::invalid_argument("diagnosis: the recording has no frames");
@@ -195,6 +235,7 @@ DiagnosisModel::DiagnosisModel(const Recording& rec) : rec_(rec), tracks_(std::m
     const auto a = frame.find(mt.frame_a), b = frame.find(mt.frame_b);
     if (a == frame.end() || b == frame.end()) throw std::invalid_argument("diagnosis: a match names an unknown frame");
     obs_.push_back({a->second.first, b->second.first, a->second.second, Eigen::Vector3d::Zero(), mt.b, mt.a});
+    rays_->px_a.push_back(mt.a);
   }
 }
 
@@ -243,19 +284,32 @@ std::optional<Eigen::Vector2d> DiagnosisModel::landmark_residual(const ModelPara
   return Eigen::Vector2d(o.px - *px);
 }
 
-std::optional<Eigen::Vector2d> DiagnosisModel::match_residual(const ModelParams& p, const GyroTrack& track,
-                                                              const Obs& o) const {
-  const LandmarkSetup s = landmark_setup(rec_.nominal, p);  // camera and time model only
+struct DiagnosisModel::MatchSetup {
+  LandmarkSetup s;  // camera and time model only
+  TimeModel tm;
+  RowTiming rt;
+  Eigen::Matrix3d mount_t;
+  RayCache::Slot* rays;
+};
+
+DiagnosisModel::MatchSetup DiagnosisModel::match_setup(const ModelParams& p) const {
+  const LandmarkSetup s = landmark_setup(rec_.nominal, p);
   const TimeModel tm = with_t0(s.time, t0_);
-  const RowTiming rt = row_timing(tm, s.cam.height);
-  const auto ray = s.cam.ray(o.px_a);
+  return {s, tm, row_timing(tm, s.cam.height), s.mount.transpose(), &rays_->slot(s.cam)};
+}
+
+std::optional<Eigen::Vector2d> DiagnosisModel::match_residual(const MatchSetup& ms, const GyroTrack& track,
+                                                              int i) const {
+  const Obs& o = obs_[i];
+  const Eigen::Vector3d* ray = ms.rays->get(i);
   if (!ray) return std::nullopt;
   // Spec "Matches": the direction seen at frame_a's pixel, in world axes, at its row's time. A
   // mount rotation turns imu_to_camera into E R_nominal (E = Exp(r)): the camera's
   // world-from-camera rotation becomes track.camera_at(t) E^T.
-  const Eigen::Vector3d d = track.camera_at(tm.motion_time(o.T + rt.row_time(o.px_a.y()))) * (s.mount.transpose() * *ray);
+  size_t at_a = 0, at_b = 0;
+  const Eigen::Vector3d d = track.to_world(ms.tm.motion_time(o.T + ms.rt.row_time(o.px_a.y())), ms.mount_t * *ray, at_a);
   auto pixel_at = [&](double v) {
-    return s.cam.project(s.mount * (track.camera_at(tm.motion_time(o.T_b + rt.row_time(v))).transpose() * d));
+    return ms.s.cam.project(ms.s.mount * track.to_camera(ms.tm.motion_time(o.T_b + ms.rt.row_time(v)), d, at_b));
   };
   const auto px = fixed_point_row(pixel_at, o.px.y());
   if (!px) return std::nullopt;
@@ -264,19 +318,21 @@ std::optional<Eigen::Vector2d> DiagnosisModel::match_residual(const ModelParams&
 
 std::optional<Eigen::Vector2d> DiagnosisModel::residual(const ModelParams& p, int i) const {
   if (rec_.kind == ObservationKind::Landmarks) return landmark_residual(p, obs_[i]);
-  return match_residual(p, track(bias_of(p), scale_of(p)), obs_[i]);
+  return match_residual(match_setup(p), track(bias_of(p), scale_of(p)), i);
 }
 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx) const {
   std::vector<Eigen::Vector2d> out;
   out.reserve(idx.size());
   const Eigen::Vector2d nan = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
-  const GyroTrack* tr = rec_.kind == ObservationKind::Matches ? &track(bias_of(p), scale_of(p)) : nullptr;
-  for (int i : idx) {
-    const auto r = tr ? match_residual(p, *tr, obs_[i]) : landmark_residual(p, obs_[i]);
-    out.push_back(r.value_or(nan));
+  if (rec_.kind == ObservationKind::Landmarks) {
+    for (int i : idx) out.push_back(landmark_residual(p, obs_[i]).value_or(nan));
+    return out;
   }
-  if (tr && p.translation_nuisance) remove_translation(*this, idx, out);
+  const GyroTrack& tr = track(bias_of(p), scale_of(p));
+  const MatchSetup ms = match_setup(p);
+  for (int i : idx) out.push_back(match_residual(ms, tr, i).value_or(nan));
+  if (p.translation_nuisance) remove_translation(*this, idx, out);
   return out;
 }
 

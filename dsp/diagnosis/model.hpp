@@ -108,8 +108,11 @@ class DiagnosisModel {
     Eigen::Vector2d px, px_a;   // observed pixel (frame_b's), frame_a's
   };
   struct TrackCache;
+  struct RayCache;
+  struct MatchSetup;  // what a matches residual needs of the parameters, made once per call
+  MatchSetup match_setup(const ModelParams& p) const;
   std::optional<Eigen::Vector2d> landmark_residual(const ModelParams& p, const Obs& o) const;
-  std::optional<Eigen::Vector2d> match_residual(const ModelParams& p, const GyroTrack& track, const Obs& o) const;
+  std::optional<Eigen::Vector2d> match_residual(const MatchSetup& ms, const GyroTrack& track, int i) const;
   const GyroTrack& track(const Eigen::Vector3d& bias, const Eigen::Vector3d& scale) const;
 
   const Recording& rec_;
@@ -120,6 +123,7 @@ class DiagnosisModel {
   double max_gap_ = std::numeric_limits<double>::infinity();
   std::vector<Obs> obs_;
   std::unique_ptr<TrackCache> tracks_;
+  std::unique_ptr<RayCache> rays_;
 };
 
 // The camera and time model that `p` describes.

@@ -8,19 +8,37 @@
 
 namespace rsd::dsp {
 
-Eigen::Matrix3d exp_so3_fast(const Eigen::Vector3d& phi) {
-  const double x2 = phi.squaredNorm();
-  double a, b;  // sin(x)/x, (1 - cos x)/x^2
+namespace {
+
+// sin(x)/x and (1 - cos x)/x^2 for x^2 = x2.
+void rodrigues_coefficients(double x2, double& a, double& b) {
   if (x2 < 0.0625) {
     // Horner on x^2; the first omitted terms are x^10/11! and x^10/12!: < 1e-16 at x = 0.25.
-    a = 1 - x2 / 6 * (1 - x2 / 20 * (1 - x2 / 42 * (1 - x2 / 72 * (1 - x2 / 110))));
-    b = 0.5 * (1 - x2 / 12 * (1 - x2 / 30 * (1 - x2 / 56 * (1 - x2 / 90 * (1 - x2 / 132)))));
+    // Multiplied by the reciprocals (a chain of divisions cost a tenth of a diagnosis).
+    constexpr double r6 = 1.0 / 6, r20 = 1.0 / 20, r42 = 1.0 / 42, r72 = 1.0 / 72, r110 = 1.0 / 110;
+    constexpr double r12 = 1.0 / 12, r30 = 1.0 / 30, r56 = 1.0 / 56, r90 = 1.0 / 90, r132 = 1.0 / 132;
+    a = 1 - x2 * r6 * (1 - x2 * r20 * (1 - x2 * r42 * (1 - x2 * r72 * (1 - x2 * r110))));
+    b = 0.5 * (1 - x2 * r12 * (1 - x2 * r30 * (1 - x2 * r56 * (1 - x2 * r90 * (1 - x2 * r132)))));
   } else {
     const double x = std::sqrt(x2);
     a = std::sin(x) / x, b = (1 - std::cos(x)) / x2;
   }
+}
+
+}  // namespace
+
+Eigen::Matrix3d exp_so3_fast(const Eigen::Vector3d& phi) {
+  double a, b;
+  rodrigues_coefficients(phi.squaredNorm(), a, b);
   const Eigen::Matrix3d K = hat(phi);
   return Eigen::Matrix3d::Identity() + a * K + b * K * K;
+}
+
+Eigen::Vector3d rotate_so3(const Eigen::Vector3d& phi, const Eigen::Vector3d& v) {
+  double a, b;
+  rodrigues_coefficients(phi.squaredNorm(), a, b);
+  const Eigen::Vector3d pv = phi.cross(v);
+  return v + a * pv + b * phi.cross(pv);
 }
 
 PoseTrack::PoseTrack(std::vector<PoseSample> poses) {

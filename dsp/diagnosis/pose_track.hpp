@@ -16,6 +16,8 @@ namespace rsd::dsp {
 // exp of so(3) (Rodrigues) with sin(x)/x and (1 - cos x)/x^2 by their series for |x| < 0.25
 // (error < 1e-16), the library functions beyond.
 Eigen::Matrix3d exp_so3_fast(const Eigen::Vector3d& phi);
+// Exp(phi) v by Rodrigues' formula on the vector (the same series as exp_so3_fast).
+Eigen::Vector3d rotate_so3(const Eigen::Vector3d& phi, const Eigen::Vector3d& v);
 
 class PoseTrack {
  public:

@@ -86,3 +86,24 @@ TEST(DiagnosisGyro, BiasAndImuToCameraAreApplied) {
   EXPECT_LT((a.camera_at(1.7) - c.camera_at(1.7)).norm(), 1e-12);
   EXPECT_THROW(GyroTrack({}, Vector3d::Zero(), R_ic), std::invalid_argument);
 }
+
+// The vector forms the residuals use equal the matrix camera_at applied to the vector, inside
+// the data (rotations of up to about 0.3 rad within an interval: both branches of the series)
+// and held at either end, whatever interval the hint last held.
+TEST(DiagnosisGyro, TurningAVectorEqualsTheMatrix) {
+  const SmoothPose pose = test_pose();
+  Eigen::Matrix3d R_ic;
+  R_ic << 0, -1, 0, -1, 0, 0, 0, 0, -1;
+  std::vector<GyroSample> g;
+  for (double t : irregular_stamps(2.0, 5)) g.push_back({t, 8.0 * pose.body_rate(t)});
+  g.push_back({2.2, Vector3d(6, -5, 4)});  // a 0.2 s interval at about 9 rad/s: |phi| past 0.25
+  const GyroTrack track(clean_gyro(g), Vector3d(0.01, 0, -0.02), R_ic);
+  const Vector3d v = Vector3d(0.3, -0.2, 1.0).normalized();
+  // The hint carried from time to time as the residuals carry it (forwards, backwards, far).
+  size_t hint = 0;
+  for (double t : {-0.5, 0.0, 0.013, 0.014, 0.77, 0.0135, 1.5, 1.99, 2.15, 2.2, 3.0, 1.0}) {
+    const Eigen::Matrix3d R = track.camera_at(t);
+    EXPECT_LT((track.to_world(t, v, hint) - R * v).norm(), 1e-14) << t;
+    EXPECT_LT((track.to_camera(t, v, hint) - R.transpose() * v).norm(), 1e-14) << t;
+  }
+}
