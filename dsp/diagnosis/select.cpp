@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 #include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/fit.hpp"
@@ -406,6 +407,37 @@ void plausible_only(const Selector& sel, State& s, std::vector<SelectedEffect>& 
   }
 }
 
+// Drops any selected effect that, given the others, does not improve the prediction of the
+// held-out observations (issue 34, invariant c): the model without it (the others refitted on
+// the fitting set) predicts them as well or better. Each round's winner had to lower the
+// held-out chi-square when it came in; a later pick can take over what it did there, and the
+// blocked halves, cut from the fitting observations, cannot see frames no fit saw. The latest
+// pick is judged first; what was dropped, and why, goes to `withheld`.
+void each_improves_held_out(const Selector& sel, State& s, std::vector<SelectedEffect>& steps,
+                            std::vector<std::string>& withheld) {
+  if (sel.held_.empty()) return;
+  for (bool changed = true; changed && !s.effects.empty();) {
+    changed = false;
+    for (auto it = s.effects.rbegin(); it != s.effects.rend(); ++it) {
+      const Effect e = *it;
+      State without = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
+      const double drop = sel.heldout_drop(without, s);
+      for (SelectedEffect& st : steps)
+        if (st.effect == e) st.heldout_given_others = drop;
+      if (drop > 0) continue;
+      std::ostringstream why;
+      why << effect_name(e) << " not named: given the others it does not improve the held-out prediction (their robust "
+          << "chi-square is " << std::lround(-drop) << " higher with it)";
+      withheld.push_back(why.str());
+      if (sel.opt_.progress) sel.opt_.progress(withheld.back());
+      s = std::move(without);
+      forget(steps, e);
+      changed = true;
+      break;
+    }
+  }
+}
+
 }  // namespace
 
 Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
@@ -420,6 +452,7 @@ Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, c
   if (opt.progress && !steps.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
   consistency(sel, s, steps);
   plausible_only(sel, s, steps, withheld);
+  each_improves_held_out(sel, s, steps, withheld);
   return {steps, s.params, withheld};
 }
 
@@ -433,6 +466,7 @@ Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>
   if (opt.progress && !chosen.effects.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
   consistency(sel, s, chosen.effects);
   plausible_only(sel, s, chosen.effects, chosen.withheld);
+  each_improves_held_out(sel, s, chosen.effects, chosen.withheld);
   chosen.params = s.params;
   return chosen;
 }

@@ -45,6 +45,9 @@ struct SelectedEffect {
   // angular rate (gyro recordings); NaN where not applicable.
   double blocked_time_drop = std::numeric_limits<double>::quiet_NaN();
   double blocked_rate_drop = std::numeric_limits<double>::quiet_NaN();
+  // The held-out robust chi-square drop from the final model without it to the final model (the
+  // others refitted): what it adds given the others. NaN where nothing is held out.
+  double heldout_given_others = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct Selection {
@@ -66,7 +69,9 @@ Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, c
 // The blocked-halves check of a selection made without it (SelectionOptions::blocked_halves
 // false): every named effect must predict the half of the recording it was not fitted on,
 // both ways, in time and (gyro recordings) in angular rate; those that do not are dropped and
-// the rest refitted. The same arguments as the selection had.
+// the rest refitted. Then the plausibility check, and each effect must, given the others,
+// improve the prediction of the held-out observations on its own (what does not is withheld,
+// with why). The same arguments as the selection had.
 Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
                                  const std::vector<int>& screen, const ModelParams& nominal, const ModelParams& start,
                                  double sigma_px, const SelectionOptions& opt, Selection chosen);
