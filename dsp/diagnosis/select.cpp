@@ -261,13 +261,15 @@ struct RoundResult {
   double drop = 0, held_drop = 0;
   std::vector<Effect> rivals;
   std::string refused;  // the round's winner, refused by the held-out frames: why
+  Effect refused_effect = Effect::Count;
 };
 
 // One forward round: every candidate screened on the subsample; those whose projected drop is
 // near the best (near-degenerate hypotheses, e.g. a lever arm along the optical axis and a
 // focal length, which the subsample cannot tell apart) are refitted on all fitting
 // observations and the lowest BIC there wins. Returns false when nothing clears the
-// threshold.
+// threshold, or when the winner is refused by the held-out frames (`out.refused` says which and
+// why: the caller asks again without it).
 bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, State& s, RoundResult& out) {
   State here = s;
   here.bic = sel.bic(s.params, s.effects, sel.screen_);
@@ -305,6 +307,7 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
   // The held-out observations must agree: the effect predicts frames the fit never saw better.
   out.held_drop = sel.heldout_drop(s, best->second);
   if (!sel.held_.empty() && out.held_drop <= 0) {
+    out.refused_effect = best->first;
     out.refused = std::string(effect_name(best->first)) + " not named: it fits the fitting frames (BIC drop " +
                   std::to_string(std::lround(out.drop)) + ") and predicts the held-out frames worse than without it";
     return false;
@@ -313,16 +316,31 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
   return true;
 }
 
+// Forward rounds until no candidate clears the threshold. A winner the held-out frames refuse
+// leaves the round's candidates and the round is asked again without it, so that it does not
+// hide an effect the data hold (it may come back once another effect is in: the refusals are
+// forgotten after each named effect). What stays refused goes to `withheld`.
 std::vector<SelectedEffect> forward(const Selector& sel, const std::vector<Effect>& candidates, State& s,
                                     std::vector<std::string>& withheld) {
   std::vector<SelectedEffect> steps;
   RoundResult r;
+  std::vector<std::pair<Effect, std::string>> refused;
   while (true) {
     const State before = s;
-    if (!forward_round(sel, candidates, s, r)) {
-      if (!r.refused.empty()) withheld.push_back(r.refused);
+    std::vector<Effect> open;
+    for (Effect e : candidates)
+      if (std::none_of(refused.begin(), refused.end(), [&](const auto& f) { return f.first == e; })) open.push_back(e);
+    r.refused.clear();
+    if (!forward_round(sel, open, s, r)) {
+      if (!r.refused.empty()) {
+        refused.emplace_back(r.refused_effect, r.refused);
+        if (sel.opt_.progress) sel.opt_.progress(r.refused);
+        continue;
+      }
+      for (const auto& f : refused) withheld.push_back(f.second);
       return steps;
     }
+    refused.clear();
     const double rms = sel.rms(s.params);
     // An effect the round replaced (lens_model takes lens_distortion's place) leaves the list.
     steps.erase(std::remove_if(steps.begin(), steps.end(), [&](const SelectedEffect& st) { return !s.has(st.effect); }),
