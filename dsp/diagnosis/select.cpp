@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "dsp/diagnosis/robust_stats.hpp"
@@ -260,23 +261,26 @@ double projected_drop(const Selector& sel, const State& from, const State& to) {
 struct RoundResult {
   double drop = 0, held_drop = 0;
   std::vector<Effect> rivals;
-  std::string refused;  // the round's winner, refused by the held-out frames: why
-  Effect refused_effect = Effect::Count;
+  // Winners the held-out frames refused in this round, in order, each with why.
+  std::vector<std::pair<Effect, std::string>> refused;
 };
 
 // One forward round: every candidate screened on the subsample; those whose projected drop is
 // near the best (near-degenerate hypotheses, e.g. a lever arm along the optical axis and a
 // focal length, which the subsample cannot tell apart) are refitted on all fitting
-// observations and the lowest BIC there wins. Returns false when nothing clears the
-// threshold, or when the winner is refused by the held-out frames (`out.refused` says which and
-// why: the caller asks again without it).
+// observations and the lowest BIC there wins. A winner the held-out frames refuse leaves the
+// round (`out.refused`) and the next best is asked, from the same screening, so that a stand-in
+// that wins on the fitting frames does not hide an effect the data hold. Returns false when
+// nothing (left) clears the threshold.
 bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, State& s, RoundResult& out) {
+  out.refused.clear();
   State here = s;
   here.bic = sel.bic(s.params, s.effects, sel.screen_);
   struct Candidate {
     double projected;
     Effect added;
     State state;
+    std::optional<State> refitted;  // on all fitting observations, once asked for
   };
   std::vector<Candidate> screened;
   for (Effect e : candidates)
@@ -284,63 +288,68 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
     if (!s.has(e) && !(e == Effect::LensDistortion && s.has(Effect::LensModel))) {
       State c = sel.screen_add(s, e);
       const double d = projected_drop(sel, here, c);
-      screened.push_back({d, e, std::move(c)});
+      screened.push_back({d, e, std::move(c), std::nullopt});
     }
-  if (screened.empty()) return false;
   std::sort(screened.begin(), screened.end(), [](const auto& a, const auto& b) { return a.projected > b.projected; });
-  const double best_projected = screened.front().projected;
-  if (best_projected < sel.opt_.min_bic_drop) return false;
-  const double margin = 30 + 0.05 * best_projected;
-  std::vector<std::pair<Effect, State>> near;
-  for (const Candidate& c : screened) {
-    if (c.projected < best_projected - margin) break;
-    near.push_back({c.added, sel.refit_all(c.state)});
+  while (!screened.empty()) {
+    const double best_projected = screened.front().projected;
+    if (best_projected < sel.opt_.min_bic_drop) return false;
+    const double margin = 30 + 0.05 * best_projected;
+    std::vector<Candidate*> near;
+    for (Candidate& c : screened) {
+      if (c.projected < best_projected - margin) break;
+      if (!c.refitted) c.refitted = sel.refit_all(c.state);
+      near.push_back(&c);
+    }
+    Candidate* best = *std::min_element(near.begin(), near.end(), [](const Candidate* a, const Candidate* b) {
+      return a->refitted->bic < b->refitted->bic;
+    });
+    out.rivals.clear();
+    for (const Candidate* c : near)
+      if (c != best && c->refitted->bic - best->refitted->bic < sel.opt_.min_bic_drop) out.rivals.push_back(c->added);
+    // The winner by BIC; accepted by the drop with the design effect (which is itself noisy
+    // by a few percent, too much to rank near-degenerate candidates by).
+    out.drop = sel.drop(s, *best->refitted);
+    if (out.drop < sel.opt_.min_bic_drop) return false;
+    // The held-out observations must agree: the effect predicts frames the fit never saw better.
+    out.held_drop = sel.heldout_drop(s, *best->refitted);
+    if (sel.held_.empty() || out.held_drop > 0) {
+      s = std::move(*best->refitted);
+      return true;
+    }
+    out.refused.emplace_back(best->added, std::string(effect_name(best->added)) + " not named: it fits the fitting frames (BIC drop " +
+                                              std::to_string(std::lround(out.drop)) +
+                                              ") and predicts the held-out frames worse than without it");
+    if (sel.opt_.progress) sel.opt_.progress(out.refused.back().second);
+    screened.erase(screened.begin() + (best - screened.data()));
   }
-  const auto best = std::min_element(near.begin(), near.end(), [](const auto& a, const auto& b) { return a.second.bic < b.second.bic; });
-  out.rivals.clear();
-  for (const auto& [e, c] : near)
-    if (&c != &best->second && c.bic - best->second.bic < sel.opt_.min_bic_drop) out.rivals.push_back(e);
-  // The winner by BIC; accepted by the drop with the design effect (which is itself noisy
-  // by a few percent, too much to rank near-degenerate candidates by).
-  out.drop = sel.drop(s, best->second);
-  if (out.drop < sel.opt_.min_bic_drop) return false;
-  // The held-out observations must agree: the effect predicts frames the fit never saw better.
-  out.held_drop = sel.heldout_drop(s, best->second);
-  if (!sel.held_.empty() && out.held_drop <= 0) {
-    out.refused_effect = best->first;
-    out.refused = std::string(effect_name(best->first)) + " not named: it fits the fitting frames (BIC drop " +
-                  std::to_string(std::lround(out.drop)) + ") and predicts the held-out frames worse than without it";
-    return false;
-  }
-  s = std::move(best->second);
-  return true;
+  return false;
 }
 
-// Forward rounds until no candidate clears the threshold. A winner the held-out frames refuse
-// leaves the round's candidates and the round is asked again without it, so that it does not
-// hide an effect the data hold (it may come back once another effect is in: the refusals are
-// forgotten after each named effect). What stays refused goes to `withheld`.
+// Forward rounds until no candidate clears the threshold. What the held-out frames refused and
+// no later round named goes to `withheld` (each round asks every candidate again: a refused
+// effect may be named once another is in).
 std::vector<SelectedEffect> forward(const Selector& sel, const std::vector<Effect>& candidates, State& s,
                                     std::vector<std::string>& withheld) {
   std::vector<SelectedEffect> steps;
   RoundResult r;
-  std::vector<std::pair<Effect, std::string>> refused;
+  std::vector<std::pair<Effect, std::string>> refused;  // the latest refusal of each effect
+  auto remember = [&] {
+    for (auto& f : r.refused) {
+      auto it = std::find_if(refused.begin(), refused.end(), [&](const auto& g) { return g.first == f.first; });
+      if (it == refused.end()) refused.push_back(f);
+      else it->second = f.second;
+    }
+  };
   while (true) {
     const State before = s;
-    std::vector<Effect> open;
-    for (Effect e : candidates)
-      if (std::none_of(refused.begin(), refused.end(), [&](const auto& f) { return f.first == e; })) open.push_back(e);
-    r.refused.clear();
-    if (!forward_round(sel, open, s, r)) {
-      if (!r.refused.empty()) {
-        refused.emplace_back(r.refused_effect, r.refused);
-        if (sel.opt_.progress) sel.opt_.progress(r.refused);
-        continue;
-      }
-      for (const auto& f : refused) withheld.push_back(f.second);
+    const bool named = forward_round(sel, candidates, s, r);
+    remember();
+    if (!named) {
+      for (const auto& f : refused)
+        if (!s.has(f.first)) withheld.push_back(f.second);
       return steps;
     }
-    refused.clear();
     const double rms = sel.rms(s.params);
     // An effect the round replaced (lens_model takes lens_distortion's place) leaves the list.
     steps.erase(std::remove_if(steps.begin(), steps.end(), [&](const SelectedEffect& st) { return !s.has(st.effect); }),
