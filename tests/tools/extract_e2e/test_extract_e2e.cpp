@@ -20,52 +20,20 @@
 
 #include "formats/recording_v1.hpp"
 #include "formats/scenario_file.hpp"
+#include "tests/support/diagnosis_verdict.hpp"
 
 using namespace rsd;
+using rsd::test::must_run;
+using rsd::test::read_verdict;
+using rsd::test::run;
+using rsd::test::slurp;
+using rsd::test::Verdict;
 namespace fs = std::filesystem;
 
 namespace {
 
 const std::string kWork = RSD_E2E_WORK_DIR;
 const std::string kScenarios = RSD_SCENARIO_DIR;
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-// Runs a command with its output in `log`; returns the exit status.
-int run(const std::string& cmd, const std::string& log) {
-  const int rc = std::system((cmd + " > " + log + " 2>&1").c_str());
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-}
-
-void must_run(const std::string& cmd, const std::string& log) {
-  ASSERT_EQ(run(cmd, log), 0) << cmd << "\n" << slurp(log);
-}
-
-struct Verdict {
-  std::vector<std::string> effects;
-  std::map<std::string, std::map<std::string, double>> params;  // effect -> numeric parameters
-  double line_delay_s = NAN;
-};
-
-// The diagnosis JSON's effects with their numeric parameters (rsd-diagnosis/1).
-Verdict read_verdict(const std::string& json_file) {
-  const std::string json = slurp(json_file);
-  Verdict v;
-  const std::string effects = json.substr(json.find("\"effects\""));
-  const std::regex effect("\\{\"name\": \"([a-z_]+)\", \"params\": \\{([^}]*)\\}"), param("\"([a-z_0-9]+)\": ([-+0-9.eE]+)");
-  for (std::sregex_iterator it(effects.begin(), effects.end(), effect), end; it != end; ++it) {
-    const std::string name = (*it)[1], list = (*it)[2];
-    v.effects.push_back(name);
-    for (std::sregex_iterator p(list.begin(), list.end(), param); p != end; ++p) v.params[name][(*p)[1]] = std::stod((*p)[2]);
-  }
-  if (v.params.count("rolling_shutter")) v.line_delay_s = v.params["rolling_shutter"]["line_delay_s"];
-  return v;
-}
 
 // Landmarks: the checkerboard detector's constant sub-pixel bias (0.005-0.03 px, measured in
 // test_extract's TargetDetection) shifts every corner alike: exactly what a principal point
