@@ -122,9 +122,16 @@ class Selector {
   }
 
   // Fit `poorer` and `richer` on one half, predict the other, both ways: the robust
-  // chi-square drop on the unseen half, the smaller of the two directions. An effect that
-  // describes the physics predicts what it has not seen; a stand-in, fitted to structure that
-  // differs between the halves (a clock that jumps, a rate the gyro clips), does not.
+  // chi-square drop on the unseen half, less the margin its noise allows, the smaller of the two
+  // directions (positive: it holds). An effect that describes the physics predicts what it has
+  // not seen; a stand-in, fitted to structure that differs between the halves (a clock that
+  // jumps, a rate the gyro clips), does not. But a real effect that one half shows only weakly
+  // (little motion there) may lower that half's chi-square by less than its noise, or raise it
+  // a little: it holds unless it degrades the half beyond that noise (issue 34, point 3). The
+  // noise of the drop: with d_i the change the effect makes to observation i's prediction and
+  // S = sum |d_i|^2 / sigma^2 its signal energy on the half, the drop is S + 2 sum r_i.d_i /
+  // sigma^2 with standard deviation 2 sqrt(S) for independent noise; the margin is 3 sqrt(S). A
+  // stand-in's wrong half costs about S itself, far past the margin once S is more than 9.
   double cross_drop(const Halves& h, const State& poorer, const State& richer) const {
     double worst = std::numeric_limits<double>::infinity();
     for (int dir = 0; dir < 2; ++dir) {
@@ -132,9 +139,20 @@ class Selector {
       const std::vector<int>& judge = dir ? h.a : h.b;
       const ModelParams p0 = fit_params(m_, learn, poorer.params, mask_of(poorer.effects, lens_), sigma_, opt_.screen_iterations);
       const ModelParams p1 = fit_params(m_, learn, richer.params, mask_of(richer.effects, lens_), sigma_, opt_.screen_iterations);
-      worst = std::min(worst, robust_chi2(m_.residuals(p0, judge), sigma_) - robust_chi2(m_.residuals(p1, judge), sigma_));
+      const auto r0 = m_.residuals(p0, judge), r1 = m_.residuals(p1, judge);
+      worst = std::min(worst, robust_chi2(r0, sigma_) - robust_chi2(r1, sigma_) + 3.0 * std::sqrt(signal_energy(r0, r1)));
     }
     return worst;
+  }
+  // S above, over the observations both models predict within the robust loss's quadratic core
+  // (an outlier's change says nothing about the noise of the drop).
+  double signal_energy(const std::vector<Eigen::Vector2d>& r0, const std::vector<Eigen::Vector2d>& r1) const {
+    double s = 0;
+    const double core = 2.0 * sigma_;
+    for (size_t k = 0; k < r0.size(); ++k)
+      if (r0[k].allFinite() && r1[k].allFinite() && r0[k].norm() < core && r1[k].norm() < core)
+        s += (r0[k] - r1[k]).squaredNorm() / (sigma_ * sigma_);
+    return s;
   }
 
   // Whether adding an effect (poorer -> richer) holds on the blocked halves in time and, in
@@ -146,7 +164,8 @@ class Selector {
     time_drop = rate_drop = std::numeric_limits<double>::quiet_NaN();
     if (time_halves_.usable()) time_drop = cross_drop(time_halves_, poorer, richer);
     if (rate_halves_.usable()) rate_drop = cross_drop(rate_halves_, poorer, richer);
-    return !(time_drop <= 0) && !(rate_drop <= 0);
+    // A drop of exactly zero is a half that cannot show the effect (no motion there): it holds.
+    return !(time_drop < 0) && !(rate_drop < 0);
   }
 
   // BIC = robust chi-square + k ln(2N) + the implausibility of the values (plausibility.hpp):

@@ -41,8 +41,9 @@ struct SelectedEffect {
   // Hypotheses for the same structure that came within min_bic_drop of it, head to head on all
   // fitting observations: the data cannot tell them from it.
   std::vector<Effect> rivals;
-  // The robust chi-square drop on the unseen blocked half (the worse direction), in time and in
-  // angular rate (gyro recordings); NaN where not applicable.
+  // The robust chi-square drop on the unseen blocked half plus the margin its noise allows
+  // (3 sqrt of the effect's signal energy there; the worse direction), in time and in angular
+  // rate (gyro recordings); positive: it holds. NaN where not applicable.
   double blocked_time_drop = std::numeric_limits<double>::quiet_NaN();
   double blocked_rate_drop = std::numeric_limits<double>::quiet_NaN();
   // The held-out robust chi-square drop from the final model without it to the final model (the

@@ -161,3 +161,34 @@ TEST(DiagnosisInvariants, ARefusedWinnerDoesNotHideAnEffectTheDataHold) {
   ASSERT_GE(at("lens_distortion not named: it fits the fitting frames"), 0);
   EXPECT_LT(at("lens_distortion not named: it fits the fitting frames"), at("named rolling_shutter"));
 }
+
+// Blocked halves revised (issue 34, point 3): a rolling shutter the whole recording shows, in a
+// recording whose first half turns and whose second half stands still (a drone that hovers), so
+// that the still half cannot show the readout at all. Fitted on the moving half, it leaves the
+// still half's predictions as they were (a drop of exactly zero there, which the rule before
+// refused); it must be kept, since it does not degrade that half, with the line delay the
+// moving half measures.
+TEST(DiagnosisInvariants, AnEffectOneHalfShowsWeaklyIsKept) {
+  SimConfig c = shaken(34);
+  c.duration_s = 6.0;
+  c.effects.line_delay_s = 2.5e-5;
+  c.motion_source = MotionSource::Samples;
+  const Eigen::Vector3d axis = Eigen::Vector3d(0.3, 1.0, 0.2).normalized();
+  for (double t = c.start_time_s - 1.5; t <= c.start_time_s + c.duration_s + 1.5; t += 1e-3) {
+    // The amplitude falls from 0.25 rad to nothing over the half second that ends half a
+    // second before the middle.
+    const double s = std::clamp((t - c.start_time_s - 0.5 * c.duration_s + 1.0) / 0.5, 0.0, 1.0);
+    const double amplitude = 0.25 * (1 - s);
+    const double angle = amplitude * std::sin(2 * M_PI * 1.3 * t) + 0.3 * amplitude * std::sin(2 * M_PI * 2.9 * t + 1.0);
+    PoseSample p;
+    p.t = t;
+    p.q = Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis));
+    p.p = Eigen::Vector3d::Zero();
+    c.pose_samples.push_back(p);
+  }
+  const Diagnosis d = diagnose(simulate_recording(c).rec);
+  show(d);
+  EXPECT_EQ(names(d), "rolling_shutter ");
+  EXPECT_NEAR(d.fitted[Param::LineDelay], 2.5e-5, 0.1 * 2.5e-5);
+  EXPECT_LT(d.heldout_final_rms_px, d.heldout_baseline_rms_px);
+}
