@@ -193,8 +193,18 @@ void OnlineCalibrator::track(uint32_t s) {
   prev_ = s;
 }
 
-// A line in the log when the state changes (or a held or rejected window says something new).
+// "learned", "held: too little rotation (0.05 rad/s RMS)": a value's note as calibration_t and
+// the state file say it.
+std::string note_text(const dsp::ValueNote& n) {
+  return n.why.empty() ? dsp::to_string(n.status) : std::string(dsp::to_string(n.status)) + ": " + n.why;
+}
+
+// A line in the log when the state changes (or a held or rejected window says something new),
+// and when the frames decide how the rows are read.
 void log_transition(const dsp::OnlineEstimate& before, const dsp::OnlineEstimate& e) {
+  if (e.rows != before.rows && e.shutter == dsp::Shutter::Unknown && e.rows != dsp::RowsSeen::Undecided)
+    spdlog::info("online calibration: the frames show a {} shutter (line delay {:.3f} +- {:.3f} us)", dsp::to_string(e.rows),
+                 e.value.line_delay_s * 1e6, e.sigma.line_delay_s * 1e6);
   if (e.state == before.state && e.reason == before.reason) return;
   if (e.state == dsp::OnlineState::Held || e.state == dsp::OnlineState::Rejected) {
     spdlog::info("online calibration {}: {}", dsp::to_string(e.state), e.reason);
@@ -259,10 +269,17 @@ void OnlineCalibrator::write_state(const dsp::OnlineEstimate& e, const dsp::Onli
   c.gyro_bias_rad_s = v.gyro_bias;
   c.imu_to_camera = dsp::exp_so3(v.mount_rotation) * setup_.nominal.imu_to_camera;
   c.has_rsd_block = true;
-  c.source = "rsd online calibration (converged over a " + std::to_string(e.window.t_end - e.window.t_begin) + " s window)";
-  c.sigma["timeshift_cam_imu"] = {e.sigma.time_offset_s};
-  c.sigma["line_delay_s"] = {e.sigma.line_delay_s};
-  c.sigma["gyro_bias_rad_s"] = {e.sigma.gyro_bias.x(), e.sigma.gyro_bias.y(), e.sigma.gyro_bias.z()};
+  // Which values were learned, which held or fixed and why (calibration-v1 has no key for it:
+  // its free-text source); sigmas for the values learned.
+  c.source = "rsd online calibration (converged over a " + std::to_string(e.window.t_end - e.window.t_begin) +
+             " s window; " + dsp::to_string(e.shutter) + " shutter, rows " + dsp::to_string(e.rows) +
+             "): time offset " + note_text(e.notes.time_offset) + "; line delay " + note_text(e.notes.line_delay) +
+             "; gyro bias " + note_text(e.notes.gyro_bias) + "; mount rotation " + note_text(e.notes.mount_rotation);
+  for (const char* key : {"timeshift_cam_imu", "line_delay_s", "gyro_bias_rad_s"}) c.sigma.erase(key);
+  auto learned = [](const dsp::ValueNote& n) { return n.status == dsp::ValueStatus::Learned; };
+  if (learned(e.notes.time_offset)) c.sigma["timeshift_cam_imu"] = {e.sigma.time_offset_s};
+  if (learned(e.notes.line_delay)) c.sigma["line_delay_s"] = {e.sigma.line_delay_s};
+  if (learned(e.notes.gyro_bias)) c.sigma["gyro_bias_rad_s"] = {e.sigma.gyro_bias.x(), e.sigma.gyro_bias.y(), e.sigma.gyro_bias.z()};
   try {
     formats::write_calibration(cfg_.state_file, c);
     written_ = v;
@@ -319,6 +336,12 @@ void OnlineCalibrator::publish() {
   m.mode = to_string(cfg_.mode);
   m.state = dsp::to_string(e.state);
   m.reason = e.reason;
+  m.shutter = dsp::to_string(e.shutter);
+  m.rows = dsp::to_string(e.rows);
+  m.time_offset_status = note_text(e.notes.time_offset);
+  m.line_delay_status = note_text(e.notes.line_delay);
+  m.gyro_bias_status = note_text(e.notes.gyro_bias);
+  m.mount_status = note_text(e.notes.mount_rotation);
   m.converged = e.converged;
   m.applied = applied_.load();
   m.time_offset_s = e.value.time_offset_s, m.time_offset_sigma_s = e.sigma.time_offset_s;

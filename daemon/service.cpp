@@ -150,6 +150,7 @@ struct Session {
     if (const auto& cal = c.source.calibration; cal && cal->has_rsd_block && cal->line_delay_s > 0)
       timing.line_delay_s = cal->line_delay_s, timing.readout = cal->readout;
     if (online_applied) timing.line_delay_s = online_applied->line_delay_s;
+    if (c.source.shutter == dsp::Shutter::Global) timing.line_delay_s = 0;  // every row at once
     return {cam, timing};
   }
 
@@ -172,15 +173,19 @@ struct Session {
     return why;
   }
 
-  // The estimator, started from the calibration in use (or the state file's); nullptr when off
-  // or when the camera has no rolling shutter to learn.
-  std::unique_ptr<OnlineCalibrator> make_online(const std::optional<dsp::OnlineCalibration>& state) {
+  // The estimator, started from the calibration in use (or the state file's); nullptr when off.
+  // A global shutter (source.shutter) learns the clock offset and the gyro bias only; a rolling
+  // one with no line delay (0: a recording's, not yet measured) lets the frames decide.
+  std::unique_ptr<OnlineCalibrator> make_online(std::optional<dsp::OnlineCalibration> state) {
     if (cfg.online.mode == OnlineMode::Off) return nullptr;
     const auto [cam, timing] = geometry(cfg);
-    if (!(timing.line_delay_s > 0)) {
-      spdlog::warn("online calibration off: {} has no line delay (a global shutter)", source->name());
-      return nullptr;
-    }
+    const bool global = cfg.source.shutter == dsp::Shutter::Global;
+    if (global && state) state->line_delay_s = 0;
+    if (!global && !(timing.line_delay_s > 0))
+      spdlog::info("online calibration: {} gives no line delay; the frames will show whether its rows are read at different times",
+                   source->name());
+    OnlineCalibrationConfig online = cfg.online;
+    online.estimator.global_shutter = global;
     OnlineSetup st;
     st.nominal.cam = cam;
     st.nominal.frame_rate_hz = timing.frame_rate_hz;
@@ -193,7 +198,7 @@ struct Session {
     st.base = cfg.source.calibration ? *cfg.source.calibration : formats::calibration_of(st.nominal, "");
     st.base.cam = cam, st.base.imu_to_camera = cfg.velocity_input.imu_to_camera, st.base.gyro_scale = st.gyro_scale;
     st.base.readout = timing.readout;
-    auto o = std::make_unique<OnlineCalibrator>(cfg.online, st, *pub);
+    auto o = std::make_unique<OnlineCalibrator>(online, st, *pub);
     o->set_applied(online_applied.has_value());
     return o;
   }

@@ -9,6 +9,7 @@
 #include "drivers/recording_replay_source.hpp"
 #include "drivers/replay_source.hpp"
 #include "formats/intrinsics_file.hpp"
+#include "formats/number_text.hpp"
 
 namespace rsd::daemon {
 
@@ -45,6 +46,9 @@ void read_intrinsics(formats::YamlMap& m, SourceConfig& s) {
 void use_calibration(SourceConfig& s, formats::Calibration cal) {
   if (s.camera && s.camera_origin != cal.file + " (cam0)")
     throw formats::ConfigError(cal.file + ": the calibration's intrinsics and " + s.camera_origin + " both give the camera: keep one");
+  if (s.shutter == dsp::Shutter::Global && cal.has_rsd_block && cal.line_delay_s > 0)
+    throw formats::ConfigError(cal.file + ": cam0.rsd.line_delay_s is " + formats::number_text(cal.line_delay_s) +
+                               " s, but source.shutter is global (no line delay): correct one of them");
   s.camera = cal.cam;
   s.camera_origin = cal.file + " (cam0)";
   // A line delay of 0 in a calibration means a global shutter; the drivers' own timing (0: the
@@ -62,6 +66,9 @@ void visit_source(formats::ConfigSection& c, SourceConfig& s) {
   c.value("driver", s.driver, "sim, aravis, v4l2, libcamera, replay (a recorded log), recording (an images recording) or lcm (frames over LCM)");
   const drivers::Driver* driver = drivers::find_driver(s.driver);
   c.check(driver != nullptr, "driver", "must be " + drivers::driver_names());
+  c.choice("shutter", s.shutter, {{"rolling", dsp::Shutter::Rolling}, {"global", dsp::Shutter::Global}},
+           "rolling (rows read one after another; a line delay of 0 from a recording: not yet measured, the online "
+           "calibration finds it) or global (every row at once: no line delay, no rolling-shutter rectification)");
   c.note("camera: {width: 1280, height: 720, fx: 900, fy: 900, cx: 639.5, cy: 359.5, distortion: [0, 0, 0, 0]}");
   c.note("    (a fisheye: model: pinhole-equi, distortion: [k1, k2, k3, k4]; docs/geometry.md, lens models)");
   c.note("intrinsics_file: camchain.yaml   # or a Kalibr camchain / ROS camera_info file (intrinsics_camera: cam0)");
@@ -72,6 +79,8 @@ void visit_source(formats::ConfigSection& c, SourceConfig& s) {
   if (reader) read_intrinsics(reader->map(), s);
   for (const drivers::Driver& d : drivers::all_drivers())
     c.section(d.name.c_str(), [&](formats::ConfigSection& sub) { d.visit(sub, s.settings[d.name]); }, d.summary.c_str());
+  if (s.shutter == dsp::Shutter::Global)
+    for (const drivers::Driver& d : drivers::all_drivers()) d.use_global_shutter(s.settings[d.name]);
   // After the drivers' sections: a calibration's row timing replaces theirs.
   if (reader && reader->map().has("calibration_file")) {
     formats::YamlMap& m = reader->map();

@@ -11,6 +11,7 @@
 
 #include "drivers/camera_source.hpp"
 #include "dsp/geometry/camera_model.hpp"
+#include "dsp/online/shutter.hpp"
 #include "formats/calibration_v1.hpp"
 #include "formats/config_section.hpp"
 
@@ -23,6 +24,10 @@ struct SourceConfig {
   std::optional<dsp::CameraModel> camera;    // intrinsics of a real camera (source.camera)
   std::string camera_origin = "source.camera";  // where `camera` came from, for messages
   std::optional<formats::Calibration> calibration;  // source.calibration_file or rsd --calibration
+  // source.shutter: rolling (the rows read one after another; a line delay of 0 from a recording
+  // means not yet measured) or global (every row at once: no line delay, no rolling-shutter
+  // rectification; the online calibration learns the clock offset and the gyro bias).
+  dsp::Shutter shutter = dsp::Shutter::Rolling;
 
   // A driver's settings as its own type (drivers::ReplayConfig for "replay", ...).
   template <class C>

@@ -44,6 +44,9 @@ struct Driver {
   // `force` replaces the section's own; otherwise it is used only where the section has none.
   std::function<void(std::any&, double line_delay_s, std::optional<dsp::Readout>, bool force)> use_row_timing =
       [](std::any&, double, std::optional<dsp::Readout>, bool) {};
+  // source.shutter: global: a camera that can read every row at once does (the simulator);
+  // the others' own timing is overruled by the daemon (no line delay).
+  std::function<void(std::any&)> use_global_shutter = [](std::any&) {};
   // The motion sensor's calibrated clock offset (t_imu = t_cam + offset), for sources that hand
   // over recorded motion ahead of the frames that need it.
   std::function<void(std::any&, double offset_s)> use_clock_offset = [](std::any&, double) {};
@@ -86,6 +89,8 @@ Driver make_driver(std::string name, std::string summary, bool real_camera, void
         if (readout && force) x.readout = *readout;
       };
   }
+  if constexpr (requires(Config x) { x.global_shutter = true; })
+    d.use_global_shutter = [](std::any& c) { std::any_cast<Config&>(c).global_shutter = true; };
   return d;
 }
 

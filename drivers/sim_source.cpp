@@ -64,6 +64,7 @@ SimSource::~SimSource() = default;
 void SimSource::open() {
   timing_ = dsp::RowTiming::full_frame(cfg_.camera.height, cfg_.fps, cfg_.readout);
   if (cfg_.line_delay_s > 0) timing_.line_delay_s = cfg_.line_delay_s;
+  if (cfg_.global_shutter) timing_.line_delay_s = 0;
   timing_.exposure_s = cfg_.exposure_s;
   if (timing_.frame_readout_s() > timing_.frame_period_s() * (1 + 1e-9))
     throw CameraError("sim: line delay x height exceeds the frame period");

@@ -22,6 +22,7 @@ struct SimSourceConfig {
   dsp::CameraModel camera = dsp::CameraModel::from_hfov(640, 480, hfov_deg * 3.14159265358979 / 180.0);
   double fps = 30;
   double line_delay_s = 0;   // 0: the readout fills the frame period
+  bool global_shutter = false;  // every row read at once (source.shutter: global); line_delay_s unused
   dsp::Readout readout = dsp::Readout::TopToBottom;
   double exposure_s = 0.002;
   dsp::PixelFormat format = dsp::PixelFormat::Mono8;

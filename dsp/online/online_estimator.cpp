@@ -25,6 +25,16 @@ const char* to_string(OnlineState s) {
   return "?";
 }
 
+const char* to_string(ValueStatus v) {
+  switch (v) {
+    case ValueStatus::Learning: return "learning";
+    case ValueStatus::Learned: return "learned";
+    case ValueStatus::Held: return "held";
+    case ValueStatus::Fixed: return "fixed";
+  }
+  return "?";
+}
+
 namespace {
 
 // The parameters the estimator frees, in the order of its values and variances.
@@ -72,8 +82,30 @@ OnlineEstimator::OnlineEstimator(const NominalModel& nominal, const OnlineCalibr
   require(opt.settle >= 1, "settle", "at least 1");
   require(opt.step_sigmas > 0, "step_sigmas", "positive");
   require(opt.offset_walk_s >= 0 && opt.line_delay_walk >= 0 && opt.bias_walk_rad_s >= 0, "the random walks", "zero or positive");
-  require(start.line_delay_s > 0, "the starting line delay", "positive");
+  require(start.line_delay_s >= 0, "the starting line delay", "zero or positive");
+  require(!(opt.global_shutter && start.line_delay_s > 0), "the starting line delay of a global shutter", "0");
+  require(start.line_delay_s > 0 || (nominal.frame_rate_hz > 0 && nominal.cam.height > 0),
+          "the camera's frame rate and height (they bound an unknown line delay)", "positive");
   est_.value = start;
+  est_.shutter = opt.global_shutter ? Shutter::Global : start.line_delay_s > 0 ? Shutter::Rolling : Shutter::Unknown;
+  est_.rows = est_.shutter == Shutter::Rolling ? RowsSeen::Rolling : est_.shutter == Shutter::Global ? RowsSeen::Global : RowsSeen::Undecided;
+  if (est_.shutter == Shutter::Global) est_.notes.line_delay = {ValueStatus::Fixed, "a global shutter: the rows are read at once"};
+  est_.notes.mount_rotation = {ValueStatus::Held, "the rate has not yet varied about two axes"};
+}
+
+double OnlineEstimator::line_delay_scale(double fit) const {
+  const double ld = have_fit_ ? x_[1] : fit;
+  if (est_.shutter == Shutter::Rolling) return ld;
+  // A row's share of the frame period: the longest line delay a camera can have.
+  const double row_period = 1.0 / (nominal_.frame_rate_hz * nominal_.cam.height);
+  return std::max(ld, row_period);
+}
+
+RowsSeen OnlineEstimator::decide_rows(double tolerance) const {
+  if (est_.shutter != Shutter::Unknown) return est_.rows;
+  const double ld = x_[1], sd = std::sqrt(var_[1]);
+  if (ld > 3 * sd) return RowsSeen::Rolling;
+  return sd <= tolerance ? RowsSeen::Global : RowsSeen::Undecided;
 }
 
 void OnlineEstimator::add_gyro(double t_imu, const Eigen::Vector3d& w_measured) {
@@ -153,12 +185,15 @@ const OnlineEstimate& OnlineEstimator::hold(OnlineState s, const std::string& wh
   est_.state = s;
   est_.reason = why;
   est_.window = w;
+  // Every value not yet learned is held, for the window's reason (a learned one stands).
+  for (ValueNote* n : {&est_.notes.time_offset, &est_.notes.line_delay, &est_.notes.gyro_bias, &est_.notes.mount_rotation})
+    if (n->status != ValueStatus::Fixed && n->status != ValueStatus::Learned) *n = {ValueStatus::Held, why};
   return est_;
 }
 
-void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibration& sigma, double t) {
+void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibration& sigma, double t, bool with_mount) {
   const Values z = values(fit), s = values(sigma), start = values(est_.value);
-  const double ld = have_fit_ ? x_[1] : fit.line_delay_s;
+  const double ld = line_delay_scale(fit.line_delay_s);
   // Per value: its random walk per square root of a second, and the sigma it converges to.
   const double b = opt_.bias_walk_rad_s, m = opt_.mount_walk_rad;
   const Values walk = {opt_.offset_walk_s, opt_.line_delay_walk * ld, b, b, b, m, m, m};
@@ -169,13 +204,20 @@ void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibrati
   // carries the information of only the new part of its window.
   const double overlap = have_fit_ ? std::max(1.0, opt_.window_s / dt) : 1.0;
   bool stepped = false, unseen_bias = false;
+  std::array<bool, kOnlineValues> unseen{};
+  const bool global = est_.shutter == Shutter::Global;
   for (int i = 0; i < kOnlineValues; ++i) {
+    if (i == 1 && global) {  // no line delay: 0, known exactly
+      x_[i] = 0, var_[i] = 0;
+      continue;
+    }
     const double prior = var_[i] + walk[i] * walk[i] * dt, r = s[i] * s[i], nu = z[i] - x_[i];
     if (s[i] > opt_.unobservable * small[i]) {  // this window says next to nothing of it: held
       const double known = opt_.unobservable * small[i];  // what a start is taken to be good to
       if (!have_fit_) x_[i] = start[i], var_[i] = std::min(r, known * known);
       else var_[i] = prior;
       unseen_bias = unseen_bias || (i >= kBias && i < kMount);
+      unseen[i] = true;
     } else if (!have_fit_ || nu * nu > opt_.step_sigmas * opt_.step_sigmas * (prior + r)) {
       // The first fit, or a value whose fit lies beyond step_sigmas of the estimate (a step):
       // it restarts from the fit.
@@ -201,6 +243,27 @@ void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibrati
   est_.state = settled_ >= opt_.settle ? OnlineState::Converged : OnlineState::Converging;
   est_.converged = est_.state == OnlineState::Converged;
   est_.reason = stepped ? "a step: restarted from this window's fit" : unseen_bias ? "gyro bias held: this window does not show it" : "";
+  est_.rows = decide_rows(small[1]);
+  note_values(sd, small, unseen, with_mount);
+}
+
+void OnlineEstimator::note_values(const Values& sd, const Values& small, const std::array<bool, kOnlineValues>& unseen,
+                                  bool with_mount) {
+  // A group of values (the bias's three axes, the mount's) is learned when every one is known to
+  // its tolerance (whatever this window showed: the estimate stands); otherwise held when this
+  // window did not show one of them, else learning.
+  auto note = [&](int first, int count, const char* unseen_why) {
+    bool learned = true, held = false;
+    for (int i = first; i < first + count; ++i) learned = learned && sd[i] <= small[i], held = held || unseen[i];
+    if (learned) return ValueNote{ValueStatus::Learned, ""};
+    return held ? ValueNote{ValueStatus::Held, unseen_why} : ValueNote{ValueStatus::Learning, ""};
+  };
+  est_.notes.time_offset = note(0, 1, "this window does not show it");
+  if (est_.shutter != Shutter::Global) est_.notes.line_delay = note(1, 1, "this window does not show it");
+  est_.notes.gyro_bias = note(kBias, 3, "this window does not show it (the camera translates)");
+  est_.notes.mount_rotation = est_.mount_known ? ValueNote{ValueStatus::Learned, ""}
+                              : with_mount        ? note(kMount, 3, "this window does not show it")
+                                                  : ValueNote{ValueStatus::Held, "the rate does not vary about two axes"};
 }
 
 namespace {
@@ -220,7 +283,7 @@ struct WindowFit {
 // parallax (dsp/diagnosis/parallax.hpp), each frame pair's translation flow is taken out and
 // the fit repeated. `parallax_share`: the share of the residual energy the translation explains.
 WindowFit fit_window(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p0, double search_s,
-                     bool with_mount) {
+                     bool with_mount, bool with_line_delay) {
   ModelParams p = p0;
   if (search_s > 0) {
     const std::vector<int> sub = subsample(idx, 300);
@@ -228,7 +291,11 @@ WindowFit fit_window(const DiagnosisModel& m, const std::vector<int>& idx, const
     p[Param::TimeOffset] = refine_time_offset(m, sub, p, guess, search_s);
   }
   const double sigma_px = std::clamp(robust_stats(m.residuals(p, idx)).scale_px, 0.05, 10.0);
-  const std::vector<Param> fitted(kFree.begin(), kFree.begin() + (with_mount ? kOnlineValues : kMount));
+  std::vector<int> which;  // indices into kFree of the values fitted
+  for (int i = 0; i < (with_mount ? kOnlineValues : kMount); ++i)
+    if (i != 1 || with_line_delay) which.push_back(i);
+  std::vector<Param> fitted;
+  for (int i : which) fitted.push_back(kFree[i]);
   ParamMask free;
   for (Param q : fitted) free.set(static_cast<int>(q));
   WindowFit w;
@@ -241,7 +308,8 @@ WindowFit fit_window(const DiagnosisModel& m, const std::vector<int>& idx, const
   w.stats = robust_stats(m.residuals(w.params, idx));
   if (const auto v = parameter_variances(m, w.params, fitted, idx)) {
     w.var = Eigen::VectorXd::Constant(kOnlineValues, std::numeric_limits<double>::infinity());  // not fitted: unknown
-    w.var->head(v->size()) = *v;
+    for (size_t j = 0; j < which.size(); ++j) (*w.var)[which[j]] = (*v)[static_cast<Eigen::Index>(j)];
+    if (!with_line_delay) (*w.var)[1] = 0;  // a global shutter's: 0 exactly
   }
   return w;
 }
@@ -276,10 +344,12 @@ const OnlineEstimate& OnlineEstimator::update() {
     // the same as a bias. Only a rate that varies about two axes or more, by more than its mean,
     // tells them apart; otherwise the mount is held as it is.
     const bool with_mount = w.rate_spread_rad_s >= opt_.mount_min_spread_rad_s && w.rate_spread_rad_s >= 0.5 * w.rate_mean_rad_s;
-    const WindowFit f = fit_window(m, idx, start_params(rec.nominal), search, with_mount);
+    const WindowFit f = fit_window(m, idx, start_params(rec.nominal), search, with_mount, est_.shutter != Shutter::Global);
     w.fitted = f.stats.observations, w.inliers = f.stats.observations - f.stats.outliers;
     w.residual_px = f.stats.scale_px, w.parallax_share = f.parallax_share;
-    const OnlineCalibration v = from_params(f.params);
+    OnlineCalibration v = from_params(f.params);
+    // A line delay fitted at its bound 0 may come back a rounding error below it.
+    if (est_.shutter != Shutter::Rolling && v.line_delay_s < 0 && v.line_delay_s > -1e-6 * line_delay_scale(0)) v.line_delay_s = 0;
     // Over a near scene a translation's flow and the rotation's are nearly the same field: when
     // it dominates, the rotation-only model would bend the calibration to explain it.
     if (f.parallax_share > opt_.max_parallax_share)
@@ -288,11 +358,12 @@ const OnlineEstimate& OnlineEstimator::update() {
     if (f.stats.scale_px > opt_.max_residual_px)
       return hold(OnlineState::Rejected, "residuals too large (" + std::to_string(f.stats.scale_px) + " px)", w);
     if (2 * w.inliers < w.fitted) return hold(OnlineState::Rejected, "fewer than half the matches fit", w);
-    if (!(v.line_delay_s > 0) || v.gyro_bias.cwiseAbs().maxCoeff() > opt_.max_bias_rad_s)
+    const bool line_delay_ok = est_.shutter == Shutter::Rolling ? v.line_delay_s > 0 : v.line_delay_s >= 0;
+    if (!line_delay_ok || v.gyro_bias.cwiseAbs().maxCoeff() > opt_.max_bias_rad_s)
       return hold(OnlineState::Rejected, "implausible fit (line delay or gyro bias)", w);
     if (!f.var) return hold(OnlineState::Rejected, "parameters not identifiable from this window", w);
     est_.window = w;
-    accept(v, from_variances(*f.var), w.t_end);
+    accept(v, from_variances(*f.var), w.t_end, with_mount);
     return est_;
   } catch (const std::exception& e) {
     return hold(OnlineState::Rejected, e.what(), w);

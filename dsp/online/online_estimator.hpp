@@ -24,8 +24,23 @@
 
 #include "dsp/diagnosis/model.hpp"
 #include "dsp/observation/recording.hpp"
+#include "dsp/online/shutter.hpp"
 
 namespace rsd::dsp {
+
+// One value's standing: learning (fitted, not yet known to its tolerance), learned (known to it;
+// it stands while later windows do not show it), held (not yet learned, and the windows do not
+// show it: kept at its start or its last estimate), fixed (not
+// estimated: the camera has no such value). `why` says why held or fixed.
+enum class ValueStatus { Learning, Learned, Held, Fixed };
+const char* to_string(ValueStatus v);
+struct ValueNote {
+  ValueStatus status = ValueStatus::Learning;
+  std::string why;
+};
+struct OnlineNotes {
+  ValueNote time_offset, line_delay, gyro_bias, mount_rotation;
+};
 
 // converging: fitted, not yet stable; converged: the last fits agree within their sigmas and
 // the sigmas are small; held: the window could not be fitted (too little rotation, too few
@@ -65,6 +80,9 @@ struct OnlineEstimate {
   bool mount_known = false;        // the mount rotation's sigmas are small (the motion showed it)
   int updates = 0;                 // updates so far
   std::string reason;              // why held or rejected ("" otherwise)
+  Shutter shutter = Shutter::Rolling;  // what the estimator was told
+  RowsSeen rows = RowsSeen::Undecided;  // what the frames have shown (rolling when told so)
+  OnlineNotes notes;               // which values are learned, which are held or fixed, and why
 };
 
 struct OnlineEstimatorOptions {
@@ -96,13 +114,15 @@ struct OnlineEstimatorOptions {
   double max_residual_px = 3;      // a robust residual sigma above this: rejected
   double max_parallax_share = 0.5; // a translation explaining more of the residual: held
   double max_bias_rad_s = 0.3;     // |bias| per axis beyond this: rejected (no gyro is that bad)
+  bool global_shutter = false;     // the camera has no line delay (Shutter::Global)
 };
 
 class OnlineEstimator {
  public:
   // `nominal`: the camera, its nominal line delay and readout, the IMU's mount (imu_to_camera);
-  // its time offset and line delay are replaced by `start`'s. Throws std::invalid_argument for
-  // options out of range (naming the option).
+  // its time offset and line delay are replaced by `start`'s. `start`'s line delay says the
+  // shutter: positive, rolling; 0, unknown (or global, with opt.global_shutter). Throws
+  // std::invalid_argument for options out of range (naming the option).
   // `gyro_scale`: the gyro's known scale (w = diag(scale) (w_measured - bias)), held.
   OnlineEstimator(const NominalModel& nominal, const OnlineCalibration& start, const OnlineEstimatorOptions& opt = {},
                   const Eigen::Vector3d& gyro_scale = Eigen::Vector3d::Ones());
@@ -129,8 +149,17 @@ class OnlineEstimator {
   ModelParams start_params(const NominalModel& n) const;
   // Holds the estimate, saying why.
   const OnlineEstimate& hold(OnlineState s, const std::string& why, const OnlineWindow& w);
-  // A window's fit (at the window's end, t) into the estimate.
-  void accept(const OnlineCalibration& fit, const OnlineCalibration& sigma, double t);
+  // A window's fit (at the window's end, t) into the estimate; `with_mount`: the mount was fitted.
+  void accept(const OnlineCalibration& fit, const OnlineCalibration& sigma, double t, bool with_mount);
+  // The scale of the line delay's random walk and tolerance: the estimate (rolling), at least
+  // the frame period's share of a row (unknown: the estimate may be 0).
+  double line_delay_scale(double fit) const;
+  // Whether the rows' timing is decided, from the line delay's estimate and sigma.
+  RowsSeen decide_rows(double tolerance) const;
+  // Each value's note after a window's fit: its sigma against its tolerance, and whether the
+  // window showed it.
+  void note_values(const std::array<double, kOnlineValues>& sd, const std::array<double, kOnlineValues>& small,
+                   const std::array<bool, kOnlineValues>& unseen, bool with_mount);
 
   NominalModel nominal_;
   OnlineEstimatorOptions opt_;

@@ -26,6 +26,8 @@ public class DecodeLog {
             rsd.calibration_t c = new rsd.calibration_t(data);
             if (!java.util.Set.of("converging", "converged", "held", "rejected").contains(c.state))
                 throw new IOException("unknown calibration state " + c.state);
+            if (!java.util.Set.of("rolling", "unknown", "global").contains(c.shutter))
+                throw new IOException("unknown shutter " + c.shutter);
             return "rsd.calibration_t";
         } else if (channel.startsWith("RSD_VELOCITY")) {
             rsd.velocity_t v = new rsd.velocity_t(data);

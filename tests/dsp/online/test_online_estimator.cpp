@@ -184,6 +184,78 @@ TEST(OnlineEstimator, FollowsAStepOfFiveMillisecondsWithinTenSeconds) {
   EXPECT_NEAR(e.estimate().value.time_offset_s, 0.020, 0.5e-3);
 }
 
+// Issue 36: a user's first configuration gives no line delay (0: nobody measured it). The
+// estimator still learns the offset and the bias, and asks whether the rows are read at
+// different times at all: here they are (the same rolling shutter as above, 60 us a row), so
+// the line delay is learned from 0 to the same tolerance.
+TEST(OnlineEstimator, WithNoLineDelayGivenItFindsTheRowsRollingAndLearnsTheLineDelay) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.ConvergesWithinTenSecondsToTheIssueTolerances (the same fits, the line delay given)");
+  SimConfig c = hand_held(7, 14);
+  c.nominal.time.line_delay_s = 0;
+  const SimulatedRecording sim = simulate_recording(c);
+  OnlineEstimator e(c.nominal, {0.0, 0.0, Vector3d::Zero()});
+  EXPECT_EQ(e.estimate().shutter, Shutter::Unknown);
+  EXPECT_EQ(e.estimate().rows, RowsSeen::Undecided);
+  stream(sim.rec, e, 30, [&](double t, const OnlineEstimate& est) { show(t - c.start_time_s, est); });
+  const OnlineEstimate& est = e.estimate();
+  ASSERT_EQ(est.state, OnlineState::Converged) << est.reason;
+  EXPECT_EQ(est.rows, RowsSeen::Rolling);
+  EXPECT_NEAR(est.value.line_delay_s / (1.2 * kNominalLineDelay), 1.0, 0.03);
+  EXPECT_LE(std::abs(est.value.line_delay_s - 1.2 * kNominalLineDelay), 4 * est.sigma.line_delay_s + 1e-7);
+  EXPECT_NEAR(est.value.time_offset_s, 0.015, 0.5e-3);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(est.value.gyro_bias[i], 0.01, 0.002) << "axis " << i;
+  EXPECT_EQ(est.notes.line_delay.status, ValueStatus::Learned) << est.notes.line_delay.why;
+  EXPECT_EQ(est.notes.time_offset.status, ValueStatus::Learned);
+  EXPECT_EQ(est.notes.gyro_bias.status, ValueStatus::Learned);
+}
+
+// The same unknown shutter on a camera whose rows are all read at once: the offset and the bias
+// are learned, and the line delay is found to be 0 within its tolerance (a row's share of the
+// frame period, 0.8 %), so the rows are said global.
+TEST(OnlineEstimator, WithNoLineDelayGivenAGlobalShutterIsFoundGlobal) {
+  SimConfig c = hand_held(9, 14);
+  c.nominal.time.line_delay_s = 0;
+  c.effects.line_delay_s = 0.0;
+  const SimulatedRecording sim = simulate_recording(c);
+  OnlineEstimator e(c.nominal, {0.0, 0.0, Vector3d::Zero()});
+  stream(sim.rec, e, 30, [&](double t, const OnlineEstimate& est) { show(t - c.start_time_s, est); });
+  const OnlineEstimate& est = e.estimate();
+  ASSERT_EQ(est.state, OnlineState::Converged) << est.reason;
+  EXPECT_EQ(est.rows, RowsSeen::Global);
+  const double row_period = 1.0 / (c.nominal.frame_rate_hz * c.nominal.cam.height);
+  EXPECT_LT(est.value.line_delay_s, 0.03 * row_period);  // readout under 1 ms of the 33 ms frame
+  EXPECT_NEAR(est.value.time_offset_s, 0.015, 0.5e-3);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(est.value.gyro_bias[i], 0.01, 0.002) << "axis " << i;
+  EXPECT_EQ(est.notes.time_offset.status, ValueStatus::Learned);
+}
+
+// A camera configured as global shutter: no line delay is fitted or reported (0, exactly, its
+// note says why), the offset and the bias are learned as from a rolling shutter.
+TEST(OnlineEstimator, AGlobalShutterLearnsTheOffsetAndTheBias) {
+  SimConfig c = hand_held(11, 14);
+  c.nominal.time.line_delay_s = 0;
+  c.effects.line_delay_s = 0.0;
+  const SimulatedRecording sim = simulate_recording(c);
+  OnlineEstimatorOptions o;
+  o.global_shutter = true;
+  OnlineEstimator e(c.nominal, {0.0, 0.0, Vector3d::Zero()}, o);
+  EXPECT_EQ(e.estimate().shutter, Shutter::Global);
+  stream(sim.rec, e, 30, [&](double t, const OnlineEstimate& est) {
+    show(t - c.start_time_s, est);
+    EXPECT_EQ(est.value.line_delay_s, 0.0);
+    EXPECT_EQ(est.notes.line_delay.status, ValueStatus::Fixed);
+  });
+  const OnlineEstimate& est = e.estimate();
+  ASSERT_EQ(est.state, OnlineState::Converged) << est.reason;
+  EXPECT_EQ(est.rows, RowsSeen::Global);
+  EXPECT_EQ(est.sigma.line_delay_s, 0.0);
+  EXPECT_NE(est.notes.line_delay.why.find("global shutter"), std::string::npos) << est.notes.line_delay.why;
+  EXPECT_NEAR(est.value.time_offset_s, 0.015, 0.5e-3);
+  EXPECT_LE(std::abs(est.value.time_offset_s - 0.015), 4 * est.sigma.time_offset_s + 1e-5);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(est.value.gyro_bias[i], 0.01, 0.002) << "axis " << i;
+  EXPECT_EQ(est.notes.gyro_bias.status, ValueStatus::Learned);
+}
+
 TEST(OnlineEstimator, AStaticCameraHoldsTheEstimate) {
   SimConfig c = hand_held(8, 30);
   c.motion_source = MotionSource::Constant;  // at rest: zero velocity, zero rate
@@ -200,6 +272,12 @@ TEST(OnlineEstimator, AStaticCameraHoldsTheEstimate) {
   });
   EXPECT_GE(updates, 29);
   EXPECT_NE(e.estimate().reason.find("rotation"), std::string::npos) << e.estimate().reason;
+  // Every value says it is held, and why.
+  const OnlineNotes& n = e.estimate().notes;
+  for (const ValueNote* v : {&n.time_offset, &n.line_delay, &n.gyro_bias, &n.mount_rotation}) {
+    EXPECT_EQ(v->status, ValueStatus::Held);
+    EXPECT_NE(v->why.find("rotation"), std::string::npos) << v->why;
+  }
 }
 
 TEST(OnlineEstimator, RefusesBadOptionsNamingThem) {
@@ -212,5 +290,19 @@ TEST(OnlineEstimator, RefusesBadOptionsNamingThem) {
   } catch (const std::invalid_argument& ex) {
     EXPECT_NE(std::string(ex.what()).find("window_s"), std::string::npos);
   }
-  EXPECT_THROW(OnlineEstimator(n, {0, 0, Vector3d::Zero()}), std::invalid_argument);
+  EXPECT_NO_THROW(OnlineEstimator(n, {0, 0, Vector3d::Zero()}));  // no line delay given: unknown
+  try {
+    OnlineEstimator e(n, {0, -1e-5, Vector3d::Zero()});
+    FAIL() << "accepted a negative line delay";
+  } catch (const std::invalid_argument& ex) {
+    EXPECT_NE(std::string(ex.what()).find("line delay"), std::string::npos) << ex.what();
+  }
+  OnlineEstimatorOptions global;
+  global.global_shutter = true;
+  try {
+    OnlineEstimator e(n, nominal_start(), global);
+    FAIL() << "accepted a line delay for a global shutter";
+  } catch (const std::invalid_argument& ex) {
+    EXPECT_NE(std::string(ex.what()).find("global shutter"), std::string::npos) << ex.what();
+  }
 }
