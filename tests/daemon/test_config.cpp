@@ -91,6 +91,20 @@ TEST(Config, EachDriverReadsItsOwnSection) {
   EXPECT_EQ(c.source.camera->width, 320);
 }
 
+// source.shutter: rolling by default; global reaches the simulator, which then reads every row
+// at once (issue 36); anything else is refused naming the key.
+TEST(Config, AGlobalShutterReachesTheSimulator) {
+  EXPECT_EQ(load("rolling.yaml", "source:\n  driver: sim\n").source.shutter, dsp::Shutter::Rolling);
+  const daemon::Config c = load("global.yaml", "source:\n  driver: sim\n  shutter: global\n");
+  EXPECT_EQ(c.source.shutter, dsp::Shutter::Global);
+  EXPECT_TRUE(c.source.settings_of<drivers::SimSourceConfig>("sim").global_shutter);
+  drivers::SimSource sim(c.source.settings_of<drivers::SimSourceConfig>("sim"));
+  sim.open();
+  EXPECT_EQ(sim.timing().line_delay_s, 0.0);
+  const std::string bad = error_of("source:\n  shutter: rolled\n");
+  EXPECT_NE(bad.find("'source.shutter' must be"), std::string::npos) << bad;
+}
+
 // source.sim.lens: the simulated camera looks through a fisheye whose hfov_deg spans the width:
 // a ray hfov / 2 off the axis, horizontal, projects onto the image's edge (half a pixel past
 // the last pixel centre), through the lens's own projection.
@@ -172,6 +186,11 @@ TEST(Config, ACalibrationFileReachesCameraDriversAndVelocityInput) {
   EXPECT_NE(error_of("source:\n  sim: {width: 320, height: 240}\n  calibration_file: cal.yaml\nvelocity:\n  imu_to_camera: [1, 0, 0, 0, 0, -1, 0, 1, 0]\n")
                 .find("cal.yaml: the calibration's T_cam_imu and velocity.imu_to_camera both rotate the IMU: keep one"),
             std::string::npos);
+  // Issue 36: a global shutter has no line delay; a calibration that gives one is refused,
+  // naming both.
+  const std::string global = error_of("source:\n  driver: aravis\n  shutter: global\n  calibration_file: cal.yaml\n"
+                                      "  aravis: {camera: Fake_1}\n");
+  EXPECT_NE(global.find("cal.yaml: cam0.rsd.line_delay_s is 5e-05 s, but source.shutter is global"), std::string::npos) << global;
   // Issue 38: a calibration for another size than the simulator renders is refused by the
   // check, not when the first frame comes (at start, or over SIGHUP).
   EXPECT_NE(error_of("source:\n  calibration_file: cal.yaml\n").find("gives intrinsics for 320x240, but source.sim asks the camera for 640x480"),
