@@ -286,6 +286,21 @@ TEST(ServiceHealth, FramesWhoseStampsDoNotAdvanceAreRefusedAndCounted) {
       << log.text();
 }
 
+namespace {
+
+// A small simulated camera shaken by hand, its IMU clock 10 ms ahead and its gyro biased, which
+// the daemon is not told.
+drivers::SimSourceConfig hand_shaken_hiding_its_imu() {
+  drivers::SimSourceConfig s = sim_config();
+  s.camera = dsp::CameraModel::from_hfov(320, 240, 1.0);
+  s.angular_rate = s.velocity = Eigen::Vector3d::Zero();
+  s.wobble_rad_s = 0.8, s.wobble_axes = {1, 0.8, 0.5}, s.wobble_axes_hz = {1, 1.37, 0.71};
+  s.imu_time_offset_s = 0.010, s.gyro_bias = {0.01, -0.01, 0.01};
+  return s;
+}
+
+}  // namespace
+
 // calibration.online apply: rsd.calibration_t once a second on its channel; the simulated camera
 // hides its IMU clock (10 ms ahead) and a gyro bias from the daemon, and is shaken by hand. The
 // estimate converges to them, and from the frame the rectifier switches to it on, every frame's
@@ -293,11 +308,7 @@ TEST(ServiceHealth, FramesWhoseStampsDoNotAdvanceAreRefusedAndCounted) {
 TEST(ServiceHealth, OnlineCalibrationPublishedOnceASecondAndSaidFrameByFrame) {
   daemon::Config cfg;
   cfg.record_file = g_tmp.path("online.lcmlog");
-  drivers::SimSourceConfig s = sim_config();
-  s.camera = dsp::CameraModel::from_hfov(320, 240, 1.0);
-  s.angular_rate = s.velocity = Eigen::Vector3d::Zero();
-  s.wobble_rad_s = 0.8, s.wobble_axes = {1, 0.8, 0.5}, s.wobble_axes_hz = {1, 1.37, 0.71};
-  s.imu_time_offset_s = 0.010, s.gyro_bias = {0.01, -0.01, 0.01};
+  drivers::SimSourceConfig s = hand_shaken_hiding_its_imu();
   cfg.source.settings_of<drivers::SimSourceConfig>("sim") = s;
   cfg.online.mode = daemon::OnlineMode::Apply;
   run(cfg, 4.5);
@@ -337,11 +348,7 @@ TEST(ServiceHealth, OnlineCalibrationPublishedOnceASecondAndSaidFrameByFrame) {
 TEST(ServiceHealth, AGlobalShutterCameraLearnsItsClockOffsetAndGyroBias) {
   daemon::Config cfg;
   cfg.record_file = g_tmp.path("online-global.lcmlog");
-  drivers::SimSourceConfig s = sim_config();
-  s.camera = dsp::CameraModel::from_hfov(320, 240, 1.0);
-  s.angular_rate = s.velocity = Eigen::Vector3d::Zero();
-  s.wobble_rad_s = 0.8, s.wobble_axes = {1, 0.8, 0.5}, s.wobble_axes_hz = {1, 1.37, 0.71};
-  s.imu_time_offset_s = 0.010, s.gyro_bias = {0.01, -0.01, 0.01};
+  drivers::SimSourceConfig s = hand_shaken_hiding_its_imu();
   s.global_shutter = true;
   cfg.source.settings_of<drivers::SimSourceConfig>("sim") = s;
   cfg.source.shutter = dsp::Shutter::Global;
