@@ -203,8 +203,8 @@ void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibrati
   // Successive windows overlap: a fit shares most of its data with the one before, so it
   // carries the information of only the new part of its window.
   const double overlap = have_fit_ ? std::max(1.0, opt_.window_s / dt) : 1.0;
-  bool stepped = false, unseen_bias = false;
-  std::array<bool, kOnlineValues> unseen{};
+  bool stepped = false;
+  std::array<bool, kOnlineValues> unseen{};  // values this window says next to nothing of
   const bool global = est_.shutter == Shutter::Global;
   for (int i = 0; i < kOnlineValues; ++i) {
     if (i == 1 && global) {  // no line delay: 0, known exactly
@@ -216,7 +216,6 @@ void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibrati
       const double known = opt_.unobservable * small[i];  // what a start is taken to be good to
       if (!have_fit_) x_[i] = start[i], var_[i] = std::min(r, known * known);
       else var_[i] = prior;
-      unseen_bias = unseen_bias || (i >= kBias && i < kMount);
       unseen[i] = true;
     } else if (!have_fit_ || nu * nu > opt_.step_sigmas * opt_.step_sigmas * (prior + r)) {
       // The first fit, or a value whose fit lies beyond step_sigmas of the estimate (a step):
@@ -229,6 +228,7 @@ void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibrati
     }
   }
   have_fit_ = true, t_fit_ = t;
+  const bool unseen_bias = unseen[kBias] || unseen[kBias + 1] || unseen[kBias + 2];
   Values sd{};
   for (int i = 0; i < kOnlineValues; ++i) sd[i] = std::sqrt(var_[i]);
   est_.value = calibration(x_), est_.sigma = calibration(sd);
@@ -309,7 +309,6 @@ WindowFit fit_window(const DiagnosisModel& m, const std::vector<int>& idx, const
   if (const auto v = parameter_variances(m, w.params, fitted, idx)) {
     w.var = Eigen::VectorXd::Constant(kOnlineValues, std::numeric_limits<double>::infinity());  // not fitted: unknown
     for (size_t j = 0; j < which.size(); ++j) (*w.var)[which[j]] = (*v)[static_cast<Eigen::Index>(j)];
-    if (!with_line_delay) (*w.var)[1] = 0;  // a global shutter's: 0 exactly
   }
   return w;
 }
