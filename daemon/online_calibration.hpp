@@ -27,6 +27,7 @@
 #include "daemon/lcm_publisher.hpp"
 #include "daemon/pipeline.hpp"
 #include "daemon/velocity_input.hpp"
+#include "dsp/features/feature_tracks.hpp"
 #include "dsp/online/online_estimator.hpp"
 #include "formats/calibration_v1.hpp"
 #include "formats/config_section.hpp"
@@ -123,7 +124,8 @@ class OnlineCalibrator final : public FrameTap, public GyroTap {
   alignas(64) std::atomic<uint64_t> ring_tail_{0};
   std::atomic<uint64_t> offered_{0}, dropped_{0}, gyro_dropped_{0};
   double last_offer_t_ = -1e300;     // rectify thread
-  std::optional<uint32_t> prev_;     // estimator thread: the frame the next one pairs with
+  dsp::FeatureTracker tracker_;      // estimator thread: holds the frame the next one pairs with
+  std::optional<double> prev_t_;     // estimator thread: that frame's first-row time, s
   double next_update_t_ = -1e300;    // estimator thread
   std::optional<dsp::OnlineCalibration> decided_;  // estimator thread: the last one handed to apply
   std::optional<dsp::OnlineCalibration> written_;  // estimator thread: the last state written

@@ -1,9 +1,10 @@
-// Feature matches between two consecutive frames for recording-v1's matches kind: Shi-Tomasi
-// corners spread over the image by grid bucketing, tracked with pyramidal Lucas-Kanade and kept
-// only when tracking back from the second frame lands where it started (forward-backward
-// check) and the patches around both ends correlate (LK can settle consistently both ways on
-// an unrelated texture, e.g. where something moved in front). No geometric outlier rejection: the diagnosis is robust, and a model-based filter
-// would throw away exactly the rolling-shutter residual it is meant to find.
+// Feature matches between consecutive frames for recording-v1's matches kind and the online
+// estimator: Shi-Tomasi corners spread over the image by grid bucketing, tracked with pyramidal
+// Lucas-Kanade and kept only when tracking back from the second frame lands where it started
+// (forward-backward check) and the patches around both ends correlate (LK can settle
+// consistently both ways on an unrelated texture, e.g. where something moved in front). No
+// geometric outlier rejection: the diagnosis is robust, and a model-based filter would throw
+// away exactly the rolling-shutter residual it is meant to find.
 #pragma once
 
 #include <Eigen/Core>
@@ -20,10 +21,17 @@ struct TrackOptions {
   double min_distance_px = 8;    // between detected corners
   int window_px = 21;            // LK window (odd)
   int pyramid_levels = 3;
+  int max_iterations = 40;       // LK's per level (it stops sooner once a step is below 0.001 px)
   double max_fb_error_px = 0.25; // forward-backward round trip; more is a tracking failure
   double min_ncc = 0.9;          // patches (window_px square) around both ends must correlate
                                  // (true matches in simulated rolling-shutter video: > 0.95)
   int border_px = 4;             // matches this close to the edge are dropped (window clipped)
+  // FeatureTracker only: carry a pair's surviving features into the next pair instead of
+  // detecting afresh every frame; corners are detected again only when fewer than
+  // refill_below * max_per_pair survive, and then only in the grid cells that ran short.
+  bool carry = false;
+  double refill_below = 0.8;
+  int detect_level = 0;          // corners found in this pyramid level (1: half size, a quarter the cost)
 };
 
 struct PairTracks {
@@ -34,8 +42,31 @@ struct PairTracks {
   int ncc_rejected = 0; // the two ends do not look alike (LK settled on something else)
 };
 
-// a and b: 8-bit single-channel frames of equal size. Pixel (0, 0) is the centre of the
-// top-left pixel, as in OpenCV and recording-v1. Throws std::invalid_argument on bad input.
+// Tracks features through a chain of frames, each frame's image pyramid (and its derivatives)
+// built once and used both as the second frame of one pair and the first of the next.
+// Thread contract: none of its own; one thread feeds it.
+class FeatureTracker {
+ public:
+  // Throws std::invalid_argument on options no tracker can use.
+  explicit FeatureTracker(const TrackOptions& opt = {});
+  // Matches between the frame before (if the chain holds one) and `frame`, which is kept for the
+  // next call. `frame`: 8-bit single-channel, the size of the chain's frames; the tracker copies
+  // what it keeps. Pixel (0, 0) is the centre of the top-left pixel, as in OpenCV and
+  // recording-v1. Throws std::invalid_argument on a bad frame.
+  PairTracks next(const cv::Mat& frame);
+  // The chain breaks (a gap, a dropped frame): the next frame starts a new one.
+  void restart();
+  bool holds_frame() const { return !prev_.empty(); }
+
+ private:
+  std::vector<cv::Point2f> corners(const std::vector<cv::Mat>& pyr, const std::vector<cv::Point2f>& have) const;
+  TrackOptions o_;
+  std::vector<cv::Mat> prev_, cur_;      // pyramids with derivatives (cv::buildOpticalFlowPyramid)
+  std::vector<cv::Point2f> carried_;     // features of the frame held, to track into the next
+  bool carried_detected_ = false;        // carried_ came from detection, not from tracking
+};
+
+// Matches between two frames a and b of equal size (a chain of two).
 PairTracks track_pair(const cv::Mat& a, const cv::Mat& b, const TrackOptions& opt = {});
 
 }  // namespace rsd::dsp

@@ -356,8 +356,12 @@ int main(int argc, char** argv) {
   std::printf("%-38s %12.1f %10s %6s\n", "CPU (% of one core)", 100.0 * cpu_s / wall_s, "-", "");
   std::printf("%-38s %12.3f %10s %6s\n", "allocations per frame (operator new)", allocs_per_frame, "0",
               verdict(b.allocs == a.allocs));
+  // Issue 36's goal is at 30 fps; at higher rates the estimator still takes 15 frames a second,
+  // but shares its core with a busier hot path (reported, not judged).
+  const bool judged = fps <= 30;
   if (estimator)
     std::printf("%-38s %12.1f %10s %6s\n%-38s %12s %10s %6s\n", "online estimator (% of one core)", 100 * estimator_share,
-                "<= 25", verdict(estimator_share <= 0.25), "online estimate", dsp::to_string(estimate.state), "-", "");
+                judged ? "<= 10" : "-", judged ? verdict(estimator_share <= 0.10) : "", "online estimate",
+                dsp::to_string(estimate.state), "-", "");
   return 0;
 }

@@ -107,6 +107,66 @@ TEST(FeatureTracks, DropTracksThatDoNotSurviveTheRoundTrip) {
   EXPECT_GE(t.ncc_rejected, 1);
 }
 
+// The online estimator's tracking: features carried from pair to pair and found at half size,
+// with a smaller window. Through a chain of views of the wall whose image shifts are known, each
+// pair's matches are as exact as a pair tracked afresh and most of a pair's features are the
+// pair before's second ends (not detected again). From frame 5 on, the right half shows another
+// wall: its tracks die there, and the refill finds new corners in the cells that ran short, so
+// the next pair covers the frame again.
+TEST(FeatureTracks, CarriedThroughAChainTheyStayExactAndCoverTheFrame) {
+  const dsp::Scene left = wall(3), right = wall(4);
+  dsp::TrackOptions o;
+  o.max_per_pair = 120, o.window_px = 11, o.carry = true, o.detect_level = 1;
+  dsp::FeatureTracker tracker(o);
+  Eigen::Vector2d at(0, 0);  // the image shift of the current view, px
+  std::vector<Eigen::Vector2d> last_b;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector2d step(-1.3 - 0.4 * k, 0.7 + 0.3 * (k % 3));  // up to 4.1 px a frame
+    if (k > 0) at += step;
+    // The pose (world to camera) translated by t moves the image by f * t / 1 m.
+    const Eigen::Affine3d view = pose(Eigen::Vector3d::Zero(), Eigen::Vector3d(at.x() / 500, at.y() / 500, 0));
+    cv::Mat frame = render(left, view, 1.0, k + 1);
+    if (k >= 5) render(right, view, 1.0, k + 1).colRange(320, 640).copyTo(frame.colRange(320, 640));
+    const dsp::PairTracks t = tracker.next(frame);
+    if (k == 0) {
+      EXPECT_TRUE(t.a.empty());  // the first frame of a chain pairs with nothing
+      continue;
+    }
+    std::vector<double> err;
+    std::set<int> cells;
+    int from_before = 0;
+    for (size_t i = 0; i < t.a.size(); ++i) {
+      // The seam between the walls stands still in the image (as an occluding edge would):
+      // corners on it are true matches of something that does not move with the wall.
+      if (k < 5 || std::abs(t.a[i].x() - 319.5) > 8) err.push_back((t.b[i] - t.a[i] - step).norm());
+      cells.insert(static_cast<int>(t.a[i].x() / 80) + 8 * static_cast<int>(t.a[i].y() / 80));
+      for (const Eigen::Vector2d& b : last_b) from_before += (b - t.a[i]).norm() < 1e-9;
+    }
+    std::printf("pair %d: %zu matches (%d carried), median error %.4f px, 95%% %.4f px, max %.4f px, %zu cells\n", k, t.a.size(),
+                from_before, percentile(err, 0.5), percentile(err, 0.95), percentile(err, 1.0), cells.size());
+    EXPECT_LT(percentile(err, 0.5), 0.03) << "pair " << k;
+    EXPECT_LT(percentile(err, 0.95), 0.08) << "pair " << k;
+    EXPECT_LT(percentile(err, 1.0), 0.25) << "pair " << k;  // no wrong track where the wall changed
+    if (k == 5) {
+      EXPECT_LT(t.a.size(), 80u);  // the right half's tracks died
+    } else {
+      EXPECT_GE(t.a.size(), 100u) << "pair " << k;
+      EXPECT_GE(cells.size(), 44u) << "pair " << k;
+    }
+    if (k == 6) {  // refilled: the right half's features are new
+      EXPECT_LT(from_before, 80);
+    } else if (k > 1) {
+      EXPECT_GE(from_before, static_cast<int>(0.9 * static_cast<double>(t.a.size()))) << "pair " << k;
+    }
+    last_b = t.b;
+  }
+  // A break in the chain: the next frame starts afresh.
+  tracker.restart();
+  EXPECT_FALSE(tracker.holds_frame());
+  EXPECT_TRUE(tracker.next(render(left, Eigen::Affine3d::Identity())).a.empty());
+  EXPECT_THROW(tracker.next(cv::Mat(240, 320, CV_8UC1, cv::Scalar(0))), std::invalid_argument);  // not the chain's size
+}
+
 TEST(FeatureTracks, RefuseMismatchedFrames) {
   EXPECT_THROW(dsp::track_pair(cv::Mat(10, 10, CV_8UC1), cv::Mat(10, 11, CV_8UC1)), std::invalid_argument);
   EXPECT_THROW(dsp::track_pair(cv::Mat(10, 10, CV_8UC3), cv::Mat(10, 10, CV_8UC3)), std::invalid_argument);
