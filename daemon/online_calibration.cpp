@@ -79,7 +79,7 @@ std::optional<dsp::OnlineCalibration> load_online_state(const OnlineCalibrationC
     spdlog::info("online calibration: starting from {} (time offset {:.3f} ms, line delay {:.3f} us)", file,
                  cal.timeshift_cam_imu_s * 1e3, cal.line_delay_s * 1e6);
     return dsp::OnlineCalibration{cal.timeshift_cam_imu_s, cal.line_delay_s, cal.gyro_bias_rad_s,
-                                  dsp::log_so3(cal.imu_to_camera * imu_to_camera.transpose())};
+                                  dsp::log_so3(cal.imu_to_camera * imu_to_camera.transpose()), cal.drift_ppm};
   } catch (const std::exception& e) {
     spdlog::error("calibration.state_file: {}; starting from the configured calibration", e.what());
     return std::nullopt;
@@ -200,6 +200,9 @@ void OnlineCalibrator::track(uint32_t s) {
   prev_t_ = cur.t;
 }
 
+// c's time offset at camera time t (it moves at c's drift).
+static double offset_at(const dsp::OnlineCalibration& c, double t) { return c.time_offset_s + c.drift_ppm * 1e-6 * (t - c.offset_at_s); }
+
 // "learned", "held: too little rotation (0.05 rad/s RMS)": a value's note as calibration_t and
 // the state file say it.
 std::string note_text(const dsp::ValueNote& n) {
@@ -242,7 +245,10 @@ void OnlineCalibrator::after_update(const dsp::OnlineEstimate& e) {
   };
   bool switch_now = !decided_;
   if (decided_) {
-    switch_now = moved(v.time_offset_s, decided_->time_offset_s, e.sigma.time_offset_s, 2e-4) ||
+    // The offsets compared at one time (each holds at its own, and moves at its drift); a drift
+    // that moved by 5 ppm walks 0.2 ms in 40 s.
+    switch_now = moved(v.time_offset_s, offset_at(*decided_, v.offset_at_s), e.sigma.time_offset_s, 2e-4) ||
+                 moved(v.drift_ppm, decided_->drift_ppm, e.sigma.drift_ppm, 5) ||
                  moved(v.line_delay_s, decided_->line_delay_s, e.sigma.line_delay_s, 0.01 * decided_->line_delay_s);
     for (int i = 0; i < 3; ++i)
       switch_now = switch_now || moved(v.gyro_bias[i], decided_->gyro_bias[i], e.sigma.gyro_bias[i], 1e-3) ||
@@ -265,13 +271,15 @@ dsp::OnlineCalibration OnlineCalibrator::applicable(const dsp::OnlineEstimate& e
 // The state file: the base calibration with the estimate's values and their sigmas, rewritten
 // when the estimate moved beyond its sigma from what the file holds.
 void OnlineCalibrator::write_state(const dsp::OnlineEstimate& e, const dsp::OnlineCalibration& v) {
-  if (written_ && std::abs(v.time_offset_s - written_->time_offset_s) <= e.sigma.time_offset_s &&
+  if (written_ && std::abs(v.time_offset_s - offset_at(*written_, v.offset_at_s)) <= e.sigma.time_offset_s &&
+      std::abs(v.drift_ppm - written_->drift_ppm) <= e.sigma.drift_ppm &&
       std::abs(v.line_delay_s - written_->line_delay_s) <= e.sigma.line_delay_s &&
       ((v.gyro_bias - written_->gyro_bias).array().abs() <= e.sigma.gyro_bias.array()).all() &&
       ((v.mount_rotation - written_->mount_rotation).array().abs() <= e.sigma.mount_rotation.array()).all())
     return;
   formats::Calibration c = setup_.base;
   c.timeshift_cam_imu_s = v.time_offset_s;
+  c.drift_ppm = v.drift_ppm;
   c.line_delay_s = v.line_delay_s;
   c.gyro_bias_rad_s = v.gyro_bias;
   c.imu_to_camera = dsp::exp_so3(v.mount_rotation) * setup_.nominal.imu_to_camera;
@@ -281,12 +289,14 @@ void OnlineCalibrator::write_state(const dsp::OnlineEstimate& e, const dsp::Onli
   c.source = "rsd online calibration (converged over a " + std::to_string(e.window.t_end - e.window.t_begin) +
              " s window; " + dsp::to_string(e.shutter) + " shutter, rows " + dsp::to_string(e.rows) +
              "): time offset " + note_text(e.notes.time_offset) + "; line delay " + note_text(e.notes.line_delay) +
-             "; gyro bias " + note_text(e.notes.gyro_bias) + "; mount rotation " + note_text(e.notes.mount_rotation);
-  for (const char* key : {"timeshift_cam_imu", "line_delay_s", "gyro_bias_rad_s"}) c.sigma.erase(key);
+             "; gyro bias " + note_text(e.notes.gyro_bias) + "; mount rotation " + note_text(e.notes.mount_rotation) +
+             "; clock drift " + note_text(e.notes.drift);
+  for (const char* key : {"timeshift_cam_imu", "line_delay_s", "gyro_bias_rad_s", "drift_ppm"}) c.sigma.erase(key);
   auto learned = [](const dsp::ValueNote& n) { return n.status == dsp::ValueStatus::Learned; };
   if (learned(e.notes.time_offset)) c.sigma["timeshift_cam_imu"] = {e.sigma.time_offset_s};
   if (learned(e.notes.line_delay)) c.sigma["line_delay_s"] = {e.sigma.line_delay_s};
   if (learned(e.notes.gyro_bias)) c.sigma["gyro_bias_rad_s"] = {e.sigma.gyro_bias.x(), e.sigma.gyro_bias.y(), e.sigma.gyro_bias.z()};
+  if (learned(e.notes.drift)) c.sigma["drift_ppm"] = {e.sigma.drift_ppm};
   try {
     formats::write_calibration(cfg_.state_file, c);
     written_ = v;
@@ -349,6 +359,7 @@ void OnlineCalibrator::publish() {
   m.line_delay_status = note_text(e.notes.line_delay);
   m.gyro_bias_status = note_text(e.notes.gyro_bias);
   m.mount_status = note_text(e.notes.mount_rotation);
+  m.drift_status = note_text(e.notes.drift);
   m.converged = e.converged;
   m.applied = applied_.load();
   m.time_offset_s = e.value.time_offset_s, m.time_offset_sigma_s = e.sigma.time_offset_s;
@@ -357,6 +368,7 @@ void OnlineCalibrator::publish() {
   m.mount_known = e.mount_known;
   for (int i = 0; i < 3; ++i)
     m.mount_rotation_rad[i] = e.value.mount_rotation[i], m.mount_rotation_sigma_rad[i] = e.sigma.mount_rotation[i];
+  m.drift_ppm = e.value.drift_ppm, m.drift_sigma_ppm = e.sigma.drift_ppm, m.offset_at_s = e.value.offset_at_s;
   m.window_begin_s = e.window.t_begin, m.window_end_s = e.window.t_end;
   m.window_frames = e.window.frames, m.window_matches = e.window.matches;
   m.fitted_matches = e.window.fitted, m.inlier_matches = e.window.inliers;

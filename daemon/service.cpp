@@ -158,6 +158,8 @@ struct Session {
   // goes through geometry()).
   void use_online(Config& c, const dsp::OnlineCalibration& e) {
     c.velocity_input.imu_time_offset_s = e.time_offset_s;
+    c.velocity_input.drift_ppm = e.drift_ppm;
+    c.velocity_input.drift_t0_s = e.offset_at_s;  // where the estimate's offset holds
     c.velocity_input.gyro_bias_rad_s = e.gyro_bias;
     c.velocity_input.imu_to_camera = dsp::exp_so3(e.mount_rotation) * mount_base;
     online_applied = e;
@@ -193,7 +195,8 @@ struct Session {
     st.nominal.time.readout = timing.readout;
     st.nominal.imu_to_camera = cfg.velocity_input.imu_to_camera;
     st.start = state ? *state
-                     : dsp::OnlineCalibration{cfg.velocity_input.imu_time_offset_s, timing.line_delay_s, cfg.velocity_input.gyro_bias_rad_s};
+                     : dsp::OnlineCalibration{cfg.velocity_input.imu_time_offset_s, timing.line_delay_s,
+                                              cfg.velocity_input.gyro_bias_rad_s, Eigen::Vector3d::Zero(), cfg.velocity_input.drift_ppm};
     st.gyro_scale = cfg.velocity_input.gyro_scale;
     st.base = cfg.source.calibration ? *cfg.source.calibration : formats::calibration_of(st.nominal, "");
     st.base.cam = cam, st.base.imu_to_camera = cfg.velocity_input.imu_to_camera, st.base.gyro_scale = st.gyro_scale;

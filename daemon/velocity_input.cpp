@@ -73,9 +73,12 @@ std::optional<dsp::Stamp> VelocityInput::camera_time(std::optional<dsp::Stamp> m
   if (cfg_.drift_ppm == 0 || !shifted) return shifted;
   // t_m - offset = t_cam + d (t_cam - T0)  =>  t_cam = T0 + (t_m - offset - T0) / (1 + d).
   if (!t0_) t0_ = shifted;
+  // The reference given (the online calibration's), else the first sample's.
+  const std::optional<dsp::Stamp> t0 = cfg_.drift_t0_s ? dsp::Stamp::from_s(*cfg_.drift_t0_s) : t0_;
+  if (!t0) return shifted;  // a reference outside the stamps' window: no drift to apply from it
   // In whole microseconds, rsd.velocity_t's unit (the window and kDriftPpm keep llround in range).
-  const double us = static_cast<double>((*shifted - *t0_) / 1000) / (1.0 + cfg_.drift_ppm * 1e-6);
-  return t0_->plus_ns(std::llround(us) * 1000);
+  const double us = static_cast<double>((*shifted - *t0) / 1000) / (1.0 + cfg_.drift_ppm * 1e-6);
+  return t0->plus_ns(std::llround(us) * 1000);
 }
 
 void VelocityInput::at_camera_origin(const double* w, const double* v, double* out) const {

@@ -52,6 +52,9 @@ struct VelocityInputConfig {
   // drift_ppm 1e-6 (t_cam - T0). T0 is the first sample's camera time (the recording format's
   // first frame, which it precedes by a fraction of a second: drift x that gap is microseconds).
   double drift_ppm = 0;
+  // T0 given (camera clock, s) instead of the first sample's: the online calibration's offset
+  // holds at the time it was fitted (calibration.online apply).
+  std::optional<double> drift_t0_s;
   // The camera's origin in the motion sensor's (body's) axes: a body moving at v and turning at
   // w carries the camera at v + w x lever_arm_m, before the rotation into camera axes.
   Eigen::Vector3d lever_arm_m = Eigen::Vector3d::Zero();

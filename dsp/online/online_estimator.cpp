@@ -81,12 +81,17 @@ OnlineEstimator::OnlineEstimator(const NominalModel& nominal, const OnlineCalibr
   require(opt.search_s >= 0, "search_s", "zero or positive");
   require(opt.settle >= 1, "settle", "at least 1");
   require(opt.step_sigmas > 0, "step_sigmas", "positive");
-  require(opt.offset_walk_s >= 0 && opt.line_delay_walk >= 0 && opt.bias_walk_rad_s >= 0, "the random walks", "zero or positive");
+  require(opt.offset_walk_s >= 0 && opt.line_delay_walk >= 0 && opt.bias_walk_rad_s >= 0 && opt.drift_walk_ppm >= 0,
+          "the random walks", "zero or positive");
+  require(opt.drift_span_s >= opt.window_s, "drift_span_s", "at least window_s");
+  require(opt.max_drift_ppm > 0 && opt.max_drift_ppm <= 1000, "max_drift_ppm", "within (0, 1000]");
   require(start.line_delay_s >= 0, "the starting line delay", "zero or positive");
   require(!(opt.global_shutter && start.line_delay_s > 0), "the starting line delay of a global shutter", "0");
   require(start.line_delay_s > 0 || (nominal.frame_rate_hz > 0 && nominal.cam.height > 0),
           "the camera's frame rate and height (they bound an unknown line delay)", "positive");
   est_.value = start;
+  drift_ = start.drift_ppm * 1e-6;
+  est_.notes.drift = {ValueStatus::Learning, ""};
   est_.shutter = opt.global_shutter ? Shutter::Global : start.line_delay_s > 0 ? Shutter::Rolling : Shutter::Unknown;
   est_.rows = est_.shutter == Shutter::Rolling ? RowsSeen::Rolling : est_.shutter == Shutter::Global ? RowsSeen::Global : RowsSeen::Undecided;
   if (est_.shutter == Shutter::Global) est_.notes.line_delay = {ValueStatus::Fixed, "a global shutter: the rows are read at once"};
@@ -186,7 +191,7 @@ const OnlineEstimate& OnlineEstimator::hold(OnlineState s, const std::string& wh
   est_.reason = why;
   est_.window = w;
   // Every value not yet learned is held, for the window's reason (a learned one stands).
-  for (ValueNote* n : {&est_.notes.time_offset, &est_.notes.line_delay, &est_.notes.gyro_bias, &est_.notes.mount_rotation})
+  for (ValueNote* n : {&est_.notes.time_offset, &est_.notes.line_delay, &est_.notes.gyro_bias, &est_.notes.mount_rotation, &est_.notes.drift})
     if (n->status != ValueStatus::Fixed && n->status != ValueStatus::Learned) *n = {ValueStatus::Held, why};
   return est_;
 }
@@ -211,6 +216,11 @@ void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibrati
       x_[i] = 0, var_[i] = 0;
       continue;
     }
+    if (i == 0) {
+      unseen[0] = s[0] > opt_.unobservable * small[0];
+      stepped = accept_offset(unseen[0] && !have_fit_ ? start[0] : z[0], s[0] * s[0], t, unseen[0], overlap) || stepped;
+      continue;
+    }
     const double prior = var_[i] + walk[i] * walk[i] * dt, r = s[i] * s[i], nu = z[i] - x_[i];
     if (s[i] > opt_.unobservable * small[i]) {  // this window says next to nothing of it: held
       const double known = opt_.unobservable * small[i];  // what a start is taken to be good to
@@ -232,6 +242,8 @@ void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibrati
   Values sd{};
   for (int i = 0; i < kOnlineValues; ++i) sd[i] = std::sqrt(var_[i]);
   est_.value = calibration(x_), est_.sigma = calibration(sd);
+  est_.value.drift_ppm = drift_ * 1e6, est_.sigma.drift_ppm = std::sqrt(offset_drift_cov_(1, 1)) * 1e6;
+  est_.value.offset_at_s = t;
   // Converged: the offset, the line delay and the bias known to their thresholds; a bias the
   // motion does not show (the camera translates) is held and does not keep the others from
   // converging. The mount rotation refines when the motion shows it (rotation about several
@@ -247,6 +259,76 @@ void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibrati
   note_values(sd, small, unseen, with_mount);
 }
 
+bool OnlineEstimator::accept_offset(double z, double r, double t, bool unseen, double overlap) {
+  Eigen::Matrix2d& P = offset_drift_cov_;
+  if (!have_fit_) {  // the first fit: the drift held at its start (variance 0) until it is fitted
+    const double known = opt_.unobservable * opt_.converged_offset_sigma_s;  // what a start is taken to be good to
+    x_[0] = z;
+    P << (unseen ? std::min(r, known * known) : r), 0, 0, 0;
+    var_[0] = P(0, 0);
+    if (!unseen) offset_fits_.push_back({t, z, r});
+    return false;
+  }
+  // Predicted to t: the offset moves at the drift's rate; both walk.
+  const double dt = std::max(t - t_fit_, 1e-3);
+  Eigen::Matrix2d F;
+  F << 1, dt, 0, 1;
+  const double qd = drift_on_ ? opt_.drift_walk_ppm * 1e-6 : 0.0;
+  P = F * P * F.transpose() + Eigen::Vector2d(opt_.offset_walk_s * opt_.offset_walk_s * dt, qd * qd * dt).asDiagonal().toDenseMatrix();
+  x_[0] += drift_ * dt;
+  bool stepped = false;
+  const double nu = z - x_[0];
+  if (unseen) {
+    // held: the prediction stands
+  } else if (nu * nu > opt_.step_sigmas * opt_.step_sigmas * (P(0, 0) + r)) {
+    // Before the drift is fitted, an offset that walked away from its estimate may be a rate: if
+    // a line through the fits so far takes this one too, the drift starts from it now.
+    if (!drift_on_ && offset_fits_.size() >= 5) {
+      offset_fits_.push_back({t, z, r * overlap});
+      if (start_drift(t)) {
+        var_[0] = P(0, 0);
+        return false;
+      }
+    }
+    // A step (the clock jumped): the offset restarts from the fit; the drift, a rate, stands.
+    stepped = true;
+    x_[0] = z;
+    P(0, 0) = r, P(0, 1) = P(1, 0) = 0;
+    offset_fits_.clear();
+  } else {
+    const Eigen::Vector2d k = P.col(0) / (P(0, 0) + r * overlap);
+    x_[0] += k[0] * nu, drift_ += k[1] * nu;
+    P -= k * P.row(0);
+  }
+  if (!drift_on_ && !unseen) {
+    offset_fits_.push_back({t, z, r * overlap});
+    if (t - offset_fits_.front()[0] >= opt_.drift_span_s) start_drift(t);
+  }
+  var_[0] = P(0, 0);
+  return stepped;
+}
+
+// The drift's start: a straight line through the offset fits so far (each weighted by its
+// variance), the offset and the drift at t with their covariance. A rate beyond a crystal's is
+// not taken: the fits start again.
+bool OnlineEstimator::start_drift(double t) {
+  Eigen::Matrix2d N = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d b = Eigen::Vector2d::Zero();
+  for (const auto& [ti, zi, vi] : offset_fits_) {
+    const Eigen::Vector2d a(1.0, ti - t);
+    N += a * a.transpose() / vi, b += a * zi / vi;
+  }
+  const Eigen::Vector2d line = N.ldlt().solve(b);
+  bool fits = line.allFinite() && std::abs(line[1]) <= opt_.max_drift_ppm * 1e-6;
+  for (const auto& [ti, zi, vi] : offset_fits_) fits = fits && std::abs(zi - line[0] - line[1] * (ti - t)) <= 4 * std::sqrt(vi);
+  offset_fits_.clear();
+  if (!fits) return false;
+  x_[0] = line[0], drift_ = line[1];
+  offset_drift_cov_ = N.inverse();
+  drift_on_ = true;
+  return true;
+}
+
 void OnlineEstimator::note_values(const Values& sd, const Values& small, const std::array<bool, kOnlineValues>& unseen,
                                   bool with_mount) {
   // A group of values (the bias's three axes, the mount's) is learned when every one is known to
@@ -259,6 +341,11 @@ void OnlineEstimator::note_values(const Values& sd, const Values& small, const s
     return held ? ValueNote{ValueStatus::Held, unseen_why} : ValueNote{ValueStatus::Learning, ""};
   };
   est_.notes.time_offset = note(0, 1, "this window does not show it");
+  est_.notes.drift = !drift_on_ ? ValueNote{ValueStatus::Held, "fitted once the offset's fits span " +
+                                                                    std::to_string(static_cast<int>(opt_.drift_span_s)) + " s"}
+                     : est_.sigma.drift_ppm <= opt_.learned_drift_sigma_ppm ? ValueNote{ValueStatus::Learned, ""}
+                     : unseen[0] ? ValueNote{ValueStatus::Held, "this window does not show the offset"}
+                                 : ValueNote{ValueStatus::Learning, ""};
   if (est_.shutter != Shutter::Global) est_.notes.line_delay = note(1, 1, "this window does not show it");
   est_.notes.gyro_bias = note(kBias, 3, "this window does not show it (the camera translates)");
   est_.notes.mount_rotation = est_.mount_known ? ValueNote{ValueStatus::Learned, ""}
@@ -362,7 +449,9 @@ const OnlineEstimate& OnlineEstimator::update() {
       return hold(OnlineState::Rejected, "implausible fit (line delay or gyro bias)", w);
     if (!f.var) return hold(OnlineState::Rejected, "parameters not identifiable from this window", w);
     est_.window = w;
-    accept(v, from_variances(*f.var), w.t_end, with_mount);
+    // A window's offset fit holds at its middle (its pairs' offsets averaged): with a drift, the
+    // estimate's time is that middle.
+    accept(v, from_variances(*f.var), 0.5 * (w.t_begin + w.t_end), with_mount);
     return est_;
   } catch (const std::exception& e) {
     return hold(OnlineState::Rejected, e.what(), w);

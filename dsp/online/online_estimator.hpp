@@ -39,7 +39,7 @@ struct ValueNote {
   std::string why;
 };
 struct OnlineNotes {
-  ValueNote time_offset, line_delay, gyro_bias, mount_rotation;
+  ValueNote time_offset, line_delay, gyro_bias, mount_rotation, drift;
 };
 
 // converging: fitted, not yet stable; converged: the last fits agree within their sigmas and
@@ -56,8 +56,13 @@ struct OnlineCalibration {
   // The IMU's mount beyond the nominal's: imu_to_camera = Exp(r) R_nominal (recording-v1's
   // mount_rotation), rad.
   Eigen::Vector3d mount_rotation = Eigen::Vector3d::Zero();
+  // The camera clock's rate error against the IMU's (recording-v1's drift_ppm): the offset
+  // grows by drift_ppm 1e-6 s each second of camera time from time_offset_s at offset_at_s
+  // (camera clock, s; the estimator's: the last fitted window's middle).
+  double drift_ppm = 0;
+  double offset_at_s = 0;
 };
-inline constexpr int kOnlineValues = 8;  // offset, line delay, bias x y z, mount x y z
+inline constexpr int kOnlineValues = 8;  // offset, line delay, bias x y z, mount x y z (the drift apart)
 
 // What the window of the last update held.
 struct OnlineWindow {
@@ -99,6 +104,14 @@ struct OnlineEstimatorOptions {
   double line_delay_walk = 2e-4;      // relative, 1/sqrt(s)
   double bias_walk_rad_s = 5e-5;      // rad/s/sqrt(s)
   double mount_walk_rad = 1e-5;       // rad/sqrt(s)
+  // The clock drift (issue 36): the offset filter carries the offset's rate of change, so a long
+  // flight's offset follows the camera crystal's rate error instead of trailing it in steps.
+  // Until the fits span drift_span_s the drift stays at its start (a state file's, or 0) and the
+  // offset is filtered alone: a rate fitted over seconds would be known to tens of ppm and widen
+  // the offset's sigma beyond its tolerance. Then a straight line through those fits starts it.
+  double drift_span_s = 30;
+  double max_drift_ppm = 300;         // a crystal's rate error is within about 100 ppm: beyond, not taken
+  double drift_walk_ppm = 0.05;       // ppm/sqrt(s): temperature moves the rate slowly
   double step_sigmas = 5;
   // Converged: the estimate's sigmas at most these (line delay: relative) over `settle`
   // updates in a row without a step.
@@ -106,6 +119,7 @@ struct OnlineEstimatorOptions {
   double converged_line_delay_sigma = 0.008;
   double converged_bias_sigma = 7e-4;
   double converged_mount_sigma_rad = 1e-3;  // the mount rotation is known below this
+  double learned_drift_sigma_ppm = 5;       // the drift is learned below this (it never holds back convergence)
   double mount_min_spread_rad_s = 0.3;       // rate variation about two axes needed to fit the mount
   int settle = 2;
   // A window whose fit sigma of a value exceeds this many times its converged sigma does not
@@ -149,8 +163,11 @@ class OnlineEstimator {
   ModelParams start_params(const NominalModel& n) const;
   // Holds the estimate, saying why.
   const OnlineEstimate& hold(OnlineState s, const std::string& why, const OnlineWindow& w);
-  // A window's fit (at the window's end, t) into the estimate; `with_mount`: the mount was fitted.
+  // A window's fit (at the window's middle, t) into the estimate; `with_mount`: the mount was fitted.
   void accept(const OnlineCalibration& fit, const OnlineCalibration& sigma, double t, bool with_mount);
+  // The offset and the drift: predicted to t, then updated with the window's offset fit z
+  // (variance r, counted `overlap` times); returns whether z was a step.
+  bool accept_offset(double z, double r, double t, bool unseen, double overlap);
   // The scale of the line delay's random walk and tolerance: the estimate (rolling), at least
   // the frame period's share of a row (unknown: the estimate may be 0).
   double line_delay_scale(double fit) const;
@@ -169,6 +186,15 @@ class OnlineEstimator {
   std::deque<GyroSample> gyro_;
   // The filter: per value (offset, line delay, bias x y z, mount x y z) the estimate and its variance.
   std::array<double, kOnlineValues> x_{}, var_{};
+  // The drift (s/s) beside the offset x_[0]: their joint covariance (P(0,0) is var_[0]); the drift
+  // fitted (drift_on_) once the offset fits (t, z, variance) span opt_.drift_span_s.
+  double drift_ = 0;
+  Eigen::Matrix2d offset_drift_cov_ = Eigen::Matrix2d::Zero();
+  bool drift_on_ = false;
+  std::vector<std::array<double, 3>> offset_fits_;
+  // Fits the line through offset_fits_ and starts the drift from it at t, unless its slope is
+  // beyond max_drift_ppm or a fit lies beyond 4 sigmas of it (a step, not a rate); whether started.
+  bool start_drift(double t);
   double t_fit_ = 0;  // the last fit's window end
   int settled_ = 0;   // updates in a row with small sigmas and no step
   bool have_fit_ = false;

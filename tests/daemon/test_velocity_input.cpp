@@ -159,6 +159,29 @@ TEST_F(VelocityInputTest, ClockDriftStretchesTheImuTimeLine) {
   EXPECT_NEAR(w_at(1'000'000 + (t1 - 1'000'000) / 2), 0.2, 1e-6);
 }
 
+// The online calibration's drift holds from where its offset was fitted (drift_t0_s), not from
+// the first sample: with T0 = 0.5 s, the same stamps sit at 0.5 + 0.5 / 1.0005 s and
+// 0.5 + 2.5 / 1.0005 s on the camera clock (999.750 and 2998.751 ms).
+TEST_F(VelocityInputTest, ClockDriftFromAGivenReference) {
+  VelocityInputConfig cfg;
+  cfg.imu_time_offset_s = 0.010;
+  cfg.drift_ppm = 500;
+  cfg.drift_t0_s = 0.5;
+  VelocityBuffer buffer(VelocityLimits{20, 100, 5.0});
+  VelocityInput in(lcm_, "RSD_VELOCITY", buffer, cfg);
+  publish("RSD_VELOCITY", velocity(1'010'000, rsd::velocity_t::FRAME_IMU, 0.1, 0, 0, 0, 0, 0, false));
+  publish("RSD_VELOCITY", velocity(3'010'000, rsd::velocity_t::FRAME_IMU, 0.3, 0, 0, 0, 0, 0, false));
+  drain();
+  ASSERT_EQ(buffer.count(), 2u);
+  auto w_at = [&](int64_t us) {
+    VelocityEstimate e;
+    EXPECT_EQ(buffer.at(us * 1000, e), VelocityStatus::Ok);
+    return e.sample.w[0];
+  };
+  EXPECT_NEAR(w_at(500'000 + std::llround(0.5e6 / 1.0005)), 0.1, 1e-12);  // 999'750 us
+  EXPECT_NEAR(w_at(500'000 + std::llround(2.5e6 / 1.0005)), 0.3, 1e-9);   // 2'998'751 us
+}
+
 // The lever arm: a body turning at 1 rad/s about z carries a camera 0.5 m along its x axis at
 // 0.5 m/s along y, on top of the body's own velocity; then the rotation into camera axes.
 TEST_F(VelocityInputTest, LeverArmCarriesTheBodyVelocityToTheCamera) {
