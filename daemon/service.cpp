@@ -154,12 +154,10 @@ struct Session {
     return {cam, timing};
   }
 
-  // calibration.online apply: `e`'s clock offset and bias for the velocity input (its line delay
-  // goes through geometry()).
+  // calibration.online apply: `e`'s clock, bias and mount for the velocity input (line delay: geometry()).
   void use_online(Config& c, const dsp::OnlineCalibration& e) {
     c.velocity_input.imu_time_offset_s = e.time_offset_s;
-    c.velocity_input.drift_ppm = e.drift_ppm;
-    c.velocity_input.drift_t0_s = e.offset_at_s;  // where the estimate's offset holds
+    c.velocity_input.drift_ppm = e.drift_ppm, c.velocity_input.drift_t0_s = e.offset_at_s;  // from where the offset holds
     c.velocity_input.gyro_bias_rad_s = e.gyro_bias;
     c.velocity_input.imu_to_camera = dsp::exp_so3(e.mount_rotation) * mount_base;
     online_applied = e;

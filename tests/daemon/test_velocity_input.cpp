@@ -22,6 +22,9 @@ using namespace rsd::daemon;
 
 namespace {
 
+rsd::velocity_t velocity(int64_t utime, int8_t frame, double wx, double wy, double wz, double vx, double vy, double vz,
+                         bool has_linear = true);
+
 class VelocityInputTest : public ::testing::Test {
  protected:
   void SetUp() override { ASSERT_NE(lcm_, nullptr); }
@@ -50,12 +53,28 @@ class VelocityInputTest : public ::testing::Test {
     return e.sample;
   }
 
+  // The drift tests' stream: rates 0.1 and 0.3 rad/s about x stamped 1.010 s and 3.010 s on the
+  // IMU clock, through `cfg` into a buffer that interpolates across their 2 s; w_x(us) reads it.
+  void two_rates_2_s_apart(const VelocityInputConfig& cfg) {
+    VelocityInput in(lcm_, "RSD_VELOCITY", slow_buffer_, cfg);
+    publish("RSD_VELOCITY", velocity(1'010'000, rsd::velocity_t::FRAME_IMU, 0.1, 0, 0, 0, 0, 0, false));
+    publish("RSD_VELOCITY", velocity(3'010'000, rsd::velocity_t::FRAME_IMU, 0.3, 0, 0, 0, 0, 0, false));
+    drain();
+    ASSERT_EQ(slow_buffer_.count(), 2u);
+  }
+  double w_x(int64_t us) {
+    VelocityEstimate e;
+    EXPECT_EQ(slow_buffer_.at(us * 1000, e), VelocityStatus::Ok);
+    return e.sample.w[0];
+  }
+
   lcm_t* lcm_ = lcm_create("memq://");
   VelocityBuffer buffer_;
+  VelocityBuffer slow_buffer_{VelocityLimits{20, 100, 5.0}};
 };
 
 rsd::velocity_t velocity(int64_t utime, int8_t frame, double wx, double wy, double wz, double vx, double vy, double vz,
-                         bool has_linear = true) {
+                         bool has_linear) {
   rsd::velocity_t m{};
   m.utime = utime;
   m.frame = frame;
@@ -140,23 +159,13 @@ TEST_F(VelocityInputTest, ClockDriftStretchesTheImuTimeLine) {
   VelocityInputConfig cfg;
   cfg.imu_time_offset_s = 0.010;
   cfg.drift_ppm = 500;
-  VelocityBuffer buffer(VelocityLimits{20, 100, 5.0});  // samples 2 s apart still interpolate
-  VelocityInput in(lcm_, "RSD_VELOCITY", buffer, cfg);
-  publish("RSD_VELOCITY", velocity(1'010'000, rsd::velocity_t::FRAME_IMU, 0.1, 0, 0, 0, 0, 0, false));
-  publish("RSD_VELOCITY", velocity(3'010'000, rsd::velocity_t::FRAME_IMU, 0.3, 0, 0, 0, 0, 0, false));
-  drain();
-  ASSERT_EQ(buffer.count(), 2u);
-  auto w_at = [&](int64_t us) {
-    VelocityEstimate e;
-    EXPECT_EQ(buffer.at(us * 1000, e), VelocityStatus::Ok);
-    return e.sample.w[0];
-  };
+  two_rates_2_s_apart(cfg);
   const int64_t t1 = 1'000'000 + std::llround(2e6 / 1.0005);  // 2'999'000 us
-  EXPECT_NEAR(w_at(1'000'000), 0.1, 1e-12);
-  EXPECT_NEAR(w_at(t1), 0.3, 1e-9);  // the second sample sits exactly there
+  EXPECT_NEAR(w_x(1'000'000), 0.1, 1e-12);
+  EXPECT_NEAR(w_x(t1), 0.3, 1e-9);  // the second sample sits exactly there
   // Half way between the two on the stretched time line: the mean of the two rates. Without the
   // drift the second sample would sit 1 ms later, and the rate here would be 0.1999.
-  EXPECT_NEAR(w_at(1'000'000 + (t1 - 1'000'000) / 2), 0.2, 1e-6);
+  EXPECT_NEAR(w_x(1'000'000 + (t1 - 1'000'000) / 2), 0.2, 1e-6);
 }
 
 // The online calibration's drift holds from where its offset was fitted (drift_t0_s), not from
@@ -167,19 +176,9 @@ TEST_F(VelocityInputTest, ClockDriftFromAGivenReference) {
   cfg.imu_time_offset_s = 0.010;
   cfg.drift_ppm = 500;
   cfg.drift_t0_s = 0.5;
-  VelocityBuffer buffer(VelocityLimits{20, 100, 5.0});
-  VelocityInput in(lcm_, "RSD_VELOCITY", buffer, cfg);
-  publish("RSD_VELOCITY", velocity(1'010'000, rsd::velocity_t::FRAME_IMU, 0.1, 0, 0, 0, 0, 0, false));
-  publish("RSD_VELOCITY", velocity(3'010'000, rsd::velocity_t::FRAME_IMU, 0.3, 0, 0, 0, 0, 0, false));
-  drain();
-  ASSERT_EQ(buffer.count(), 2u);
-  auto w_at = [&](int64_t us) {
-    VelocityEstimate e;
-    EXPECT_EQ(buffer.at(us * 1000, e), VelocityStatus::Ok);
-    return e.sample.w[0];
-  };
-  EXPECT_NEAR(w_at(500'000 + std::llround(0.5e6 / 1.0005)), 0.1, 1e-12);  // 999'750 us
-  EXPECT_NEAR(w_at(500'000 + std::llround(2.5e6 / 1.0005)), 0.3, 1e-9);   // 2'998'751 us
+  two_rates_2_s_apart(cfg);
+  EXPECT_NEAR(w_x(500'000 + std::llround(0.5e6 / 1.0005)), 0.1, 1e-12);  // 999'750 us
+  EXPECT_NEAR(w_x(500'000 + std::llround(2.5e6 / 1.0005)), 0.3, 1e-9);   // 2'998'751 us
 }
 
 // The lever arm: a body turning at 1 rad/s about z carries a camera 0.5 m along its x axis at
