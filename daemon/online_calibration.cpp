@@ -200,9 +200,6 @@ void OnlineCalibrator::track(uint32_t s) {
   prev_t_ = cur.t;
 }
 
-// c's time offset at camera time t (it moves at c's drift).
-static double offset_at(const dsp::OnlineCalibration& c, double t) { return c.time_offset_s + c.drift_ppm * 1e-6 * (t - c.offset_at_s); }
-
 // "learned", "held: too little rotation (0.05 rad/s RMS)": a value's note as calibration_t and
 // the state file say it.
 std::string note_text(const dsp::ValueNote& n) {
@@ -247,7 +244,7 @@ void OnlineCalibrator::after_update(const dsp::OnlineEstimate& e) {
   if (decided_) {
     // The offsets compared at one time (each holds at its own, and moves at its drift); a drift
     // that moved by 5 ppm walks 0.2 ms in 40 s.
-    switch_now = moved(v.time_offset_s, offset_at(*decided_, v.offset_at_s), e.sigma.time_offset_s, 2e-4) ||
+    switch_now = moved(v.time_offset_s, decided_->offset_at(v.offset_at_s), e.sigma.time_offset_s, 2e-4) ||
                  moved(v.drift_ppm, decided_->drift_ppm, e.sigma.drift_ppm, 5) ||
                  moved(v.line_delay_s, decided_->line_delay_s, e.sigma.line_delay_s, 0.01 * decided_->line_delay_s);
     for (int i = 0; i < 3; ++i)
@@ -271,7 +268,7 @@ dsp::OnlineCalibration OnlineCalibrator::applicable(const dsp::OnlineEstimate& e
 // The state file: the base calibration with the estimate's values and their sigmas, rewritten
 // when the estimate moved beyond its sigma from what the file holds.
 void OnlineCalibrator::write_state(const dsp::OnlineEstimate& e, const dsp::OnlineCalibration& v) {
-  if (written_ && std::abs(v.time_offset_s - offset_at(*written_, v.offset_at_s)) <= e.sigma.time_offset_s &&
+  if (written_ && std::abs(v.time_offset_s - written_->offset_at(v.offset_at_s)) <= e.sigma.time_offset_s &&
       std::abs(v.drift_ppm - written_->drift_ppm) <= e.sigma.drift_ppm &&
       std::abs(v.line_delay_s - written_->line_delay_s) <= e.sigma.line_delay_s &&
       ((v.gyro_bias - written_->gyro_bias).array().abs() <= e.sigma.gyro_bias.array()).all() &&

@@ -130,9 +130,8 @@ PairTracks FeatureTracker::next(const cv::Mat& frame) {
   return out;
 }
 
+// The tracker's own checks name a bad frame (type, emptiness, a size other than a's).
 PairTracks track_pair(const cv::Mat& a, const cv::Mat& b, const TrackOptions& o) {
-  if (a.type() != CV_8UC1 || b.type() != CV_8UC1 || a.size() != b.size() || a.empty())
-    throw std::invalid_argument("track_pair: frames must be non-empty 8-bit grey images of one size");
   TrackOptions fresh = o;
   fresh.carry = false;
   FeatureTracker t(fresh);

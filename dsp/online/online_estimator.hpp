@@ -61,6 +61,8 @@ struct OnlineCalibration {
   // (camera clock, s; the estimator's: the last fitted window's middle).
   double drift_ppm = 0;
   double offset_at_s = 0;
+  // The time offset at camera time t (it moves at the drift's rate).
+  double offset_at(double t) const { return time_offset_s + drift_ppm * 1e-6 * (t - offset_at_s); }
 };
 inline constexpr int kOnlineValues = 8;  // offset, line delay, bias x y z, mount x y z (the drift apart)
 
