@@ -54,6 +54,7 @@ struct Options {
   std::string dir, json, report, calibration;
   std::string imu_axes = "check";
   int heldout_every = kHeldoutEvery;
+  int fit_observations = DiagnosisOptions{}.fit_observations;
 };
 
 std::string matrix_text(const Eigen::Matrix3d& R) {
@@ -152,6 +153,10 @@ int run(int argc, char** argv) {
       ->check(CLI::IsMember({"check", "search", "given"}))->capture_default_str();
   app.add_option("--heldout-every", o.heldout_every, "Hold out every n-th frame (0: none)")
       ->check(int_range(0, 1000))->capture_default_str();
+  app.add_option("--fit-observations", o.fit_observations,
+                 "The fits see at most this many of the fitting observations, chosen by the information they carry "
+                 "(0: all of them; more is slower, rarely better)")
+      ->check(int_range(0, 100000000))->capture_default_str();
   if (const auto rc = parse_command_line(app, argc, argv)) return *rc;
   require_writable(o.json, "--json");
   if (!o.calibration.empty()) require_writable(o.calibration, "--write-calibration");
@@ -166,6 +171,7 @@ int run(int argc, char** argv) {
   std::cerr << "rsd-diagnose: diagnosing " << model.size() << " observations...\n";
   DiagnosisOptions opt;
   opt.heldout_every = o.heldout_every;
+  opt.fit_observations = o.fit_observations;
   const auto t0 = std::chrono::steady_clock::now();
   opt.progress = [&](const std::string& what) {
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

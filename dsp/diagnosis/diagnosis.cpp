@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "dsp/diagnosis/observation_choice.hpp"
 #include "dsp/diagnosis/select.hpp"
 
 namespace rsd::dsp {
@@ -99,14 +100,34 @@ void split(const DiagnosisModel& m, int every, std::vector<int>& fit, std::vecto
     (held_out(m, i, every) ? held : fit).push_back(i);
 }
 
-// Without a stated noise: the robust scale once every applicable continuous effect is fitted
-// at once (from the gross start), on the screening subsample.
-double estimate_sigma(const DiagnosisModel& m, const std::vector<int>& screen, const ModelParams& gross, double guess) {
+// Every continuous parameter of the applicable effects (lens_model's terms are the nominal
+// lens's here: its switch stays off).
+ParamMask applicable_params(const DiagnosisModel& m) {
   ParamMask all;
-  for (Effect e : applicable_effects(m))  // (lens_model's terms are the nominal lens's here: its switch stays off)
+  for (Effect e : applicable_effects(m))
     if (e != Effect::LensModel) all |= effect_params(e, m.recording().nominal.cam.dist.model);
-  const ModelParams rich = fit_params(m, screen, gross, all, guess, 20);
-  return std::max(robust_stats(m.residuals(rich, screen)).scale_px, 1e-3);
+  return all;
+}
+
+// Without a stated noise: the robust scale once every applicable continuous effect is fitted
+// at once (from the gross start), on the screening subsample. In matches whose richest
+// rotation-only fit still shows parallax (judged on `fit_set`), the scale is that of the same
+// fit with each frame pair's translation taken out, and the parallax is returned with it: a
+// selection at the rotation-only scale would end far below it and run again, and the parallax
+// it would find sends it to the translation nuisance anyway.
+struct ScaleEstimate {
+  double sigma_px;
+  Parallax parallax;
+};
+ScaleEstimate estimate_sigma(const DiagnosisModel& m, const std::vector<int>& screen, const std::vector<int>& fit_set,
+                             const ModelParams& gross, double guess) {
+  ModelParams rich = fit_params(m, screen, gross, applicable_params(m), guess, 20);
+  const Parallax parallax = parallax_signal(m, rich, fit_set);
+  if (parallax.clear()) {
+    rich.translation_nuisance = true;
+    rich = fit_params(m, screen, rich, applicable_params(m), guess, 20);
+  }
+  return {std::max(robust_stats(m.residuals(rich, screen)).scale_px, 1e-3), parallax};
 }
 
 // Where the residual lives. A gross error (a clock offset of a large fraction of a second, a
@@ -213,20 +234,34 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   progress("searching the clock offset and focal scale for gross errors");
   const std::vector<int> fit_screen = subsample(fit, n_screen);
   d.gross = gross_start(m, fit_screen, nominal, guess);
-  std::vector<int> use_all, use_fit, use_held, screen;
+  // The fits see at most opt.fit_observations of the usable fitting observations (and a
+  // quarter as many held out), chosen by the information they carry at the gross start.
+  std::vector<int> use_all, use_fit, use_held, fit_set, held_set, screen;
+  const ParamMask every = applicable_params(m);
   auto split_usable = [&] {
     use_all = usable(m, d.gross, all), use_fit = usable(m, d.gross, fit), use_held = usable(m, d.gross, held);
-    screen = subsample(use_fit, n_screen);
+    const size_t budget = static_cast<size_t>(std::max(opt.fit_observations, 0));
+    fit_set = choose_observations(m, use_fit, d.gross, every, {budget});
+    held_set = choose_observations(m, use_held, d.gross, every, {budget / 4});
+    screen = subsample(fit_set, n_screen);
   };
   split_usable();
+  if (fit_set.size() < use_fit.size())
+    progress("fitting on " + std::to_string(fit_set.size()) + " of the " + std::to_string(use_fit.size()) +
+             " fitting observations, chosen by the information they carry");
   // Without a stated noise the scale comes from the data once the gross errors are in; a
   // search run at a guess far off (fast motion: the baseline's scale is tens of pixels) is
   // run again at the scale it led to.
-  d.sigma_px = d.noise_floor_px > 0 ? d.noise_floor_px : estimate_sigma(m, screen, d.gross, guess);
-  if (d.noise_floor_px == 0 && std::abs(std::log(d.sigma_px / guess)) > std::log(1.25)) {
-    d.gross = gross_start(m, fit_screen, nominal, d.sigma_px);
-    split_usable();
-    d.sigma_px = estimate_sigma(m, screen, d.gross, d.sigma_px);
+  if (d.noise_floor_px > 0) {
+    d.sigma_px = d.noise_floor_px;
+  } else {
+    ScaleEstimate e = estimate_sigma(m, screen, fit_set, d.gross, guess);
+    if (std::abs(std::log(e.sigma_px / guess)) > std::log(1.25)) {
+      d.gross = gross_start(m, fit_screen, nominal, e.sigma_px);
+      split_usable();
+      e = estimate_sigma(m, screen, fit_set, d.gross, e.sigma_px);
+    }
+    d.sigma_px = e.sigma_px, d.parallax = e.parallax;
   }
   SelectionOptions so;
   so.min_bic_drop = opt.min_bic_drop, so.max_iterations = opt.max_iterations;
@@ -234,7 +269,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   Selection sel;
   for (int attempt = 0;; ++attempt) {
     progress("selecting effects at sigma " + std::to_string(d.sigma_px) + " px");
-    sel = select_with_parallax(m, use_fit, use_held, screen, nominal, d, so);
+    sel = select_with_parallax(m, fit_set, held_set, screen, nominal, d, so);
     // The scale the fit ends with must agree with the one it started from (within 25%): a
     // recording that understates its noise, or a scale estimated before the effects were in,
     // would make BIC name noise. Otherwise the selection runs again at the scale it ended with.
@@ -261,7 +296,8 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   d.withheld = sel.withheld;
   never_worse_than_nominal(m, nominal, use_all, d);
   progress("uncertainties and the remainder");
-  d.uncertainties = effect_uncertainties(m, d.effects, d.fitted, d.heldout_indices, opt.heldout_every);
+  d.uncertainties = effect_uncertainties(m, d.effects, d.fitted, fit_set);
+  d.fit_observations = static_cast<int>(fit_set.size());
   d.remainder = assess_remainder(m, d.fitted, use_all, d.noise_floor_px, robust_stats(m.residuals(nominal, use_all)).rms_px);
   for (const std::string& w : d.withheld) d.remainder.summary += (d.remainder.summary.empty() ? "" : "\n") + w + ".";
   return d;

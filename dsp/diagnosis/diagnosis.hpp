@@ -33,6 +33,7 @@ struct Diagnosis {
   double final_rms_px = 0;  // over the usable observations
   double heldout_baseline_rms_px = 0, heldout_final_rms_px = 0;
   int heldout_observations = 0;
+  int fit_observations = 30000;  // how many fitting observations the fits saw (observation_choice.hpp)
   // The per-coordinate residual RMS that noise alone gives: noise_px for landmarks,
   // sqrt(2) noise_px for matches (the transfer carries frame_a's noise); 0 when the recording
   // states no noise.
@@ -44,8 +45,9 @@ struct Diagnosis {
   std::vector<std::string> candidates;  // the effects considered for this recording's kinds
   ModelParams gross;                    // where the global search put offset and focal length
   std::vector<ParamUncertainty> uncertainties;  // of every named effect's parameters, in order
-  // Matches: parallax in the residual of the first selection. When clear, the effects were
-  // selected again with each frame pair's translation taken out (parallax.hpp).
+  // Matches: parallax in the residual of the richest rotation-only fit (when the recording
+  // states no noise) or else of the first selection. When clear, the effects were selected with
+  // each frame pair's translation taken out (parallax.hpp).
   Parallax parallax;
   Remainder remainder;  // what the named effects leave: noise, or structure the table lacks
   // Effects the fit found and the diagnosis did not name, each with why: a value real hardware
@@ -59,6 +61,9 @@ struct DiagnosisOptions {
   double min_bic_drop = 10;       // "very strong" evidence on the usual BIC scale
   int max_iterations = 30;        // final fits
   int screen_observations = 5000;  // candidates are fitted on this many fitting observations
+  // The fits see at most this many fitting observations (and a quarter as many held out),
+  // chosen by the information they carry (observation_choice.hpp); 0: all of them.
+  int fit_observations = 30000;
   // Called on the caller's thread as the diagnosis moves on (a stage, an effect named), for
   // progress output on long runs; may be empty.
   std::function<void(const std::string&)> progress;

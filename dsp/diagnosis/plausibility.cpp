@@ -66,7 +66,7 @@ double implausibility(const ModelParams& p, const std::vector<Effect>& effects) 
 
 std::string implausible_because(const ModelParams& p, Effect e) { return excess(p, e).why; }
 
-std::string unnameable_because(const ModelParams& p, Effect e, const DiagnosisModel& m) {
+std::string beyond_hardware_because(const ModelParams& p, Effect e, const DiagnosisModel& m) {
   // Past the soft bound by more than two widths (a gyro scale 7% off, a bias of 140 mrad/s):
   // between, BIC's penalty weighs the evidence; beyond, no evidence makes it real hardware.
   if (const Excess x = excess(p, e); x.beyond > 2) return x.why;
@@ -76,6 +76,13 @@ std::string unnameable_because(const ModelParams& p, Effect e, const DiagnosisMo
     const double off = std::max(std::abs(p[Param::Fx] / n.cam.fx - 1), std::abs(p[Param::Fy] / n.cam.fy - 1));
     if (off > 0.25) return o << "a focal length " << 100 * off << "% from the nominal: a lens is known to within 25%", o.str();
   }
+  return "";
+}
+
+std::string unnameable_because(const ModelParams& p, Effect e, const DiagnosisModel& m) {
+  if (std::string why = beyond_hardware_because(p, e, m); !why.empty()) return why;
+  const NominalModel& n = m.recording().nominal;
+  std::ostringstream o;
   const ParamMask mask = effect_params(e, n.cam.dist.model);
   for (int k = 0; k < kParamCount; ++k) {
     if (!mask[k]) continue;

@@ -25,11 +25,13 @@ double implausibility(const ModelParams& p, const std::vector<Effect>& effects);
 std::string implausible_because(const ModelParams& p, Effect e);
 
 class DiagnosisModel;
+// Why an effect fitted to `p` has a value beyond what real hardware has ("" when it has not):
+// more than two widths past a bound above, or a focal length over 25% from the nominal.
+std::string beyond_hardware_because(const ModelParams& p, Effect e, const DiagnosisModel& m);
 // Why an effect fitted to `p` must not be named ("" when it may): a value beyond what real
-// hardware has (more than two widths past a bound above; a focal length over 25% from the
-// nominal), or a parameter on
-// the fit's bound (param_bounds: the data pushed it there, they do not measure it; a line delay
-// of zero is a global shutter, a measurement).
+// hardware has (beyond_hardware_because), or a parameter on the fit's bound (param_bounds: the
+// data pushed it there, they do not measure it; a line delay of zero is a global shutter, a
+// measurement).
 std::string unnameable_because(const ModelParams& p, Effect e, const DiagnosisModel& m);
 
 }  // namespace rsd::dsp

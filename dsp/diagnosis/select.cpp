@@ -278,15 +278,33 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
     // by a few percent, too much to rank near-degenerate candidates by).
     out.drop = sel.drop(s, *best->refitted);
     if (out.drop < sel.opt_.min_bic_drop) return false;
-    // The held-out observations must agree: the effect predicts frames the fit never saw better.
+    // Its value must be one real hardware has. If not, and it is the strongest structure left
+    // (the round's first winner), that structure is physics outside the table (a gyro bias of
+    // half a radian per second stands in for parallax, a gyro scale for a gyro that clips): the
+    // rounds end, since a weaker effect named now would stand in for the same structure (a
+    // lens, a mount for the clipping gyro), and the remainder reports it. (Named, the stand-in
+    // would also carry every later round's fit, to be withdrawn only at the end.) After a
+    // refused winner it is another stand-in for what was refused (a focal length 40% off for a
+    // lens the held-out frames do not have), and the round goes on to the next best.
+    const std::string name = effect_name(best->added);
+    const std::string beyond = beyond_hardware_because(best->refitted->params, best->added, sel.m_);
+    // The held-out observations must agree: the effect predicts frames the fit never saw better;
+    // and a parameter on its bound is not measured (a lens's k4 pushed to 1).
     out.held_drop = sel.heldout_drop(s, *best->refitted);
-    if (sel.held_.empty() || out.held_drop > 0) {
+    const std::string unnameable = unnameable_because(best->refitted->params, best->added, sel.m_);
+    if ((sel.held_.empty() || out.held_drop > 0) && unnameable.empty()) {
       s = std::move(*best->refitted);
       return true;
     }
-    out.refused.emplace_back(best->added, std::string(effect_name(best->added)) + " not named: it fits the fitting frames (BIC drop " +
-                                              std::to_string(std::lround(out.drop)) +
-                                              ") and predicts the held-out frames worse than without it");
+    const bool first = out.refused.empty();
+    out.refused.emplace_back(best->added, !unnameable.empty() ? name + " not named: " + unnameable
+                                                             : name + " not named: it fits the fitting frames (BIC drop " +
+                                                                   std::to_string(std::lround(out.drop)) +
+                                                                   ") and predicts the held-out frames worse than without it");
+    if (!beyond.empty() && first) {
+      if (sel.opt_.progress) sel.opt_.progress(out.refused.back().second + "; no weaker effect is named in its stead");
+      return false;
+    }
     if (sel.opt_.progress) sel.opt_.progress(out.refused.back().second);
     screened.erase(screened.begin() + (best - screened.data()));
   }

@@ -19,42 +19,8 @@ bool held_out(const DiagnosisModel& m, int i, int every) {
   return every > 1 && m.frame_rank(i) % every == every - 1;
 }
 
-namespace {
-
-// The fitting-set observations that are inliers at the fit, with their residuals.
-struct FitInliers {
-  std::vector<int> idx;
-  std::vector<Eigen::Vector2d> r;
-};
-
-// The fitting set: everything diagnose() did not hold out.
-std::vector<int> fitting_set(const DiagnosisModel& m, const std::vector<int>& heldout, int heldout_every) {
-  std::vector<bool> held(m.size(), false);
-  for (int i = 0; i < m.size(); ++i) held[i] = held_out(m, i, heldout_every);
-  if (!heldout.empty()) {
-    std::fill(held.begin(), held.end(), false);
-    for (int i : heldout) held[i] = true;
-  }
-  std::vector<int> idx;
-  for (int i = 0; i < m.size(); ++i)
-    if (!held[i]) idx.push_back(i);
-  return idx;
-}
-
-FitInliers fit_inliers(const DiagnosisModel& m, const ModelParams& fitted, const std::vector<int>& idx) {
-  const auto r0 = m.residuals(fitted, idx);
-  const std::vector<bool> in = inliers(r0);
-  FitInliers out;
-  for (size_t k = 0; k < idx.size(); ++k)
-    if (in[k]) out.idx.push_back(idx[k]), out.r.push_back(r0[k]);
-  return out;
-}
-
-// d residual / d parameter (px per unit), two rows per observation, by central differences of
-// a hundredth of the parameter's typical change: well above the rolling-shutter root-finder's
-// tolerance, well inside the linear range. A failed prediction contributes nothing.
-Eigen::MatrixXd jacobian(const DiagnosisModel& m, const ModelParams& at, const std::vector<Param>& free,
-                         const std::vector<int>& idx) {
+Eigen::MatrixXd residual_jacobian(const DiagnosisModel& m, const ModelParams& at, const std::vector<Param>& free,
+                                  const std::vector<int>& idx) {
   Eigen::MatrixXd J(2 * idx.size(), free.size());
   for (size_t j = 0; j < free.size(); ++j) {
     const double h = 1e-2 * param_scale(free[j], m.recording().nominal);
@@ -67,6 +33,23 @@ Eigen::MatrixXd jacobian(const DiagnosisModel& m, const ModelParams& at, const s
     }
   }
   return J;
+}
+
+namespace {
+
+// The fitting-set observations that are inliers at the fit, with their residuals.
+struct FitInliers {
+  std::vector<int> idx;
+  std::vector<Eigen::Vector2d> r;
+};
+
+FitInliers fit_inliers(const DiagnosisModel& m, const ModelParams& fitted, const std::vector<int>& idx) {
+  const auto r0 = m.residuals(fitted, idx);
+  const std::vector<bool> in = inliers(r0);
+  FitInliers out;
+  for (size_t k = 0; k < idx.size(); ++k)
+    if (in[k]) out.idx.push_back(idx[k]), out.r.push_back(r0[k]);
+  return out;
 }
 
 // Per-parameter variances: the larger of the classic s^2 (J^T J)^-1 and the sandwich estimate
@@ -103,12 +86,11 @@ std::optional<Eigen::VectorXd> parameter_variances(const DiagnosisModel& m, cons
                                                    const std::vector<Param>& free, const std::vector<int>& idx) {
   if (free.empty()) return std::nullopt;
   const FitInliers f = fit_inliers(m, fitted, idx);
-  return variances(m, jacobian(m, fitted, free, f.idx), f);
+  return variances(m, residual_jacobian(m, fitted, free, f.idx), f);
 }
 
 std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, const std::vector<NamedEffect>& effects,
-                                                   const ModelParams& fitted, const std::vector<int>& heldout,
-                                                   int heldout_every) {
+                                                   const ModelParams& fitted, const std::vector<int>& fit) {
   // Every continuous parameter of every named effect is free at once.
   std::vector<Param> free;
   for (const NamedEffect& e : effects)
@@ -116,7 +98,7 @@ std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, cons
       if (const auto k = param_by_name(p.name); k && p.text.empty() &&
                                                  std::find(free.begin(), free.end(), *k) == free.end())
         free.push_back(*k);
-  const std::optional<Eigen::VectorXd> var = parameter_variances(m, fitted, free, fitting_set(m, heldout, heldout_every));
+  const std::optional<Eigen::VectorXd> var = parameter_variances(m, fitted, free, fit);
   auto sigma_of = [&](Param p) -> std::optional<double> {
     const auto it = std::find(free.begin(), free.end(), p);
     if (!var || it == free.end()) return std::nullopt;

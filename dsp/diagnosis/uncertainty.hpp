@@ -33,10 +33,9 @@ bool held_out(const DiagnosisModel& m, int i, int heldout_every);
 // the larger of the classic s^2 (J^T J)^-1 (s the per-coordinate RMS of those residuals) and
 // the sandwich estimate with residuals clustered by frame (errors a frame shares: gyro noise,
 // stamp jitter). Derived parameters (frame_readout_s = line_delay_s x height) are propagated.
-// `heldout`: the observations left out of the fit (empty: those of held_out()).
+// `fit`: the observations the fit saw.
 std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, const std::vector<NamedEffect>& effects,
-                                                   const ModelParams& fitted, const std::vector<int>& heldout,
-                                                   int heldout_every);
+                                                   const ModelParams& fitted, const std::vector<int>& fit);
 
 // The variances of the parameters `free` at `fitted` (in their own units, the order of
 // `free`), from the inliers among observations idx, as effect_uncertainties computes them:
@@ -44,6 +43,13 @@ std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, cons
 // parameters are not identifiable from these observations (singular information).
 std::optional<Eigen::VectorXd> parameter_variances(const DiagnosisModel& m, const ModelParams& fitted,
                                                    const std::vector<Param>& free, const std::vector<int>& idx);
+
+// d residual / d parameter (px per unit) of the observations idx at `at`: rows 2k, 2k + 1 are
+// idx[k]'s, a column per parameter of `free`. Central differences of a hundredth of the
+// parameter's typical change: well above the rolling-shutter root-finder's tolerance, well
+// inside the linear range. A failed prediction has zero rows.
+Eigen::MatrixXd residual_jacobian(const DiagnosisModel& m, const ModelParams& at, const std::vector<Param>& free,
+                                  const std::vector<int>& idx);
 
 // The ModelParams index of a spec parameter name ("line_delay_s", "k1", "x", ...), if the
 // diagnosis model has one by that name.

@@ -1,0 +1,142 @@
+#include "dsp/diagnosis/observation_choice.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <map>
+#include <numeric>
+
+#include "dsp/diagnosis/uncertainty.hpp"
+
+namespace rsd::dsp {
+
+namespace {
+
+// Half the weight by information, half evenly: the mixture keeps every part of the recording in
+// reach (the remainder must see what the table lacks, wherever it is).
+std::vector<double> mixed(const std::vector<double>& information) {
+  const double total = std::accumulate(information.begin(), information.end(), 0.0);
+  const double even = 1.0 / static_cast<double>(information.size());
+  std::vector<double> w(information.size(), even);
+  if (total > 0)
+    for (size_t k = 0; k < w.size(); ++k) w[k] = 0.5 * information[k] / total + 0.5 * even;
+  return w;
+}
+
+// The observations of idx grouped by frame (pair), in time order.
+std::vector<std::vector<int>> by_frame(const DiagnosisModel& m, const std::vector<int>& idx) {
+  std::map<int, std::vector<int>> g;
+  for (int i : idx) g[m.frame_rank(i)].push_back(i);
+  std::vector<std::vector<int>> out;
+  out.reserve(g.size());
+  for (auto& [rank, obs] : g) out.push_back(std::move(obs));
+  return out;
+}
+
+// `count` of the items of v, evenly spread.
+template <class T>
+std::vector<T> evenly(const std::vector<T>& v, size_t count) {
+  std::vector<T> out;
+  for (size_t k : systematic_choice(std::vector<double>(v.size(), 1.0), count)) out.push_back(v[k]);
+  return out;
+}
+
+}  // namespace
+
+std::vector<size_t> systematic_choice(const std::vector<double>& w, size_t count) {
+  std::vector<size_t> out;
+  if (count >= w.size()) {
+    out.resize(w.size());
+    std::iota(out.begin(), out.end(), size_t{0});
+    return out;
+  }
+  if (count == 0) return out;
+  // Inclusion probabilities min(1, c w_k) summing to count: raise c until the capped items and
+  // the scaled rest make up count (a few rounds: each caps at least one more item or ends).
+  std::vector<bool> capped(w.size(), false);
+  double c = 0;
+  for (bool again = true; again;) {
+    again = false;
+    double rest = 0;
+    size_t n_capped = 0;
+    for (size_t k = 0; k < w.size(); ++k) {
+      if (capped[k]) ++n_capped;
+      else rest += std::max(w[k], 0.0);
+    }
+    if (rest <= 0) break;
+    c = static_cast<double>(count - n_capped) / rest;
+    for (size_t k = 0; k < w.size(); ++k)
+      if (!capped[k] && c * std::max(w[k], 0.0) >= 1) capped[k] = true, again = true;
+  }
+  // One start at the middle of the first unit, then every unit: item k is taken when the
+  // running sum of probabilities passes a start (at most once: its probability is at most 1).
+  double acc = 0, next = 0.5;
+  for (size_t k = 0; k < w.size() && out.size() < count; ++k) {
+    acc += capped[k] ? 1.0 : c * std::max(w[k], 0.0);
+    if (acc > next) {
+      out.push_back(k);
+      while (next < acc) next += 1;
+    }
+  }
+  return out;
+}
+
+std::vector<double> observation_leverage(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& at,
+                                         const ParamMask& mask) {
+  std::vector<Param> free;
+  for (int k = 0; k < kParamCount; ++k)
+    if (mask[k]) free.push_back(Param(k));
+  std::vector<double> h(idx.size(), 0.0);
+  if (free.empty() || idx.empty()) return h;
+  Eigen::MatrixXd J = residual_jacobian(m, at, free, idx);
+  // Columns to unit length: leverage does not depend on the parameters' units, the threshold
+  // below on the information's conditioning does.
+  for (Eigen::Index j = 0; j < J.cols(); ++j)
+    if (const double n = J.col(j).norm(); n > 0) J.col(j) /= n;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(J.transpose() * J);
+  const Eigen::VectorXd& lambda = eig.eigenvalues();
+  const double floor = 1e-10 * std::max(lambda.maxCoeff(), 0.0);
+  // (J^T J)^+ = V diag(1/lambda) V^T over the directions the data see; h_i = |J_i V diag(lambda^-1/2)|^2.
+  Eigen::MatrixXd W = eig.eigenvectors();
+  for (Eigen::Index j = 0; j < W.cols(); ++j) W.col(j) *= lambda[j] > floor ? 1 / std::sqrt(lambda[j]) : 0.0;
+  const Eigen::MatrixXd G = J * W;
+  for (size_t i = 0; i < idx.size(); ++i) h[i] = G.middleRows(2 * static_cast<Eigen::Index>(i), 2).squaredNorm();
+  return h;
+}
+
+std::vector<int> choose_observations(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& at,
+                                     const ParamMask& mask, const ObservationChoice& choice) {
+  if (choice.budget == 0 || idx.size() <= choice.budget) return idx;
+  const std::vector<std::vector<int>> frames = by_frame(m, idx);
+  // Enough per frame for its own translation and its cluster; as many frames as that allows.
+  const size_t per = std::max(choice.per_frame_min, choice.budget / frames.size());
+  const size_t n_frames = std::max<size_t>(1, choice.budget / per);
+  std::vector<int> out;
+  if (n_frames >= frames.size()) {  // every frame: nothing to choose between them
+    for (const auto& f : frames)
+      for (int i : evenly(f, per)) out.push_back(i);
+    return out;
+  }
+  // Frames by information: a pool of leverage_pool times as many frames as are kept, evenly
+  // spread, each frame's information (the sum of its observations' leverage) estimated from
+  // 2 x per of its observations, so that ten minutes cost what one does.
+  const std::vector<std::vector<int>> pool = evenly(frames, std::max<size_t>(1, choice.leverage_pool) * n_frames);
+  std::vector<int> sampled;
+  std::vector<size_t> begin;
+  for (const auto& f : pool) {
+    begin.push_back(sampled.size());
+    for (int i : evenly(f, 2 * per)) sampled.push_back(i);
+  }
+  begin.push_back(sampled.size());
+  const std::vector<double> h = observation_leverage(m, sampled, at, mask);
+  std::vector<double> frame_info(pool.size(), 0.0);
+  for (size_t f = 0; f < pool.size(); ++f) {
+    for (size_t k = begin[f]; k < begin[f + 1]; ++k) frame_info[f] += h[k];
+    frame_info[f] *= static_cast<double>(pool[f].size()) / static_cast<double>(std::max<size_t>(1, begin[f + 1] - begin[f]));
+  }
+  for (size_t f : systematic_choice(mixed(frame_info), n_frames))
+    for (int i : evenly(pool[f], per)) out.push_back(i);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace rsd::dsp

@@ -1,0 +1,49 @@
+// Which observations the diagnosis fits on when a recording has more than it needs (issue 34,
+// point 5: a minute of 1080p in 20 s, ten minutes in 3 minutes). The cost of every fit grows with
+// the observations it sees; the information about the model's parameters does not grow alike:
+// the matches of a frame pair share its gyro noise and stamp jitter, so past a few dozen a pair's
+// matches add little, and a frame in which nothing moves tells the fit nothing of the readout,
+// the clock offset or the gyro's scale. So frames (frame pairs) are chosen by the information
+// they carry about the parameters of every applicable effect, the sum of their observations'
+// statistical leverage in the linearised fit, h_i = tr(J_i (J^T J)^+ J_i^T) (J_i the 2 x k
+// Jacobian of observation i's residual), mixed half and half with an even share so that no part
+// of the recording is left out (a fit that sees only the informative frames cannot notice
+// physics outside the table elsewhere). Within a chosen frame the observations are an even
+// share, not the highest leverage: leverage is highest at the image's rim, where a guessed lens
+// is most wrong, and a fit on the rim alone carried that error into the clock offset (the Karma
+// clip). A chosen frame keeps enough observations for the per-pair translation of the parallax
+// nuisance (parallax.hpp) and for the frame-clustered uncertainty. Deterministic (systematic
+// sampling, no random numbers).
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "dsp/diagnosis/model.hpp"
+
+namespace rsd::dsp {
+
+struct ObservationChoice {
+  size_t budget = 0;            // at most this many observations (0: all)
+  size_t per_frame_min = 12;    // a chosen frame keeps at least this many (when it has them)
+  size_t leverage_pool = 2;     // frames are chosen from a pool of this many times as many, evenly spread
+};
+
+// At most `choice.budget` of `idx` (DiagnosisModel order, ascending): frames by the leverage of
+// their observations for the parameters in `mask` at `at`, an even share within each. `idx`
+// itself when it is within the budget. The result is in ascending order.
+std::vector<int> choose_observations(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& at,
+                                     const ParamMask& mask, const ObservationChoice& choice);
+
+// Leverage of each observation of `idx` for the parameters in `mask` at `at` (sum = the rank of
+// the information, at most the number of free parameters). A failed prediction has none.
+std::vector<double> observation_leverage(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& at,
+                                         const ParamMask& mask);
+
+// `count` of the items with inclusion weights `w` (non-negative), by systematic sampling on
+// inclusion probabilities proportional to w, capped at 1 (an item of high weight is taken
+// once): item k is taken with probability min(1, c w_k) for the c that makes them sum to count.
+// Indices into w, ascending; all of them when count >= w.size().
+std::vector<size_t> systematic_choice(const std::vector<double>& w, size_t count);
+
+}  // namespace rsd::dsp

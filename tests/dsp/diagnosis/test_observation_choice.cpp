@@ -1,0 +1,167 @@
+// Choosing the observations the diagnosis fits on (dsp/diagnosis/observation_choice.hpp):
+// systematic sampling against inclusion probabilities found apart (bisection), leverage against
+// the hat matrix's diagonal from a QR factorisation, the choice against an even one of the same
+// size (the information it keeps), and a diagnosis on a tenth of a recording against the truth.
+#include <gtest/gtest.h>
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <numeric>
+
+#include "dsp/diagnosis/diagnosis.hpp"
+#include "dsp/diagnosis/effects.hpp"
+#include "dsp/diagnosis/fit.hpp"
+#include "dsp/diagnosis/observation_choice.hpp"
+#include "dsp/diagnosis/uncertainty.hpp"
+#include "tests/dsp/diagnosis/diagnosis_configs.hpp"
+#include "tests/dsp/diagnosis/diagnosis_lookup.hpp"
+#include "tests/support/sanitizer.hpp"
+
+using namespace rsd::dsp;
+
+namespace {
+
+// A phone-like matches recording: 640x480, 60 matches per pair, a clean 200 Hz gyro, a shake
+// at 1.2 Hz whose angular rate and acceleration pass through zero in turn, so that frames
+// differ in what they tell of the readout and the clock.
+SimConfig phone(unsigned seed, double duration_s) {
+  SimConfig c = rsd::test::simulation(ObservationKind::Matches, seed, duration_s, 0.5);
+  c.matches_per_pair = 60;
+  c.rotation_amplitude_rad = 0.25, c.motion_frequency_hz = 1.2;
+  c.gyro = {200, 200, 0, 0, 0, 0};
+  return c;
+}
+
+ParamMask params(std::initializer_list<Param> ps) {
+  ParamMask m;
+  for (Param p : ps) m.set(static_cast<size_t>(p));
+  return m;
+}
+
+// log det of the information J^T J about `mask` that the observations idx carry.
+double log_information(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& at, const ParamMask& mask) {
+  std::vector<Param> free;
+  for (int k = 0; k < kParamCount; ++k)
+    if (mask[k]) free.push_back(Param(k));
+  const Eigen::MatrixXd J = residual_jacobian(m, at, free, idx);
+  return Eigen::LLT<Eigen::MatrixXd>(J.transpose() * J).matrixLLT().diagonal().array().log().sum() * 2;
+}
+
+}  // namespace
+
+TEST(SystematicChoice, TakesEachItemWithItsInclusionProbability) {
+  // Weights with a dominant item, zeros and a spread; the probabilities min(1, c w) summing to
+  // the count are found here by bisection on c, apart from the implementation's capping rounds.
+  std::vector<double> w;
+  for (int k = 0; k < 200; ++k) w.push_back(k % 7 == 0 ? 0.0 : 1.0 + std::sin(0.1 * k) * 0.9);
+  w[50] = 1e6, w[51] = 40;
+  const size_t count = 37;
+  double lo = 0, hi = 1e3;
+  auto total = [&](double c) {
+    double s = 0;
+    for (double x : w) s += std::min(1.0, c * x);
+    return s;
+  };
+  for (int it = 0; it < 200; ++it) (total(0.5 * (lo + hi)) < count ? lo : hi) = 0.5 * (lo + hi);
+  const std::vector<size_t> chosen = systematic_choice(w, count);
+  ASSERT_EQ(chosen.size(), count);
+  EXPECT_TRUE(std::is_sorted(chosen.begin(), chosen.end()));
+  EXPECT_TRUE(std::binary_search(chosen.begin(), chosen.end(), size_t{50}));
+  EXPECT_TRUE(std::binary_search(chosen.begin(), chosen.end(), size_t{51}));
+  for (size_t k : chosen) EXPECT_GT(w[k], 0) << k;
+  // Systematic sampling: every prefix holds its expected count to within one.
+  double expected = 0;
+  size_t taken = 0;
+  for (size_t k = 0; k < w.size(); ++k) {
+    expected += std::min(1.0, hi * w[k]);
+    taken += std::binary_search(chosen.begin(), chosen.end(), k) ? 1 : 0;
+    EXPECT_LT(std::abs(static_cast<double>(taken) - expected), 1.0 + 1e-9) << "prefix " << k;
+  }
+  EXPECT_EQ(systematic_choice(w, 500).size(), w.size());
+  EXPECT_TRUE(systematic_choice(w, 0).empty());
+}
+
+TEST(ObservationLeverage, IsTheHatMatrixDiagonal) {
+  const SimulatedRecording sim = simulate_recording(phone(11, 2.0));
+  const DiagnosisModel m(sim.rec);
+  std::vector<int> idx = rsd::test::every_observation(m);
+  idx.resize(std::min<size_t>(idx.size(), 1500));
+  const ModelParams at = nominal_params(sim.rec.nominal);
+  const ParamMask mask = params({Param::LineDelay, Param::TimeOffset, Param::BiasX, Param::BiasY, Param::BiasZ, Param::K1});
+  const std::vector<double> h = observation_leverage(m, idx, at, mask);
+  // The hat matrix H = J (J^T J)^-1 J^T = Q Q^T for the thin Q of J: h_i = |Q's rows 2i, 2i+1|^2.
+  std::vector<Param> free;
+  for (int k = 0; k < kParamCount; ++k)
+    if (mask[k]) free.push_back(Param(k));
+  const Eigen::MatrixXd J = residual_jacobian(m, at, free, idx);
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(J);
+  const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(J.rows(), J.cols());
+  double sum = 0;
+  for (size_t i = 0; i < idx.size(); ++i) {
+    const double brute = Q.middleRows(2 * static_cast<Eigen::Index>(i), 2).squaredNorm();
+    EXPECT_NEAR(h[i], brute, 1e-9 + 1e-6 * brute) << i;
+    sum += h[i];
+  }
+  EXPECT_NEAR(sum, 6.0, 1e-6);  // the trace: six parameters, all seen
+}
+
+TEST(ChooseObservations, KeepsMoreInformationThanAnEvenChoiceOfTheSameSize) {
+  SimConfig c = phone(12, 6.0);
+  const SimulatedRecording sim = simulate_recording(c);
+  const DiagnosisModel m(sim.rec);
+  const std::vector<int> all = rsd::test::every_observation(m);
+  const ModelParams at = nominal_params(sim.rec.nominal);
+  const ParamMask mask = params({Param::LineDelay, Param::TimeOffset, Param::BiasX, Param::BiasY, Param::BiasZ, Param::Fx});
+  // 720 of about 10 000: 12 in each of 60 of the 180 frames, chosen from 120 by information.
+  ObservationChoice choice;
+  choice.budget = 720;
+  const std::vector<int> chosen = choose_observations(m, all, at, mask, choice);
+  ASSERT_LE(chosen.size(), choice.budget);
+  EXPECT_GT(chosen.size(), choice.budget * 9 / 10);
+  EXPECT_TRUE(std::is_sorted(chosen.begin(), chosen.end()));
+  EXPECT_TRUE(std::adjacent_find(chosen.begin(), chosen.end()) == chosen.end());
+  // Whole frames: each chosen frame keeps per_frame_min observations (it has 60).
+  std::map<int, int> per_frame;
+  for (int i : chosen) ++per_frame[m.frame_rank(i)];
+  for (const auto& [rank, n] : per_frame) EXPECT_GE(n, static_cast<int>(choice.per_frame_min)) << "frame " << rank;
+  // The frames chosen by information keep more of it than as many frames chosen evenly (each
+  // with as many observations, evenly): the D-criterion, log det of the information.
+  std::map<int, std::vector<int>> frames;
+  for (int i : all) frames[m.frame_rank(i)].push_back(i);
+  std::vector<int> even;
+  for (size_t k = 0; k < per_frame.size(); ++k) {
+    const std::vector<int>& f = std::next(frames.begin(), static_cast<long>(k * frames.size() / per_frame.size()))->second;
+    for (size_t j = 0; j < choice.per_frame_min; ++j) even.push_back(f[j * f.size() / choice.per_frame_min]);
+  }
+  const double gain = log_information(m, chosen, at, mask) - log_information(m, even, at, mask);
+  std::printf("log det information: chosen - even = %.3f (%zu observations in %zu frames)\n", gain, chosen.size(),
+              per_frame.size());
+  EXPECT_GT(gain, 0.1);  // 0.146: the information volume 16% larger
+  // Within the budget the observations are the input itself.
+  choice.budget = all.size();
+  EXPECT_EQ(choose_observations(m, all, at, mask, choice), all);
+}
+
+TEST(ChooseObservations, ADiagnosisOnAFractionFindsTheTruthWithAnHonestUncertainty) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("ChooseObservations.KeepsMoreInformationThanAnEvenChoiceOfTheSameSize (the choice itself)");
+  SimConfig c = phone(13, 8.0);
+  c.effects.line_delay_s = 2.0e-5, c.effects.time_offset_s = 0.004;
+  const SimulatedRecording sim = simulate_recording(c);
+  DiagnosisOptions opt;
+  opt.fit_observations = 2500;  // of about 11 500 fitting observations
+  const Diagnosis d = diagnose(sim.rec, opt);
+  EXPECT_EQ(rsd::test::names(d), "rolling_shutter time_offset ");
+  EXPECT_LE(d.fit_observations, 2500);
+  EXPECT_GT(d.fit_observations, 2000);
+  // Within three of the uncertainties it reports, which come from the observations it fitted.
+  for (const ParamUncertainty& u : d.uncertainties) {
+    const double truth = u.param == "line_delay_s" ? 2.0e-5 : u.param == "frame_readout_s" ? 2.0e-5 * 480 : 0.004;
+    ASSERT_TRUE(u.sigma) << u.param;
+    EXPECT_NEAR(u.value, truth, 3 * *u.sigma) << u.param;
+    EXPECT_LT(*u.sigma, 0.05 * truth) << u.param;
+  }
+  EXPECT_LT(d.heldout_final_rms_px, 1.1 * d.noise_floor_px);
+}
