@@ -2,6 +2,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <chrono>
 #include <cstdio>
 #include <memory>
 #include <set>
@@ -42,8 +43,13 @@ cv::Mat grey8(const dsp::Image& img, double& scale16) {
 
 namespace {
 
-void progress(size_t k, size_t n, const std::string& what) {
-  std::fprintf(stderr, "\rrsd: frame %zu/%zu, %s   ", k + 1, n, what.c_str());
+// One line, rewritten as the frames go by: the frame, what was found, and the time left at the
+// pace so far (once a few frames have set it).
+void progress(size_t k, size_t n, const std::string& what, std::chrono::steady_clock::time_point t0) {
+  const double spent = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::fprintf(stderr, "\rrsd: frame %zu/%zu, %s", k + 1, n, what.c_str());
+  if (k >= 4 && k + 1 < n) std::fprintf(stderr, ", about %.0f s left", spent / (k + 1) * (n - k - 1));
+  std::fprintf(stderr, "      ");
   if (k + 1 == n) std::fprintf(stderr, "\n");
 }
 
@@ -56,19 +62,28 @@ cv::Mat next_grey(PictureFrames& f, size_t k, double& scale16) {
 }  // namespace
 
 void make_matches(PictureFrames& f, const dsp::TrackOptions& opt, dsp::Recording& rec) {
-  cv::Mat prev;
+  // One chain of consecutive usable frames: each frame's pyramid is built once, and every pair
+  // detects its features afresh (carry off), as a pair tracked alone would (dsp::track_pair).
+  dsp::TrackOptions fresh = opt;
+  fresh.carry = false;
+  dsp::FeatureTracker tracker(fresh);
   double scale16 = 0;
   int lost = 0, fb = 0, unlike = 0, pairs = 0;
   const size_t n = f.numbers.size();
+  const auto t0 = std::chrono::steady_clock::now();
   for (size_t k = 0; k < n; ++k) {
-    cv::Mat cur = next_grey(f, k, scale16);
-    if (f.usable[k] && k > 0 && f.usable[k - 1] && !prev.empty()) {
-      const dsp::PairTracks t = dsp::track_pair(prev, cur, opt);
+    const cv::Mat cur = next_grey(f, k, scale16);
+    if (!f.usable[k]) {
+      tracker.restart();
+    } else if (k > 0 && f.usable[k - 1] && tracker.holds_frame()) {
+      const dsp::PairTracks t = tracker.next(cur);
       for (size_t i = 0; i < t.a.size(); ++i) rec.matches.push_back({f.numbers[k - 1], t.a[i], f.numbers[k], t.b[i]});
       lost += t.lost, fb += t.fb_rejected, unlike += t.ncc_rejected, ++pairs;
+    } else {
+      tracker.restart();
+      tracker.next(cur);  // the first frame of a chain
     }
-    prev = cur;
-    progress(k, n, std::to_string(rec.matches.size()) + " matches");
+    progress(k, n, std::to_string(rec.matches.size()) + " matches", t0);
   }
   std::printf("rsd: %zu matches over %d consecutive frame pairs (%.0f per pair); dropped %d lost tracks, %d failing the "
               "%.2f px forward-backward check and %d whose patches correlate below %.2f\n",
@@ -84,6 +99,7 @@ void make_landmarks(PictureFrames& f, const dsp::TargetSpec& target, const std::
   double scale16 = 0;
   int seen = 0, unknown = 0;
   const size_t n = f.numbers.size();
+  const auto t0 = std::chrono::steady_clock::now();
   for (size_t k = 0; k < n; ++k) {
     const cv::Mat img = next_grey(f, k, scale16);
     if (f.usable[k]) {
@@ -93,7 +109,7 @@ void make_landmarks(PictureFrames& f, const dsp::TargetSpec& target, const std::
         else ++unknown;
       seen += !c.empty();
     }
-    progress(k, n, "target in " + std::to_string(seen) + " frames");
+    progress(k, n, "target in " + std::to_string(seen) + " frames", t0);
   }
   std::printf("rsd: target %s in %d of %zu frames, %zu corner observations of %zu points\n", target_name.c_str(), seen, n,
               rec.observations.size(), rec.points.size());
