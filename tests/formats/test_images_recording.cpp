@@ -10,14 +10,18 @@
 #include "formats/image_file.hpp"
 #include "formats/recording_v1.hpp"
 #include "formats/video_file.hpp"
+#include "tests/support/temp_dir.hpp"
 
 using namespace rsd;
 namespace fs = std::filesystem;
 
 namespace {
 
+// The test's directories, inside one of this process's that goes when it ends.
+const rsd::test::TempDir& g_tmp = rsd::test::register_temp_dir("rsd-test-images-");
+
 fs::path temp_dir(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("rsd-test-images-" + name + "-" + std::to_string(::getpid()));
+  const fs::path p = g_tmp.path(name);
   fs::remove_all(p);
   fs::create_directories(p);
   return p;

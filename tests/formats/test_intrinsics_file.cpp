@@ -9,6 +9,7 @@
 #include <string>
 
 #include "formats/yaml_map.hpp"
+#include "tests/support/temp_dir.hpp"
 
 using rsd::formats::ConfigError;
 using rsd::formats::Intrinsics;
@@ -16,8 +17,11 @@ using rsd::formats::load_intrinsics;
 
 namespace {
 
+// The files, in a directory of this process's that goes when it ends.
+const rsd::test::TempDir& g_tmp = rsd::test::register_temp_dir("rsd-intr-");
+
 std::string write(const std::string& name, const std::string& text) {
-  const std::string path = testing::TempDir() + "/rsd-intr-" + std::to_string(::getpid()) + "-" + name;
+  const std::string path = g_tmp.path(name);
   std::ofstream(path) << text;
   return path;
 }
