@@ -6,8 +6,9 @@
 // pattern follows the change of the image motion over the frame interval (the angular
 // acceleration), the line-delay pattern follows it row by row. Signals: image_velocity (time
 // offset), row (line delay), column (a delay across the columns), radius (k1, k2), image_scale (fx, fy), time_trend (drift beyond
-// a constant offset), time (energy concentrated in some frames), angular_rate (gyro bias;
-// gyro recordings), depth (lever arm; trajectory recordings).
+// a constant offset), time (energy concentrated in a span of frames), fast_rotation (energy
+// concentrated in the frames of fastest rotation: a gyro that clips; gyro recordings),
+// angular_rate (gyro bias; gyro recordings), depth (lever arm; trajectory recordings).
 #include <Eigen/Dense>
 #include <algorithm>
 #include <sstream>
@@ -85,28 +86,88 @@ Eigen::MatrixXd columns(const Eigen::MatrixXd& A, std::vector<int> cols) {
   return out;
 }
 
-// Share of the residual energy in frames whose mean energy exceeds 4x the median frame's,
-// and the span of those frames.
-Located time_signal(const std::vector<std::pair<int, double>>& fe) {
-  std::vector<double> sum, cnt;
+// Each frame's residual energy (sum, count) by rank.
+struct FrameEnergy {
+  int rank;
+  double sum = 0, count = 0;
+  double mean() const { return sum / count; }
+};
+std::vector<FrameEnergy> by_frame(const std::vector<std::pair<int, double>>& fe) {
+  std::vector<FrameEnergy> out;
+  std::vector<int> at;
   for (const auto& [rank, e] : fe) {
-    if (rank >= static_cast<int>(sum.size())) sum.resize(rank + 1, 0), cnt.resize(rank + 1, 0);
-    sum[rank] += e, cnt[rank] += 1;
+    if (rank >= static_cast<int>(at.size())) at.resize(rank + 1, -1);
+    if (at[rank] < 0) at[rank] = static_cast<int>(out.size()), out.push_back({rank});
+    out[at[rank]].sum += e, out[at[rank]].count += 1;
   }
+  std::sort(out.begin(), out.end(), [](const FrameEnergy& a, const FrameEnergy& b) { return a.rank < b.rank; });
+  return out;
+}
+
+// The "hot" frames: mean energy beyond 4x the median frame's.
+std::vector<bool> hot_frames(const std::vector<FrameEnergy>& f) {
   std::vector<double> mean;
-  for (size_t k = 0; k < sum.size(); ++k)
-    if (cnt[k] > 0) mean.push_back(sum[k] / cnt[k]);
-  if (mean.empty()) return {"time", 0, ""};
-  const double med = median(mean);
-  double total = 0, hot = 0;
-  int first = -1, last = -1;
-  for (size_t k = 0; k < sum.size(); ++k) {
-    total += sum[k];
-    if (cnt[k] > 0 && sum[k] / cnt[k] > 4 * med) hot += sum[k], last = static_cast<int>(k), first = first < 0 ? last : first;
+  for (const FrameEnergy& x : f) mean.push_back(x.mean());
+  const double med = mean.empty() ? 0 : median(mean);
+  std::vector<bool> hot;
+  for (double x : mean) hot.push_back(x > 4 * med);
+  return hot;
+}
+
+// Share of the residual energy in the hot frames, times how contiguous they are in time (hot
+// frames over the frames of their span): a clock that jumps heats every frame after it, a gyro
+// that clips only the fast frames of each swing, scattered over the recording.
+Located time_signal(const std::vector<FrameEnergy>& f, const std::vector<bool>& hot) {
+  double total = 0, heat = 0;
+  int first = -1, last = -1, n_hot = 0;
+  for (size_t k = 0; k < f.size(); ++k) {
+    total += f[k].sum;
+    if (hot[k]) heat += f[k].sum, last = static_cast<int>(k), first = first < 0 ? last : first, ++n_hot;
   }
+  if (first < 0 || total <= 0) return {"time", 0, ""};
   std::ostringstream d;
-  d << "residual concentrated in frames " << first << " to " << last << " (time order)";
-  return {"time", total > 0 ? hot / total : 0, first < 0 ? "" : d.str()};
+  d << "residual concentrated in frames " << f[first].rank << " to " << f[last].rank << " (time order)";
+  return {"time", heat / total * n_hot / (last - first + 1), d.str()};
+}
+
+// The largest rate about one gyro axis (rad/s, the gyro's own axes) between a and b on the
+// motion clock: a gyro clips each axis at its range.
+double peak_axis_rate(const std::vector<GyroSample>& g, double a, double b) {
+  auto it = std::lower_bound(g.begin(), g.end(), a, [](const GyroSample& s, double t) { return s.t < t; });
+  double peak = 0;
+  for (; it != g.end() && it->t <= b; ++it) peak = std::max(peak, it->w.cwiseAbs().maxCoeff());
+  return peak;
+}
+
+// Share of the residual energy in the hot frames, times how purely they are the frames of the
+// fastest rotation (hot frames over the frames at least as fast as the slowest tenth of them):
+// a gyro that clips, or blur, leaves the slow frames alone.
+Located rate_signal(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx, const Patterns& s,
+                    const std::vector<FrameEnergy>& f, const std::vector<bool>& hot) {
+  std::vector<double> rate_of_rank;
+  const double offset = p[Param::TimeOffset], period = 1.0 / m.recording().nominal.frame_rate_hz;
+  for (int k : s.keep) {
+    const int i = idx[k], rank = m.frame_rank(i);
+    if (rank >= static_cast<int>(rate_of_rank.size())) rate_of_rank.resize(rank + 1, -1);
+    if (rate_of_rank[rank] < 0)
+      rate_of_rank[rank] = peak_axis_rate(m.recording().gyro, std::min(m.frame_time(i), m.frame_time_b(i)) + offset,
+                                          std::max(m.frame_time(i), m.frame_time_b(i)) + period + offset);
+  }
+  std::vector<double> hot_rates;
+  double total = 0, heat = 0;
+  for (size_t k = 0; k < f.size(); ++k) {
+    total += f[k].sum;
+    if (hot[k]) heat += f[k].sum, hot_rates.push_back(rate_of_rank[f[k].rank]);
+  }
+  if (hot_rates.empty() || total <= 0) return {"fast_rotation", 0, ""};
+  std::sort(hot_rates.begin(), hot_rates.end());
+  const double slow_hot = hot_rates[hot_rates.size() / 10];
+  int as_fast = 0;
+  for (const FrameEnergy& x : f) as_fast += rate_of_rank[x.rank] >= slow_hot ? 1 : 0;
+  std::ostringstream d;
+  d << "residual concentrated in the frames of fastest rotation (from " << slow_hot
+    << " rad/s about one gyro axis): a gyro that clips there, or blur";
+  return {"fast_rotation", heat / total * static_cast<double>(hot_rates.size()) / std::max(1, as_fast), d.str()};
 }
 
 }  // namespace
@@ -122,6 +183,8 @@ std::vector<Located> locate(const DiagnosisModel& m, const ModelParams& p, const
   if (m.has_gyro()) params.insert(params.end(), {Param::BiasX, Param::BiasY, Param::BiasZ});
   else params.insert(params.end(), {Param::LeverX, Param::LeverY, Param::LeverZ});
   const Eigen::MatrixXd A = derivatives(m, p, idx, base, s, params);
+  const std::vector<FrameEnergy> frames = by_frame(s.frame_energy);
+  const std::vector<bool> hot = hot_frames(frames);
   // A time shift and a row delay both move points along their image motion; each signal's
   // strength is what it explains beyond the other, so the two do not claim the same energy.
   const double both = explained(columns(A, {0, 1}), s.r);
@@ -137,7 +200,8 @@ std::vector<Located> locate(const DiagnosisModel& m, const ModelParams& p, const
        "residual proportional to distance from the principal point: scale"},
       {"time_trend", std::max(0.0, explained(columns(A, {0, 6}), s.r) - explained(columns(A, {0}), s.r)),
        "the time shift grows linearly over the recording: clock rate"},
-      time_signal(s.frame_energy)};
+      time_signal(frames, hot)};
+  if (m.has_gyro()) out.push_back(rate_signal(m, p, idx, s, frames, hot));
   Eigen::MatrixXd timing(A.rows(), 3);
   timing << columns(A, {0, 1}), column_pattern(m, idx, s, A);
   out.push_back({"column", std::max(0.0, explained(timing, s.r) - both),

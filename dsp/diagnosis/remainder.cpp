@@ -167,6 +167,13 @@ std::vector<Located> locate_remainder(const DiagnosisModel& m, const ModelParams
                      "of a near scene, which the rotation-only model of matches cannot express"});
   }
   std::sort(out.begin(), out.end(), [](const Located& a, const Located& b) { return a.strength > b.strength; });
+  // frame_shift and image_field say how the remainder is structured, the others what it
+  // follows (a span of time, the fast frames, a translation, ...): one of those first when it
+  // explains a fifth of it (a gyro that clips shifts its fast frames, a clock that jumps every
+  // frame after the jump).
+  std::stable_partition(out.begin(), out.end(), [](const Located& l) {
+    return l.strength >= 0.2 && l.signal != "frame_shift" && l.signal != "image_field";
+  });
   return out;
 }
 

@@ -87,6 +87,10 @@ TEST(Remainder, SaturatedGyroIsStructure) {
   const Remainder r = at_truth(simulate_recording(c));
   EXPECT_TRUE(r.significant);
   EXPECT_TRUE(r.temporal);
+  // Located to the angular rate: the frames of fastest rotation, from the rate it clips at.
+  ASSERT_FALSE(r.located.empty());
+  EXPECT_EQ(r.located.front().signal, "fast_rotation");
+  EXPECT_NE(r.located.front().detail.find("from 1 rad/s"), std::string::npos) << r.located.front().detail;
 }
 
 TEST(Remainder, ClockJumpIsStructure) {
@@ -96,6 +100,9 @@ TEST(Remainder, ClockJumpIsStructure) {
     const Remainder r = at_truth(simulate_recording(c));
     EXPECT_TRUE(r.significant) << to_string(k);
     EXPECT_TRUE(r.temporal) << to_string(k);
+    // Not taken for a gyro that clips: the jump's residual follows the image motion after it.
+    ASSERT_FALSE(r.located.empty()) << to_string(k);
+    EXPECT_NE(r.located.front().signal, "fast_rotation") << to_string(k);
   }
 }
 
