@@ -58,6 +58,9 @@ void validate(const SimConfig& c) {
   require(u.scene_depth_m == 0 || c.kind == ObservationKind::Matches,
           "unmodelled.scene_depth_m applies to matches (landmarks have their points)");
   require(u.gyro_saturation_rad_s >= 0, "unmodelled.gyro_saturation_rad_s must not be negative");
+  require(u.stabilisation_hz >= 0, "unmodelled.stabilisation_hz must not be negative");
+  require(u.stabilisation_hz == 0 || c.kind == ObservationKind::Matches,
+          "unmodelled.stabilisation_hz applies to matches (a stabilised video's features)");
   require(u.clock_jump_at_s >= 0 && u.clock_jump_at_s <= c.duration_s,
           "unmodelled.clock_jump_at_s must lie within the recording");
   const double readout = cam.height * c.effects.line_delay_s.value_or(c.nominal.time.line_delay_s);
@@ -227,6 +230,25 @@ class ParallaxScene {
   SampledTrajectory body_;
 };
 
+// In-camera stabilisation: the orientation the pictures follow, smoothed by a first-order
+// low-pass of corner `hz` run forward then backward over the samples (zero phase, as a
+// stabiliser that looks ahead in its buffer does), on the sphere by slerp.
+void stabilise(std::vector<OrientationTrack::Sample>& s, double hz) {
+  if (s.size() < 2) return;
+  const double tau = 1.0 / (2 * M_PI * hz);
+  auto pass = [&](auto begin, auto end) {
+    Eigen::Quaterniond q = begin->q;
+    for (auto it = begin, prev = begin; it != end; prev = it++) {
+      const double a = std::abs(it->t - prev->t) / (tau + std::abs(it->t - prev->t));
+      if (q.dot(it->q) < 0) q.coeffs() *= -1;
+      q = q.slerp(a, it->q).normalized();
+      it->q = q;
+    }
+  };
+  pass(s.begin(), s.end());
+  pass(s.rbegin(), s.rend());
+}
+
 void simulate_matches(const SimConfig& c, const TrueModel& m, SimulatedRecording& out, std::mt19937& rng) {
   Recording& r = out.rec;
   r.motion = MotionKind::Gyro;
@@ -240,6 +262,7 @@ void simulate_matches(const SimConfig& c, const TrueModel& m, SimulatedRecording
   std::vector<OrientationTrack::Sample> cam_samples;
   for (double t = t_begin; t <= t_end; t += 5e-4)
     cam_samples.push_back({t, camera_orientation(imu.at(t).q, m.mount * r.nominal.imu_to_camera)});  // Exp(r) R_nominal
+  if (c.unmodelled.stabilisation_hz > 0) stabilise(cam_samples, c.unmodelled.stabilisation_hz);
   const OrientationTrack truth(std::move(cam_samples));
   const MatchSetup setup{m.cam, m.time};
   std::uniform_real_distribution<double> u(0, m.cam.width - 1), v(0, m.cam.height - 1), flip(0, 1);

@@ -60,7 +60,13 @@ struct Unmodelled {
   // The frame stamps jump by clock_jump_s from clock_jump_at_s after the first frame on.
   double clock_jump_s = 0;
   double clock_jump_at_s = 0;
-  bool any() const { return scene_depth_m > 0 || gyro_saturation_rad_s > 0 || clock_jump_s != 0; }
+  // Matches: the camera stabilises its video (as an action camera does): the pictures follow the
+  // orientation smoothed by a zero-phase low-pass of this corner frequency (forward and backward
+  // first-order passes), the gyro the real one (0: no stabilisation).
+  double stabilisation_hz = 0;
+  bool any() const {
+    return scene_depth_m > 0 || gyro_saturation_rad_s > 0 || clock_jump_s != 0 || stabilisation_hz > 0;
+  }
 };
 
 struct SimConfig {

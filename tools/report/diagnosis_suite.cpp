@@ -88,7 +88,7 @@ std::vector<SuiteCase> suite_cases(bool reduced, const std::vector<ObservationKi
     // Physics outside the table: a significant remainder, and no effect named in its stead.
     std::vector<std::string> outside = {"clock_jump"};
     if (!lm) outside = reduced ? std::vector<std::string>{"parallax"}
-                               : std::vector<std::string>{"parallax", "gyro_saturation", "clock_jump"};
+                               : std::vector<std::string>{"parallax", "gyro_saturation", "clock_jump", "stabilised"};
     for (const auto& what : outside) {
       SuiteCase c;
       c.kind = k, c.outside = what;

@@ -115,7 +115,9 @@ std::string suite_markdown(const std::vector<CaseResult>& results, const SuiteSu
        "The `remainder` (what the named effects leave, docs/diagnosis.md) is noise in every case whose physics the "
        "table holds, and significant in the `outside` cases, which hold physics the table does not: parallax of a "
        "wall 4 m away past a 5 cm hand-held translation (matches), a gyro that clips at 1 rad/s (matches), a clock "
-       "that jumps by 3 ms half-way (both kinds). There no effect may be named in its stead.\n\n"
+       "that jumps by 3 ms half-way (both kinds), a video stabilised in the camera (matches: the pictures follow the "
+       "orientation smoothed at 5 Hz, zero phase, the gyro the real one). There no effect may be named in its "
+       "stead.\n\n"
     << "## Results\n\n"
     << (std::none_of(results.begin(), results.end(), [](const CaseResult& r) { return r.c.speed; }) ? "" : "The last rows (`speed`) repeat the triple on a 20 s recording, run alone after the others: "
                          "diagnose() must also finish in under 30 s (issue 6, on 2 cores; it runs on one thread).\n\n")
