@@ -121,11 +121,12 @@ struct ScaleEstimate {
 };
 ScaleEstimate estimate_sigma(const DiagnosisModel& m, const std::vector<int>& screen, const std::vector<int>& fit_set,
                              const ModelParams& gross, double guess) {
-  ModelParams rich = fit_params(m, screen, gross, applicable_params(m), guess, 20);
+  const ParamMask all = applicable_params(m);
+  ModelParams rich = fit_params(m, screen, gross, all, guess, 20);
   const Parallax parallax = parallax_signal(m, rich, fit_set);
   if (parallax.clear()) {
     rich.translation_nuisance = true;
-    rich = fit_params(m, screen, rich, applicable_params(m), guess, 20);
+    rich = fit_params(m, screen, rich, all, guess, 20);
   }
   return {std::max(robust_stats(m.residuals(rich, screen)).scale_px, 1e-3), parallax};
 }

@@ -92,7 +92,7 @@ struct FrameEnergy {
   double sum = 0, count = 0;
   double mean() const { return sum / count; }
 };
-std::vector<FrameEnergy> by_frame(const std::vector<std::pair<int, double>>& fe) {
+std::vector<FrameEnergy> frame_energies(const std::vector<std::pair<int, double>>& fe) {
   std::vector<FrameEnergy> out;
   std::vector<int> at;
   for (const auto& [rank, e] : fe) {
@@ -183,7 +183,7 @@ std::vector<Located> locate(const DiagnosisModel& m, const ModelParams& p, const
   if (m.has_gyro()) params.insert(params.end(), {Param::BiasX, Param::BiasY, Param::BiasZ});
   else params.insert(params.end(), {Param::LeverX, Param::LeverY, Param::LeverZ});
   const Eigen::MatrixXd A = derivatives(m, p, idx, base, s, params);
-  const std::vector<FrameEnergy> frames = by_frame(s.frame_energy);
+  const std::vector<FrameEnergy> frames = frame_energies(s.frame_energy);
   const std::vector<bool> hot = hot_frames(frames);
   // A time shift and a row delay both move points along their image motion; each signal's
   // strength is what it explains beyond the other, so the two do not claim the same energy.
