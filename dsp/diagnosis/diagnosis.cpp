@@ -131,6 +131,24 @@ ScaleEstimate estimate_sigma(const DiagnosisModel& m, const std::vector<int>& sc
   return {std::max(robust_stats(m.residuals(rich, screen)).scale_px, 1e-3), parallax};
 }
 
+// The gross search (gross_start); in matches whose richest rotation-only fit from its result
+// (every applicable effect at once: a lens or a rolling shutter left out would look like a
+// translation) shows parallax, run again with the translation nuisance on: a near scene's flow,
+// a few pixels in every pair, would otherwise steer the search (a forward flight's flow moved a
+// 10 ms offset to 0.38 s and the focal length by 20%). That parallax is kept in `parallax`.
+ModelParams gross_search(const DiagnosisModel& m, const std::vector<int>& screen, const std::vector<int>& fit_set,
+                         const ModelParams& nominal, double sigma, Parallax& parallax) {
+  const ModelParams plain = gross_start(m, screen, nominal, sigma);
+  if (m.kind() != ObservationKind::Matches) return plain;
+  const ModelParams rich = fit_params(m, screen, plain, applicable_params(m), sigma, 20);
+  const Parallax px = parallax_signal(m, rich, fit_set);
+  if (!px.clear()) return plain;
+  parallax = px;
+  ModelParams n = nominal;
+  n.translation_nuisance = true;
+  return gross_start(m, screen, n, sigma);
+}
+
 // Where the residual lives. A gross error (a clock offset of a large fraction of a second, a
 // focal length several percent off) swamps every linear pattern, so when the global search
 // moved the offset or the focal length, that is reported first, with the share of the
@@ -185,11 +203,13 @@ Selection select_with_parallax(const DiagnosisModel& m, const std::vector<int>& 
   if (!d.parallax.clear()) {
     SelectionOptions first = so;
     first.blocked_halves = false;
-    Selection sel = select_effects(m, use_fit, use_held, screen, nominal, d.gross, d.sigma_px, first);
+    ModelParams g = d.gross;
+    g.translation_nuisance = false;  // the gross search's parallax did not hold at the noise scale
+    Selection sel = select_effects(m, use_fit, use_held, screen, nominal, g, d.sigma_px, first);
     d.parallax = parallax_signal(m, sel.params, use_fit);
-    if (!d.parallax.clear()) return hold_on_blocked_halves(m, use_fit, use_held, screen, nominal, d.gross, d.sigma_px, so, sel);
+    if (!d.parallax.clear()) return hold_on_blocked_halves(m, use_fit, use_held, screen, nominal, g, d.sigma_px, so, sel);
   }
-  if (so.progress) so.progress("parallax in the matches: selecting again with each frame pair's translation taken out");
+  if (so.progress) so.progress("parallax in the matches: selecting again with the camera's translation (a smooth velocity over the depth) taken out");
   ModelParams n = nominal, g = d.gross;
   n.translation_nuisance = g.translation_nuisance = true;
   return select_effects(m, use_fit, use_held, screen, n, g, d.sigma_px, so);
@@ -234,7 +254,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   };
   progress("searching the clock offset and focal scale for gross errors");
   const std::vector<int> fit_screen = subsample(fit, n_screen);
-  d.gross = gross_start(m, fit_screen, nominal, guess);
+  d.gross = gross_search(m, fit_screen, fit, nominal, guess, d.parallax);
   // The fits see at most opt.fit_observations of the usable fitting observations (and a
   // quarter as many held out), chosen by the information they carry at the gross start.
   std::vector<int> use_all, use_fit, use_held, fit_set, held_set, screen;
@@ -258,7 +278,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   } else {
     ScaleEstimate e = estimate_sigma(m, screen, fit_set, d.gross, guess);
     if (std::abs(std::log(e.sigma_px / guess)) > std::log(1.25)) {
-      d.gross = gross_start(m, fit_screen, nominal, e.sigma_px);
+      d.gross = gross_search(m, fit_screen, fit, nominal, e.sigma_px, d.parallax);
       split_usable();
       e = estimate_sigma(m, screen, fit_set, d.gross, e.sigma_px);
     }
@@ -280,11 +300,12 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
     d.sigma_restarts.push_back(d.sigma_px);
     d.sigma_px = ended;
     if (d.noise_floor_px == 0) {
-      d.gross = gross_start(m, fit_screen, nominal, d.sigma_px);
+      d.gross = gross_search(m, fit_screen, fit, nominal, d.sigma_px, d.parallax);
       split_usable();
     }
   }
   sel.params.translation_nuisance = false;  // what the named effects predict, parallax and all
+  d.gross.translation_nuisance = false;  // the report's global search: what it moved, parallax and all
   d.located = locate_with_gross(m, nominal, d.gross, fit);
   d.unusable = m.size() - static_cast<int>(use_all.size());
   for (const SelectedEffect& st : sel.effects) d.effects.push_back(describe(st, sel.params, rec.nominal));

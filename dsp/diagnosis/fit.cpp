@@ -363,7 +363,7 @@ double scan_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, co
 }
 
 ModelParams gross_start(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma) {
-  const std::vector<int> sub = subsample(idx, 150);
+  const std::vector<int> sub = subsample(idx, p.translation_nuisance ? 600 : 150);
   const auto [lo, hi] = search_range(m, p[Param::TimeOffset]);
   ModelParams best = p;
   double best_cost = std::numeric_limits<double>::infinity();

@@ -55,6 +55,8 @@ double refine_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, 
 // scale (0.8 .. 1.2 of p's fx, fy in 5% steps) under a truncated cost that a wrong offset or a
 // focal length 20% off both saturate. Returns p with the best offset and focal lengths: start
 // values for the time_offset and focal_length hypotheses, not a claim that either is present.
+// With p's translation nuisance on, on 600 observations rather than 150: the translation's
+// velocity spline (translation.hpp) needs a few observations per knot.
 ModelParams gross_start(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma_px);
 
 // Every `n`-th of idx, at most `count` (spread over the whole recording).

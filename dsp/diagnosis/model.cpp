@@ -1,6 +1,6 @@
 #include "dsp/diagnosis/model.hpp"
 
-#include "dsp/diagnosis/parallax.hpp"
+#include "dsp/diagnosis/translation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -332,7 +332,7 @@ std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, con
   const GyroTrack& tr = track(bias_of(p), scale_of(p));
   const MatchSetup ms = match_setup(p);
   for (int i : idx) out.push_back(match_residual(ms, tr, i).value_or(nan));
-  if (p.translation_nuisance) remove_translation(*this, idx, out);
+  if (p.translation_nuisance) remove_translation(*this, idx, out, tr, ms.tm, ms.mount_t);
   return out;
 }
 

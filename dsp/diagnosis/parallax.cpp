@@ -28,53 +28,6 @@ Eigen::Matrix<double, 2, 3> translation_flow(const CameraModel& cam, const Eigen
   return J;
 }
 
-namespace {
-
-// The translation flow of one pair fitted to the residuals at `pos` (positions into r) whose
-// length is within 4 robust scales of the current fit: twice, from no fit.
-Eigen::Vector3d fit_pair(const CameraModel& cam, const DiagnosisModel& m, const std::vector<int>& idx,
-                         const std::vector<Eigen::Vector2d>& r, const std::vector<size_t>& pos) {
-  std::vector<Eigen::Matrix<double, 2, 3>> J(pos.size());
-  for (size_t j = 0; j < pos.size(); ++j) J[j] = translation_flow(cam, m.observed(idx[pos[j]]));
-  Eigen::Vector3d beta = Eigen::Vector3d::Zero();
-  std::vector<double> len(pos.size());
-  for (int pass = 0; pass < 2; ++pass) {
-    for (size_t j = 0; j < pos.size(); ++j) len[j] = (r[pos[j]] - J[j] * beta).norm();
-    const double limit = 4 * std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6);
-    Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d b = Eigen::Vector3d::Zero();
-    int used = 0;
-    for (size_t j = 0; j < pos.size(); ++j) {
-      if (len[j] > limit) continue;
-      N += J[j].transpose() * J[j], b += J[j].transpose() * r[pos[j]], ++used;
-    }
-    if (used < 6) return Eigen::Vector3d::Zero();
-    beta = N.ldlt().solve(b);
-  }
-  return beta;
-}
-
-}  // namespace
-
-void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r) {
-  const CameraModel& cam = m.recording().nominal.cam;
-  // The positions grouped by frame pair: sorted (rank, position) rather than a map of vectors,
-  // which allocated per pair on every evaluation of the model.
-  std::vector<std::pair<int, size_t>> by_pair;
-  by_pair.reserve(idx.size());
-  for (size_t k = 0; k < idx.size(); ++k)
-    if (r[k].allFinite()) by_pair.emplace_back(m.frame_rank(idx[k]), k);
-  std::sort(by_pair.begin(), by_pair.end());
-  std::vector<size_t> pos;
-  for (size_t b = 0, e = 0; b < by_pair.size(); b = e) {
-    pos.clear();
-    for (e = b; e < by_pair.size() && by_pair[e].first == by_pair[b].first; ++e) pos.push_back(by_pair[e].second);
-    if (pos.size() < 6) continue;
-    const Eigen::Vector3d beta = fit_pair(cam, m, idx, r, pos);
-    for (size_t k : pos) r[k] -= translation_flow(cam, m.observed(idx[k])) * beta;
-  }
-}
-
 Parallax parallax_signal(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx_all) {
   Parallax out;
   if (m.kind() != ObservationKind::Matches) return out;

@@ -3,8 +3,8 @@
 // matches by the flow of that translation, which no effect of the table describes. Here: the
 // flow fields of a small rotation and of a translation over a fronto-parallel scene between
 // two frames (the instantaneous motion field, per unit of rotation and of translation over
-// depth), and the translation nuisance: each frame pair's translation flow fitted robustly to
-// its residuals and taken out, so that effects are judged on what a translation cannot explain.
+// depth), and the parallax signal: whether a translation explains a pair's residual beyond a
+// rotation. The translation nuisance that takes it out is translation.hpp's.
 #pragma once
 
 #include <Eigen/Core>
@@ -33,9 +33,5 @@ struct Parallax {
 };
 struct ModelParams;
 Parallax parallax_signal(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx);
-
-// Removes from `r` (residuals of the observations `idx`, NaN for failed predictions) each frame
-// pair's translation flow, fitted to the pair's inliers (a pair with under 6 keeps its residuals).
-void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r);
 
 }  // namespace rsd::dsp

@@ -1,0 +1,136 @@
+#include "dsp/diagnosis/translation.hpp"
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "dsp/core/statistics.hpp"
+#include "dsp/diagnosis/model.hpp"
+#include "dsp/diagnosis/parallax.hpp"
+
+namespace rsd::dsp {
+
+namespace {
+
+// One frame pair's share of the velocity fit: its time and the normal equations of its inliers
+// in the velocity over depth (world axes), and how a velocity turns into its translation over
+// depth (camera axes): beta = dt R^T u.
+struct PairSums {
+  double t = 0;
+  Eigen::Matrix3d turn = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+};
+
+// Uniform cubic B-spline: the weights of the four control points at fraction u of an interval.
+std::array<double, 4> cubic_weights(double u) {
+  const double u2 = u * u, u3 = u2 * u, v = 1 - u;
+  return {v * v * v / 6, (3 * u3 - 6 * u2 + 4) / 6, (-3 * u3 + 3 * u2 + 3 * u + 1) / 6, u3 / 6};
+}
+
+// The velocity spline over [t0, t0 + intervals x knot_s]: a time's first control point and weights.
+struct Spline {
+  double t0, knot;
+  int intervals;
+  int controls() const { return intervals + 3; }
+  int first(double t, std::array<double, 4>& w) const {
+    const double s = (t - t0) / knot;
+    const int j = std::clamp(static_cast<int>(std::floor(s)), 0, intervals - 1);
+    w = cubic_weights(std::clamp(s - j, 0.0, 1.0));
+    return j;
+  }
+};
+
+// The control points (3 per knot, world axes) minimising the pairs' squared residuals, with a
+// light penalty on the second difference of the control points (it decides only where the data
+// leave a direction free: a stretch without pairs, a component no pair shows).
+Eigen::VectorXd fit_velocity(const Spline& sp, const std::vector<PairSums>& pairs) {
+  const int n = 3 * sp.controls();
+  std::vector<Eigen::Triplet<double>> tr;
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
+  double trace = 0;
+  for (const PairSums& p : pairs) {
+    std::array<double, 4> w;
+    const int j = sp.first(p.t, w);
+    for (int a = 0; a < 4; ++a) {
+      rhs.segment<3>(3 * (j + a)) += w[a] * p.b;
+      for (int c = 0; c < 4; ++c)
+        for (int x = 0; x < 3; ++x)
+          for (int y = 0; y < 3; ++y) tr.emplace_back(3 * (j + a) + x, 3 * (j + c) + y, w[a] * w[c] * p.N(x, y));
+    }
+    trace += p.N.trace();
+  }
+  const double lambda = 1e-4 * trace / n, ridge = 1e-9 * trace / n + 1e-12;
+  for (int k = 0; k + 2 < sp.controls(); ++k) {
+    const std::array<double, 3> d = {1, -2, 1};
+    for (int a = 0; a < 3; ++a)
+      for (int c = 0; c < 3; ++c)
+        for (int x = 0; x < 3; ++x) tr.emplace_back(3 * (k + a) + x, 3 * (k + c) + x, lambda * d[a] * d[c]);
+  }
+  for (int i = 0; i < n; ++i) tr.emplace_back(i, i, ridge);
+  Eigen::SparseMatrix<double> A(n, n);
+  A.setFromTriplets(tr.begin(), tr.end());
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
+  if (ldlt.info() != Eigen::Success) return Eigen::VectorXd::Zero(n);
+  return ldlt.solve(rhs);
+}
+
+}  // namespace
+
+void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
+                        const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s) {
+  const CameraModel& cam = m.recording().nominal.cam;
+  // The pairs (by frame_a's rank) and each observation's pair and flow per unit translation.
+  std::vector<std::pair<int, size_t>> by_pair;
+  by_pair.reserve(idx.size());
+  for (size_t k = 0; k < idx.size(); ++k)
+    if (r[k].allFinite()) by_pair.emplace_back(m.frame_rank(idx[k]), k);
+  if (by_pair.empty()) return;
+  std::sort(by_pair.begin(), by_pair.end());
+  std::vector<PairSums> pairs;
+  std::vector<int> pair_of(by_pair.size());
+  std::vector<Eigen::Matrix<double, 2, 3>> J(by_pair.size());
+  for (size_t k = 0; k < by_pair.size(); ++k) {
+    const int i = idx[by_pair[k].second];
+    if (k == 0 || by_pair[k].first != by_pair[k - 1].first) {
+      PairSums s;
+      s.t = 0.5 * (m.frame_time(i) + m.frame_time_b(i));
+      const Eigen::Matrix3d world_from_camera = track.camera_at(tm.motion_time(m.frame_time(i))) * mount_t;
+      s.turn = (m.frame_time_b(i) - m.frame_time(i)) * world_from_camera.transpose();
+      pairs.push_back(s);
+    }
+    pair_of[k] = static_cast<int>(pairs.size()) - 1;
+    J[k] = translation_flow(cam, m.observed(i)) * pairs.back().turn;  // per unit u, world axes
+  }
+  double t_lo = pairs.front().t, t_hi = t_lo;
+  for (const PairSums& p : pairs) t_lo = std::min(t_lo, p.t), t_hi = std::max(t_hi, p.t);
+  const Spline sp{t_lo, knot_s, std::max(1, static_cast<int>(std::ceil((t_hi - t_lo) / knot_s)))};
+  // Three passes from no translation: the inliers are the residuals within 4 robust scales of
+  // the current fit (one scale for the whole set: the noise does not depend on the pair, and a
+  // pair with a handful of observations is judged as well as one with hundreds).
+  std::vector<Eigen::Vector3d> u(pairs.size(), Eigen::Vector3d::Zero());
+  std::vector<double> len(by_pair.size());
+  auto left = [&](size_t k) { return Eigen::Vector2d(r[by_pair[k].second] - J[k] * u[pair_of[k]]); };
+  for (int pass = 0; pass < 3; ++pass) {
+    for (size_t k = 0; k < len.size(); ++k) len[k] = left(k).norm();
+    const double limit = 4 * std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6);
+    for (PairSums& p : pairs) p.N.setZero(), p.b.setZero();
+    for (size_t k = 0; k < len.size(); ++k) {
+      if (len[k] > limit) continue;
+      PairSums& p = pairs[pair_of[k]];
+      p.N += J[k].transpose() * J[k], p.b += J[k].transpose() * r[by_pair[k].second];
+    }
+    const Eigen::VectorXd c = fit_velocity(sp, pairs);
+    for (size_t q = 0; q < pairs.size(); ++q) {
+      std::array<double, 4> w;
+      const int j = sp.first(pairs[q].t, w);
+      u[q].setZero();
+      for (int a = 0; a < 4; ++a) u[q] += w[a] * c.segment<3>(3 * (j + a));
+    }
+  }
+  for (size_t k = 0; k < by_pair.size(); ++k) r[by_pair[k].second] = left(k);
+}
+
+}  // namespace rsd::dsp

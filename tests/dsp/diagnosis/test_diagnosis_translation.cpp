@@ -1,0 +1,135 @@
+// The translation nuisance of matches (dsp/diagnosis/translation.hpp) against simulated flights:
+// it takes out the parallax a near scene gives (at the true model the noise is left), it cannot
+// take up what a clock offset leaves (a free translation per frame pair took up most of it),
+// and a forward flight with a pan yields its clock offset (issue 34, point 2).
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include "dsp/diagnosis/diagnosis.hpp"
+#include "dsp/diagnosis/parallax.hpp"
+#include "dsp/diagnosis/robust_stats.hpp"
+#include "tests/dsp/diagnosis/diagnosis_configs.hpp"
+#include "tests/dsp/diagnosis/diagnosis_lookup.hpp"
+
+namespace rsd::test {
+namespace {
+
+using namespace rsd::dsp;
+
+double smoothstep(double x) {
+  x = std::clamp(x, 0.0, 1.0);
+  return x * x * (3 - 2 * x);
+}
+
+// A drone flying forward at 8 m/s past a scene `depth_m` ahead (a plane facing each frame pair's
+// first camera), drifting sideways a little, the camera on a gimbal (a shake of a few mrad left)
+// panning by 0.8 rad over the 2 s from 4 s on; 10 s of the VGA camera, 0.5 px noise.
+SimConfig forward_flight(unsigned seed, double depth_m) {
+  SimConfig c = simulation(ObservationKind::Matches, seed, 10.0, 0.5);
+  c.motion_source = MotionSource::Samples;
+  const double t0 = c.start_time_s, speed = 8.0, pan_rad = 0.8, pan_at = 4.0, pan_s = 2.0;
+  for (double t = t0 - 3; t <= t0 + c.duration_s + 3; t += 1e-3) {
+    const double s = t - t0;
+    const double yaw = pan_rad * smoothstep((s - pan_at) / pan_s);
+    const Eigen::Vector3d shake(0.004 * std::sin(2 * M_PI * 2.3 * s), 0.003 * std::sin(2 * M_PI * 3.1 * s + 1),
+                                0.002 * std::sin(2 * M_PI * 1.7 * s + 2));
+    const Eigen::Quaterniond q =
+        Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY())) * Eigen::Quaterniond(exp_so3(shake));
+    c.pose_samples.push_back({t, Eigen::Vector3d(0.3 * std::sin(0.7 * s), 0.1 * std::sin(1.3 * s), speed * s), q});
+  }
+  c.unmodelled.scene_depth_m = depth_m;
+  c.gyro.noise_rad_s = 0.002;
+  return c;
+}
+
+ModelParams with_offset(const SimulatedRecording& sim, double offset_s, bool nuisance) {
+  ModelParams p = nominal_params(sim.rec.nominal);
+  p[Param::TimeOffset] = offset_s;
+  p.translation_nuisance = nuisance;
+  return p;
+}
+
+TEST(Translation, AtTheTrueModelTheVelocitySplineLeavesTheNoise) {
+  for (double depth : {40.0, 15.0}) {
+    SimConfig c = forward_flight(8, depth);
+    c.effects.time_offset_s = 0.01;
+    const SimulatedRecording sim = simulate_recording(c);
+    const DiagnosisModel m(sim.rec);
+    const auto all = every_observation(m);
+    const double noise = 0.5 * m.noise_gain();
+    const RobustStats plain = robust_stats(m.residuals(with_offset(sim, 0.01, false), all));
+    const RobustStats taken = robust_stats(m.residuals(with_offset(sim, 0.01, true), all));
+    EXPECT_GT(plain.rms_px, 2 * noise) << "depth " << depth;  // the parallax is there
+    EXPECT_NEAR(taken.rms_px, noise, 0.03 * noise) << "depth " << depth;
+  }
+}
+
+// The part of `d` (residual differences, by observation) that a free translation per frame
+// pair explains: the old nuisance's fit, by least squares per pair.
+double share_a_free_translation_takes(const DiagnosisModel& m, const std::vector<int>& idx,
+                                      const std::vector<Eigen::Vector2d>& d) {
+  const CameraModel& cam = m.recording().nominal.cam;
+  double total = 0, left = 0;
+  for (size_t b = 0, e = 0; b < idx.size(); b = e) {
+    for (e = b; e < idx.size() && m.frame_rank(idx[e]) == m.frame_rank(idx[b]); ++e) {
+    }
+    Eigen::MatrixXd A(2 * (e - b), 3);
+    Eigen::VectorXd y(2 * (e - b));
+    for (size_t k = b; k < e; ++k)
+      A.block<2, 3>(2 * (k - b), 0) = translation_flow(cam, m.observed(idx[k])), y.segment<2>(2 * (k - b)) = d[k];
+    left += (y - A * A.colPivHouseholderQr().solve(y)).squaredNorm();
+    total += y.squaredNorm();
+  }
+  return 1 - left / total;
+}
+
+TEST(Translation, TheVelocitySplineCannotTakeUpAClockOffset) {
+  // Noise-free: what a 10 ms clock offset changes in the residuals, over the pan. A free
+  // translation per pair takes up nearly all of it (a sideways translation over one depth moves
+  // the image as a pan does); the velocity spline, smooth in world axes, leaves most of it.
+  SimConfig c = forward_flight(9, 15.0);
+  c.noise_px = 0, c.gyro.noise_rad_s = 0;
+  const SimulatedRecording sim = simulate_recording(c);
+  const DiagnosisModel m(sim.rec);
+  std::vector<int> pan;
+  for (int i = 0; i < m.size(); ++i)
+    if (m.frame_time(i) - sim.rec.frames.front().t > 4.2 && m.frame_time(i) - sim.rec.frames.front().t < 5.8) pan.push_back(i);
+  ASSERT_GT(pan.size(), 1000u);
+  const auto plain_true = m.residuals(with_offset(sim, 0, false), pan), plain_off = m.residuals(with_offset(sim, 0.01, false), pan);
+  const auto taken_true = m.residuals(with_offset(sim, 0, true), pan), taken_off = m.residuals(with_offset(sim, 0.01, true), pan);
+  std::vector<Eigen::Vector2d> change(pan.size());
+  double before = 0, after = 0;
+  for (size_t k = 0; k < pan.size(); ++k) {
+    change[k] = plain_off[k] - plain_true[k];
+    before += change[k].squaredNorm();
+    after += (taken_off[k] - taken_true[k]).squaredNorm();
+  }
+  ASSERT_GT(before / pan.size(), 0.01);  // the offset moves the pan's matches by over 0.1 px
+  EXPECT_GT(share_a_free_translation_takes(m, pan, change), 0.8);
+  EXPECT_GT(after / before, 0.6);
+}
+
+TEST(Translation, AForwardFlightWithAPanYieldsItsClockOffset) {
+  // Far (40 m) and near (15 m) scenes, and a long lens (f = 1200 px: the pan's flow is nearly a
+  // shift, as a sideways translation's is).
+  struct Case {
+    unsigned seed;
+    double depth_m, focal_px;
+  };
+  for (const Case& k : {Case{11, 40.0, 500.0}, Case{12, 15.0, 500.0}, Case{13, 40.0, 1200.0}}) {
+    SimConfig c = forward_flight(k.seed, k.depth_m);
+    c.nominal.cam.fx = c.nominal.cam.fy = k.focal_px;
+    c.effects.time_offset_s = 0.01;
+    const SimulatedRecording sim = simulate_recording(c);
+    const Diagnosis d = diagnose(DiagnosisModel(sim.rec));
+    EXPECT_TRUE(d.parallax.clear()) << k.depth_m;
+    EXPECT_EQ(names(d), "time_offset ") << "depth " << k.depth_m << " focal " << k.focal_px;
+    EXPECT_NEAR(param(find(d, "time_offset"), "time_offset_s"), 0.01, 1e-3) << "depth " << k.depth_m << " focal " << k.focal_px;
+  }
+}
+
+}  // namespace
+}  // namespace rsd::test
