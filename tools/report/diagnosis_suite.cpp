@@ -95,16 +95,27 @@ std::vector<SuiteCase> suite_cases(bool reduced, const std::vector<ObservationKi
       c.seed = case_seed(c);
       out.push_back(c);
     }
+    // An effect under parallax: the translation taken out must not take the effect with it.
+    if (!lm && !reduced) {
+      SuiteCase c;
+      c.kind = k, c.outside = "parallax", c.effects = {"focal_length"};
+      c.seed = case_seed(c);
+      out.push_back(c);
+    }
   }
-  // Rigs of their own (matches): the phone with everything off at once, and fast rotation.
+  // Rigs of their own (matches): the phone with everything off at once, fast rotation, a drone.
   if (std::find(kinds.begin(), kinds.end(), ObservationKind::Matches) != kinds.end()) {
-    SuiteCase phone, fast;
-    phone.kind = fast.kind = ObservationKind::Matches;
+    SuiteCase phone, fast, drone;
+    phone.kind = fast.kind = drone.kind = ObservationKind::Matches;
     phone.effects = {"rolling_shutter", "time_offset", "lens_distortion", "focal_length", "mount_rotation"};
     phone.preset = "phone";
     fast.effects = {"rolling_shutter", "time_offset"};
     fast.preset = "fast";
-    for (SuiteCase* c : {&phone, &fast}) {
+    // A drone flying forward past a distant scene, panning once: its clock offset shows only in
+    // the pan, and the flight's parallax is in every pair (translation.hpp).
+    drone.effects = {"time_offset", "rolling_shutter"};
+    drone.preset = "drone", drone.outside = "distant_scene";
+    for (SuiteCase* c : {&phone, &fast, &drone}) {
       c->seed = case_seed(*c);
       if (!reduced || c == &fast) out.push_back(*c);
     }

@@ -17,12 +17,14 @@ namespace rsd::tools {
 struct SuiteCase {
   dsp::ObservationKind kind = dsp::ObservationKind::Landmarks;
   std::vector<std::string> effects;  // spec names; empty = no effect
-  // Physics outside the effect table (parallax, gyro_saturation, clock_jump; empty: none):
+  // Physics outside the effect table (parallax, distant_scene, gyro_saturation, clock_jump,
+  // stabilised; empty: none):
   // the diagnosis must report it as a significant remainder and name no effect for it.
   std::string outside;
   // A rig of its own instead of one-sigma effects: "phone" (matches; everything off at once, at
-  // a real phone's sizes) or "fast" (matches; 3-4 rad/s, a 30 ms readout, 0.3 px noise that the
-  // recording does not state). `effects` then lists what it switches on.
+  // a real phone's sizes), "fast" (matches; 3-4 rad/s, a 30 ms readout, 0.3 px noise that the
+  // recording does not state) or "drone" (matches; a forward flight with a pan, flight_path.hpp,
+  // a 58 ms clock offset and a 20 ms readout). `effects` then lists what it switches on.
   std::string preset;
   unsigned seed = 1;
   double duration_s = 0;             // 0: the suite's length

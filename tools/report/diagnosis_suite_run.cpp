@@ -13,6 +13,7 @@
 #include "tools/report/diagnosis_report.hpp"
 #include "tools/report/diagnosis_suite_checks.hpp"
 #include "dsp/diagnosis/diagnosis.hpp"
+#include "dsp/sim/flight_path.hpp"
 
 namespace rsd::tools {
 
@@ -61,12 +62,15 @@ void apply(SimConfig& c, const std::string& e, double a) {
 // hand-held translation of 5 cm (a few pixels per frame pair), a gyro clipping at 1 rad/s
 // (the hand-held motion peaks near 2), a clock that jumps by 3 ms half-way, a video stabilised
 // in the camera (its pictures follow the orientation smoothed at 5 Hz, zero phase: the 1.2 Hz
-// shake keeps 94.5% of its swing, with no lag, so a gyro scale 5.5% low would stand in).
+// shake keeps 94.5% of its swing, with no lag, so a gyro scale 5.5% low would stand in), and a
+// drone's distant scene (40 m ahead: with the drone preset's forward flight, parallax in every pair).
 void apply_outside(SimConfig& c, const std::string& what) {
   if (what.empty()) return;
   if (what == "parallax") {
     c.unmodelled.scene_depth_m = 4.0;
     c.translation_amplitude_m = 0.05;
+  } else if (what == "distant_scene") {
+    c.unmodelled.scene_depth_m = 40.0;  // a drone's view ahead: flow of a few pixels per pair at 8 m/s
   } else if (what == "gyro_saturation") {
     c.unmodelled.gyro_saturation_rad_s = 1.0;
   } else if (what == "stabilised") {
@@ -101,6 +105,14 @@ void apply_preset(SimConfig& c, const std::string& preset, const std::string& on
     c.gyro = {200, 200, 0, 0, 0, 0.002};
     if (on("rolling_shutter")) c.effects.line_delay_s = 0.030 / n.cam.height;
     if (on("time_offset")) c.effects.time_offset_s = 0.003;
+  } else if (preset == "drone") {
+    // A drone's gimbal camera flying forward at 8 m/s and panning 0.8 rad once (flight_path.hpp),
+    // its own 400 Hz gyro; the clocks 58 ms apart (as in the Karma clip of issue 34), a 20 ms readout.
+    c.motion_source = MotionSource::Samples;
+    c.pose_samples = flight_poses(FlightPath{}, c.start_time_s, c.start_time_s - 3, c.start_time_s + c.duration_s + 3);
+    c.gyro = {400, 400, 0, 0, 0, 0.002};
+    if (on("time_offset")) c.effects.time_offset_s = -0.058;
+    if (on("rolling_shutter")) c.effects.line_delay_s = 0.020 / n.cam.height;
   } else {
     throw std::invalid_argument("unknown preset " + preset);
   }

@@ -11,6 +11,7 @@
 #include "dsp/diagnosis/diagnosis.hpp"
 #include "dsp/diagnosis/parallax.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
+#include "dsp/sim/flight_path.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
 #include "tests/dsp/diagnosis/diagnosis_lookup.hpp"
 
@@ -19,27 +20,13 @@ namespace {
 
 using namespace rsd::dsp;
 
-double smoothstep(double x) {
-  x = std::clamp(x, 0.0, 1.0);
-  return x * x * (3 - 2 * x);
-}
-
 // A drone flying forward at 8 m/s past a scene `depth_m` ahead (a plane facing each frame pair's
-// first camera), drifting sideways a little, the camera on a gimbal (a shake of a few mrad left)
-// panning by 0.8 rad over the 2 s from 4 s on; 10 s of the VGA camera, 0.5 px noise.
+// first camera), panning by 0.8 rad over the 2 s from 4 s on (flight_path.hpp); 10 s of the VGA
+// camera, 0.5 px noise.
 SimConfig forward_flight(unsigned seed, double depth_m) {
   SimConfig c = simulation(ObservationKind::Matches, seed, 10.0, 0.5);
   c.motion_source = MotionSource::Samples;
-  const double t0 = c.start_time_s, speed = 8.0, pan_rad = 0.8, pan_at = 4.0, pan_s = 2.0;
-  for (double t = t0 - 3; t <= t0 + c.duration_s + 3; t += 1e-3) {
-    const double s = t - t0;
-    const double yaw = pan_rad * smoothstep((s - pan_at) / pan_s);
-    const Eigen::Vector3d shake(0.004 * std::sin(2 * M_PI * 2.3 * s), 0.003 * std::sin(2 * M_PI * 3.1 * s + 1),
-                                0.002 * std::sin(2 * M_PI * 1.7 * s + 2));
-    const Eigen::Quaterniond q =
-        Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY())) * Eigen::Quaterniond(exp_so3(shake));
-    c.pose_samples.push_back({t, Eigen::Vector3d(0.3 * std::sin(0.7 * s), 0.1 * std::sin(1.3 * s), speed * s), q});
-  }
+  c.pose_samples = flight_poses(FlightPath{}, c.start_time_s, c.start_time_s - 3, c.start_time_s + c.duration_s + 3);
   c.unmodelled.scene_depth_m = depth_m;
   c.gyro.noise_rad_s = 0.002;
   return c;
