@@ -109,7 +109,7 @@ std::string located_json(const std::vector<Located>& located, const char* indent
   return o.str();
 }
 
-// The spec's "Diagnosis output", key for key, and what was withheld.
+// The spec's "Diagnosis output", key for key, what was withheld and the held-out halves.
 std::string diagnosis_json(const Diagnosis& d, const std::string& imu_axes) {
   std::ostringstream o;
   o << "{\n  \"format\": \"rsd-diagnosis/1\",\n  \"baseline\": {\"rms_px\": " << json_number(d.baseline.rms_px)
@@ -125,6 +125,14 @@ std::string diagnosis_json(const Diagnosis& d, const std::string& imu_axes) {
   // Beyond the spec's keys: what was found and not named, with why (readers may ignore it).
   o << ",\n  \"withheld\": [";
   for (size_t k = 0; k < d.withheld.size(); ++k) o << (k ? ", " : "") << json_string(d.withheld[k]);
+  o << "]";
+  // Beyond the spec's keys: the held-out observations of each half of the recording in time.
+  o << ",\n  \"heldout_halves\": [";
+  for (size_t h = 0; h < d.heldout_halves.size(); ++h) {
+    const auto& x = d.heldout_halves[h];
+    o << (h ? ", " : "") << "{\"baseline_rms_px\": " << json_number(x.baseline_rms_px)
+      << ", \"final_rms_px\": " << json_number(x.final_rms_px) << ", \"observations\": " << x.observations << "}";
+  }
   o << "]";
   if (!imu_axes.empty()) o << ",\n  \"imu_axes\": " << json_string(imu_axes);
   o << "\n}\n";

@@ -1,9 +1,11 @@
 #include "dsp/diagnosis/diagnosis.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 
+#include "dsp/core/statistics.hpp"
 #include "dsp/diagnosis/observation_choice.hpp"
 #include "dsp/diagnosis/select.hpp"
 
@@ -215,6 +217,22 @@ Selection select_with_parallax(const DiagnosisModel& m, const std::vector<int>& 
   return select_effects(m, use_fit, use_held, screen, n, g, d.sigma_px, so);
 }
 
+// The held-out observations split at their median frame time, each half's RMS under the nominal
+// and the final model.
+void heldout_halves(const DiagnosisModel& m, const ModelParams& nominal, const std::vector<int>& held, Diagnosis& d) {
+  if (held.empty()) return;
+  std::vector<double> t;
+  for (int i : held) t.push_back(m.frame_time(i));
+  const double mid = median(t);
+  std::array<std::vector<int>, 2> half;
+  for (int i : held) half[m.frame_time(i) < mid ? 0 : 1].push_back(i);
+  for (int h = 0; h < 2; ++h) {
+    if (half[h].empty()) continue;
+    d.heldout_halves[h] = {robust_stats(m.residuals(nominal, half[h])).rms_px,
+                           robust_stats(m.residuals(d.fitted, half[h])).rms_px, static_cast<int>(half[h].size())};
+  }
+}
+
 // The diagnosis's first invariant: the final model predicts the frames no fit saw no worse than
 // the nominal model. Effects that together do worse there describe the fitting frames only
 // (stand-ins for physics outside the table): none is named, and the remainder says why.
@@ -317,6 +335,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   d.heldout_final_rms_px = robust_stats(m.residuals(sel.params, use_held)).rms_px;
   d.withheld = sel.withheld;
   never_worse_than_nominal(m, nominal, use_all, d);
+  heldout_halves(m, nominal, use_held, d);
   progress("uncertainties and the remainder");
   d.uncertainties = effect_uncertainties(m, d.effects, d.fitted, fit_set);
   d.fit_observations = static_cast<int>(fit_set.size());

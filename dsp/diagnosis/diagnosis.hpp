@@ -6,6 +6,7 @@
 // writes the JSON and report. Method and measured accuracy: docs/diagnosis.md.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <string>
 #include <vector>
@@ -33,6 +34,14 @@ struct Diagnosis {
   double final_rms_px = 0;  // over the usable observations
   double heldout_baseline_rms_px = 0, heldout_final_rms_px = 0;
   int heldout_observations = 0;
+  // The held-out observations in the first and the second half of the recording's time (split at
+  // the median frame time of the held-out observations): the nominal and the final model on each.
+  // A model that predicts one half only is seen here even when the pooled RMS improves.
+  struct HeldoutHalf {
+    double baseline_rms_px = 0, final_rms_px = 0;
+    int observations = 0;
+  };
+  std::array<HeldoutHalf, 2> heldout_halves{};
   int fit_observations = 30000;  // how many fitting observations the fits saw (observation_choice.hpp)
   // The per-coordinate residual RMS that noise alone gives: noise_px for landmarks,
   // sqrt(2) noise_px for matches (the transfer carries frame_a's noise); 0 when the recording

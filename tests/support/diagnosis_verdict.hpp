@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -40,6 +41,8 @@ struct Verdict {
   std::map<std::string, std::map<std::string, double>> params;  // effect -> numeric parameters
   double line_delay_s = NAN;
   double heldout_baseline_rms_px = NAN, heldout_final_rms_px = NAN;
+  // The held-out observations of the first and second half in time: nominal and final RMS.
+  std::array<double, 2> half_baseline_rms_px{NAN, NAN}, half_final_rms_px{NAN, NAN};
   bool remainder_significant = false;
   std::vector<std::string> remainder_located;  // the remainder's signals, strongest first
   std::string withheld;                        // the JSON's withheld list, as written
@@ -69,6 +72,13 @@ inline Verdict read_verdict(const std::string& json_file) {
   const size_t held = json.find("\"heldout\"");
   v.heldout_baseline_rms_px = number_after(json, "baseline_rms_px", held);
   v.heldout_final_rms_px = number_after(json, "final_rms_px", held);
+  size_t half = json.find("\"heldout_halves\"");
+  for (int h = 0; h < 2 && half != std::string::npos; ++h) {
+    half = json.find("{", half + 1);
+    if (half == std::string::npos) break;
+    v.half_baseline_rms_px[h] = number_after(json, "baseline_rms_px", half);
+    v.half_final_rms_px[h] = number_after(json, "final_rms_px", half);
+  }
   const size_t rem = json.find("\"remainder\"");
   v.remainder_significant = rem != std::string::npos && json.compare(rem, 33, "\"remainder\": {\"significant\": true") == 0;
   const std::string rest = rem == std::string::npos ? "" : json.substr(rem, json.find("\"withheld\"") - rem);

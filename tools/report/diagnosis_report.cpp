@@ -150,8 +150,12 @@ std::string index_markdown(const ReportInput& in, const std::vector<ParamUncerta
   o << "| residual RMS (px, per coordinate, inliers) | nominal model | final model |\n| --- | --- | --- |\n"
     << "| held out: " << d.heldout_observations << " observations of every " << in.heldout_every
     << "th frame, not used by the fit | " << format_number(d.heldout_baseline_rms_px) << " | "
-    << format_number(d.heldout_final_rms_px) << " |\n"
-    << "| all " << d.baseline.observations << " observations | " << format_number(d.baseline.rms_px) << " | "
+    << format_number(d.heldout_final_rms_px) << " |\n";
+  for (size_t h = 0; h < d.heldout_halves.size(); ++h)
+    o << "| held out, " << (h ? "second" : "first") << " half in time: " << d.heldout_halves[h].observations
+      << " observations | " << format_number(d.heldout_halves[h].baseline_rms_px) << " | "
+      << format_number(d.heldout_halves[h].final_rms_px) << " |\n";
+  o << "| all " << d.baseline.observations << " observations | " << format_number(d.baseline.rms_px) << " | "
     << format_number(d.final_rms_px) << " |\n\n"
     << "The fits saw " << d.fit_observations << " fitting observations (chosen by the information they carry when "
     << "there were more than the fits need).\n\n"

@@ -191,4 +191,9 @@ TEST(DiagnosisInvariants, AnEffectOneHalfShowsWeaklyIsKept) {
   EXPECT_EQ(names(d), "rolling_shutter ");
   EXPECT_NEAR(d.fitted[Param::LineDelay], 2.5e-5, 0.1 * 2.5e-5);
   EXPECT_LT(d.heldout_final_rms_px, d.heldout_baseline_rms_px);
+  // Held out, half by half in time: the moving half predicted better, the still half as before.
+  const auto& h = d.heldout_halves;
+  EXPECT_EQ(h[0].observations + h[1].observations, d.heldout_observations);
+  EXPECT_LT(h[0].final_rms_px, 0.95 * h[0].baseline_rms_px);
+  EXPECT_NEAR(h[1].final_rms_px, h[1].baseline_rms_px, 0.01 * h[1].baseline_rms_px);
 }
