@@ -12,6 +12,7 @@
 
 #include "tools/common/cli_util.hpp"
 #include "tools/common/picture_observations.hpp"
+#include "tools/common/progress_line.hpp"
 #include "tools/report/diagnosis_calibration.hpp"
 #include "tools/report/diagnosis_report.hpp"
 #include "dsp/diagnosis/diagnosis.hpp"
@@ -181,11 +182,16 @@ int run(int argc, char** argv) {
   opt.heldout_every = o.heldout_every;
   opt.fit_observations = o.fit_observations;
   const auto t0 = std::chrono::steady_clock::now();
-  opt.progress = [&](const std::string& what) {
-    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::cerr << "rsd-diagnose: [" << format_number(t, 3) << " s] " << what << "\n";
+  auto elapsed = [&] {
+    return "[" + format_number(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 3) + " s] ";
   };
+  // Each stage as a line with the time so far; the long ones (the gross search's grid, each
+  // forward round's candidates) as a bar with the time left of that stage.
+  ProgressLine line("rsd-diagnose: ");
+  opt.progress = [&](const std::string& what) { line.message(elapsed() + what); };
+  opt.step = [&](const std::string& stage, int done, int total) { line.step(stage, done, total); };
   const Diagnosis d = diagnose(model, opt);
+  line.finish();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << "rsd-diagnose: diagnosed in " << format_number(secs, 3) << " s\n";
   write_file(o.json, diagnosis_json(d, axes));

@@ -139,8 +139,12 @@ ScaleEstimate estimate_sigma(const DiagnosisModel& m, const std::vector<int>& sc
 // a few pixels in every pair, would otherwise steer the search (a forward flight's flow moved a
 // 10 ms offset to 0.38 s and the focal length by 20%). That parallax is kept in `parallax`.
 ModelParams gross_search(const DiagnosisModel& m, const std::vector<int>& screen, const std::vector<int>& fit_set,
-                         const ModelParams& nominal, double sigma, Parallax& parallax) {
-  const ModelParams plain = gross_start(m, screen, nominal, sigma);
+                         const ModelParams& nominal, double sigma, Parallax& parallax, const DiagnosisOptions& opt) {
+  auto step = [&](const char* stage) -> std::function<void(int, int)> {
+    if (!opt.step) return nullptr;
+    return [&opt, stage](int done, int total) { opt.step(stage, done, total); };
+  };
+  const ModelParams plain = gross_start(m, screen, nominal, sigma, step("searching the clock offset at each focal scale"));
   if (m.kind() != ObservationKind::Matches) return plain;
   const ModelParams rich = fit_params(m, screen, plain, applicable_params(m), sigma, 20);
   const Parallax px = parallax_signal(m, rich, fit_set);
@@ -148,7 +152,7 @@ ModelParams gross_search(const DiagnosisModel& m, const std::vector<int>& screen
   parallax = px;
   ModelParams n = nominal;
   n.translation_nuisance = true;
-  return gross_start(m, screen, n, sigma);
+  return gross_start(m, screen, n, sigma, step("searching again with the translation taken out"));
 }
 
 // Where the residual lives. A gross error (a clock offset of a large fraction of a second, a
@@ -272,7 +276,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   };
   progress("searching the clock offset and focal scale for gross errors");
   const std::vector<int> fit_screen = subsample(fit, n_screen);
-  d.gross = gross_search(m, fit_screen, fit, nominal, guess, d.parallax);
+  d.gross = gross_search(m, fit_screen, fit, nominal, guess, d.parallax, opt);
   // The fits see at most opt.fit_observations of the usable fitting observations (and a
   // quarter as many held out), chosen by the information they carry at the gross start.
   std::vector<int> use_all, use_fit, use_held, fit_set, held_set, screen;
@@ -296,7 +300,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   } else {
     ScaleEstimate e = estimate_sigma(m, screen, fit_set, d.gross, guess);
     if (std::abs(std::log(e.sigma_px / guess)) > std::log(1.25)) {
-      d.gross = gross_search(m, fit_screen, fit, nominal, e.sigma_px, d.parallax);
+      d.gross = gross_search(m, fit_screen, fit, nominal, e.sigma_px, d.parallax, opt);
       split_usable();
       e = estimate_sigma(m, screen, fit_set, d.gross, e.sigma_px);
     }
@@ -305,6 +309,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   SelectionOptions so;
   so.min_bic_drop = opt.min_bic_drop, so.max_iterations = opt.max_iterations;
   so.progress = opt.progress;
+  so.step = opt.step;
   Selection sel;
   for (int attempt = 0;; ++attempt) {
     progress("selecting effects at sigma " + std::to_string(d.sigma_px) + " px");
@@ -318,7 +323,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
     d.sigma_restarts.push_back(d.sigma_px);
     d.sigma_px = ended;
     if (d.noise_floor_px == 0) {
-      d.gross = gross_search(m, fit_screen, fit, nominal, d.sigma_px, d.parallax);
+      d.gross = gross_search(m, fit_screen, fit, nominal, d.sigma_px, d.parallax, opt);
       split_usable();
     }
   }

@@ -76,6 +76,8 @@ struct DiagnosisOptions {
   // Called on the caller's thread as the diagnosis moves on (a stage, an effect named), for
   // progress output on long runs; may be empty.
   std::function<void(const std::string&)> progress;
+  // A step of a long stage done (SelectionOptions::step); may be empty.
+  std::function<void(const std::string& stage, int done, int total)> step;
 };
 
 Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt = {});

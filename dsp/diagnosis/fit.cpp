@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 
 namespace rsd::dsp {
@@ -362,14 +363,17 @@ double scan_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, co
   return refine_time_offset(m, sub, q, sigma);
 }
 
-ModelParams gross_start(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma) {
+ModelParams gross_start(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma,
+                        const std::function<void(int, int)>& step) {
   const std::vector<int> sub = subsample(idx, p.translation_nuisance ? 600 : 150);
   const auto [lo, hi] = search_range(m, p[Param::TimeOffset]);
   ModelParams best = p;
   double best_cost = std::numeric_limits<double>::infinity();
   // Nominal focal first, then outwards: a recording that does not see the focal length (a
   // flat cost) keeps the nominal one.
-  for (int k : {0, -1, 1, -2, 2, -3, 3, -4, 4}) {
+  constexpr int kScales[] = {0, -1, 1, -2, 2, -3, 3, -4, 4};
+  int done = 0;
+  for (int k : kScales) {
     ModelParams q = p;
     q[Param::Fx] *= 1 + 0.05 * k;
     q[Param::Fy] *= 1 + 0.05 * k;
@@ -380,6 +384,7 @@ ModelParams gross_start(const DiagnosisModel& m, const std::vector<int>& idx, co
       best = q;
       best[Param::TimeOffset] = g.offset;
     }
+    if (step) step(++done, static_cast<int>(std::size(kScales)));
   }
   if (lo < hi) best[Param::TimeOffset] = refine_time_offset(m, sub, best, sigma);
   return best;

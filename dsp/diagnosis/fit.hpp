@@ -5,6 +5,7 @@
 
 #include <utility>
 
+#include <functional>
 #include <vector>
 
 #include "dsp/diagnosis/model.hpp"
@@ -57,7 +58,9 @@ double refine_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, 
 // values for the time_offset and focal_length hypotheses, not a claim that either is present.
 // With p's translation nuisance on, on 600 observations rather than 150: the translation's
 // velocity spline (translation.hpp) needs a few observations per knot.
-ModelParams gross_start(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma_px);
+// `step(done, total)`, if given, after each focal scale of the grid.
+ModelParams gross_start(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma_px,
+                        const std::function<void(int, int)>& step = nullptr);
 
 // Every `n`-th of idx, at most `count` (spread over the whole recording).
 std::vector<int> subsample(const std::vector<int>& idx, size_t count);

@@ -250,13 +250,18 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
     std::optional<State> refitted;  // on all fitting observations, once asked for
   };
   std::vector<Candidate> screened;
+  std::vector<Effect> open;
   for (Effect e : candidates)
     // lens_model replaces lens_distortion (with the other family's terms): never the reverse.
-    if (!s.has(e) && !(e == Effect::LensDistortion && s.has(Effect::LensModel))) {
-      State c = sel.screen_add(s, e);
-      const double d = projected_drop(sel, here, c);
-      screened.push_back({d, e, std::move(c), std::nullopt});
-    }
+    if (!s.has(e) && !(e == Effect::LensDistortion && s.has(Effect::LensModel))) open.push_back(e);
+  const std::string stage = "screening " + std::to_string(open.size()) + " candidates (" +
+                            std::to_string(s.effects.size()) + " named so far)";
+  for (size_t k = 0; k < open.size(); ++k) {
+    State c = sel.screen_add(s, open[k]);
+    const double d = projected_drop(sel, here, c);
+    screened.push_back({d, open[k], std::move(c), std::nullopt});
+    if (sel.opt_.step) sel.opt_.step(stage, static_cast<int>(k + 1), static_cast<int>(open.size()));
+  }
   std::sort(screened.begin(), screened.end(), [](const auto& a, const auto& b) { return a.projected > b.projected; });
   while (!screened.empty()) {
     const double best_projected = screened.front().projected;

@@ -19,6 +19,9 @@ struct SelectionOptions {
   int max_iterations = 30;         // final fits
   int screen_iterations = 8;       // candidate fits on the subsample
   std::function<void(const std::string&)> progress;  // an effect named or dropped (may be empty)
+  // A step of a long stage done: `done` of `total` (the candidates a forward round screens), so
+  // that a caller can draw a bar and say the time left of the stage (may be empty).
+  std::function<void(const std::string& stage, int done, int total)> step;
   // Whether select_effects ends with the blocked-halves check (hold_on_blocked_halves).
   bool blocked_halves = true;
 };

@@ -10,6 +10,7 @@
 
 #include "drivers/images_source.hpp"
 #include "dsp/features/target_observations.hpp"
+#include "tools/common/progress_line.hpp"
 
 namespace rsd::tools {
 
@@ -43,16 +44,6 @@ cv::Mat grey8(const dsp::Image& img, double& scale16) {
 
 namespace {
 
-// One line, rewritten as the frames go by: the frame, what was found, and the time left at the
-// pace so far (once a few frames have set it).
-void progress(size_t k, size_t n, const std::string& what, std::chrono::steady_clock::time_point t0) {
-  const double spent = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::fprintf(stderr, "\rrsd: frame %zu/%zu, %s", k + 1, n, what.c_str());
-  if (k >= 4 && k + 1 < n) std::fprintf(stderr, ", about %.0f s left", spent / (k + 1) * (n - k - 1));
-  std::fprintf(stderr, "      ");
-  if (k + 1 == n) std::fprintf(stderr, "\n");
-}
-
 cv::Mat next_grey(PictureFrames& f, size_t k, double& scale16) {
   std::optional<dsp::Image> img = f.next();
   if (!img) throw std::runtime_error(f.what + ": frame " + std::to_string(f.numbers[k]) + " could not be read");
@@ -70,7 +61,7 @@ void make_matches(PictureFrames& f, const dsp::TrackOptions& opt, dsp::Recording
   double scale16 = 0;
   int lost = 0, fb = 0, unlike = 0, pairs = 0;
   const size_t n = f.numbers.size();
-  const auto t0 = std::chrono::steady_clock::now();
+  ProgressLine line("rsd: ");
   for (size_t k = 0; k < n; ++k) {
     const cv::Mat cur = next_grey(f, k, scale16);
     if (!f.usable[k]) {
@@ -83,7 +74,7 @@ void make_matches(PictureFrames& f, const dsp::TrackOptions& opt, dsp::Recording
       tracker.restart();
       tracker.next(cur);  // the first frame of a chain
     }
-    progress(k, n, std::to_string(rec.matches.size()) + " matches", t0);
+    line.step("frame", static_cast<long>(k + 1), static_cast<long>(n), std::to_string(rec.matches.size()) + " matches");
   }
   std::printf("rsd: %zu matches over %d consecutive frame pairs (%.0f per pair); dropped %d lost tracks, %d failing the "
               "%.2f px forward-backward check and %d whose patches correlate below %.2f\n",
@@ -99,7 +90,7 @@ void make_landmarks(PictureFrames& f, const dsp::TargetSpec& target, const std::
   double scale16 = 0;
   int seen = 0, unknown = 0;
   const size_t n = f.numbers.size();
-  const auto t0 = std::chrono::steady_clock::now();
+  ProgressLine line("rsd: ");
   for (size_t k = 0; k < n; ++k) {
     const cv::Mat img = next_grey(f, k, scale16);
     if (f.usable[k]) {
@@ -109,7 +100,7 @@ void make_landmarks(PictureFrames& f, const dsp::TargetSpec& target, const std::
         else ++unknown;
       seen += !c.empty();
     }
-    progress(k, n, "target in " + std::to_string(seen) + " frames", t0);
+    line.step("frame", static_cast<long>(k + 1), static_cast<long>(n), "target in " + std::to_string(seen) + " frames");
   }
   std::printf("rsd: target %s in %d of %zu frames, %zu corner observations of %zu points\n", target_name.c_str(), seen, n,
               rec.observations.size(), rec.points.size());
