@@ -6,6 +6,7 @@
 #include <optional>
 #include <sstream>
 
+#include "dsp/diagnosis/blocked_halves.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/fit.hpp"
 #include "dsp/diagnosis/plausibility.hpp"
@@ -38,82 +39,26 @@ class Selector {
            const std::vector<int>& screen, const ModelParams& nominal, const ModelParams& start, double sigma,
            const SelectionOptions& opt)
       : m_(m), fit_(fit), held_(held), screen_(screen), nominal_(nominal), start_(start), sigma_(sigma), opt_(opt),
-        time_halves_(halves(m, screen, [&](int i) { return m.frame_time(i); })),
-        rate_halves_(m.has_gyro() ? halves(m, screen, [&](int i) { return rate_at(m, i, start); }) : Halves{}),
+        time_halves_(time_halves(m, screen)), rate_halves_(m.has_gyro() ? rate_halves(m, screen, start) : Halves{}),
         lens_(m.recording().nominal.cam.dist.model), field_(image_field(m.recording().nominal.cam)) {}
 
-  // Two halves of the screening observations, split at the median of `key` per frame.
-  struct Halves {
-    std::vector<int> a, b;
-    bool usable() const { return a.size() >= 50 && b.size() >= 50; }
-  };
-  template <class Key>
-  static Halves halves(const DiagnosisModel& m, const std::vector<int>& idx, Key key) {
-    std::vector<double> k;
-    for (int i : idx) k.push_back(key(i));
-    if (k.empty()) return {};
-    std::vector<double> sorted = k;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    const double mid = sorted[sorted.size() / 2];
-    Halves h;
-    for (size_t j = 0; j < idx.size(); ++j) (k[j] < mid ? h.a : h.b).push_back(idx[j]);
-    (void)m;
-    return h;
-  }
-  // The gyro's angular rate (magnitude) nearest observation i's frame on the motion clock.
-  static double rate_at(const DiagnosisModel& m, int i, const ModelParams& p) {
-    const auto& g = m.recording().gyro;
-    const double t = m.frame_time(i) + p[Param::TimeOffset];
-    auto it = std::lower_bound(g.begin(), g.end(), t, [](const GyroSample& s, double x) { return s.t < x; });
-    if (it == g.end()) it = std::prev(g.end());
-    return it->w.norm();
-  }
-
-  // Fit `poorer` and `richer` on one half, predict the other, both ways: the robust
-  // chi-square drop on the unseen half, less the margin its noise allows, the smaller of the two
-  // directions (positive: it holds). An effect that describes the physics predicts what it has
-  // not seen; a stand-in, fitted to structure that differs between the halves (a clock that
-  // jumps, a rate the gyro clips), does not. But a real effect that one half shows only weakly
-  // (little motion there) may lower that half's chi-square by less than its noise, or raise it
-  // a little: it holds unless it degrades the half beyond that noise (issue 34, point 3). The
-  // noise of the drop: with d_i the change the effect makes to observation i's prediction and
-  // S = sum |d_i|^2 / sigma^2 its signal energy on the half, the drop is S + 2 sum r_i.d_i /
-  // sigma^2 with standard deviation 2 sqrt(S) for independent noise; the margin is 3 sqrt(S). A
-  // stand-in's wrong half costs about S itself, far past the margin once S is more than 9.
-  double cross_drop(const Halves& h, const State& poorer, const State& richer) const {
-    double worst = std::numeric_limits<double>::infinity();
-    for (int dir = 0; dir < 2; ++dir) {
-      const std::vector<int>& learn = dir ? h.b : h.a;
-      const std::vector<int>& judge = dir ? h.a : h.b;
-      const ModelParams p0 = fit_params(m_, learn, poorer.params, mask_of(poorer.effects, lens_), sigma_, opt_.screen_iterations);
-      const ModelParams p1 = fit_params(m_, learn, richer.params, mask_of(richer.effects, lens_), sigma_, opt_.screen_iterations);
-      const auto r0 = m_.residuals(p0, judge), r1 = m_.residuals(p1, judge);
-      worst = std::min(worst, robust_chi2(r0, sigma_) - robust_chi2(r1, sigma_) + 3.0 * std::sqrt(signal_energy(r0, r1)));
-    }
-    return worst;
-  }
-  // S above, over the observations both models predict within the robust loss's quadratic core
-  // (an outlier's change says nothing about the noise of the drop).
-  double signal_energy(const std::vector<Eigen::Vector2d>& r0, const std::vector<Eigen::Vector2d>& r1) const {
-    double s = 0;
-    const double core = 2.0 * sigma_;
-    for (size_t k = 0; k < r0.size(); ++k)
-      if (r0[k].allFinite() && r1[k].allFinite() && r0[k].norm() < core && r1[k].norm() < core)
-        s += (r0[k] - r1[k]).squaredNorm() / (sigma_ * sigma_);
-    return s;
-  }
-
-  // Whether adding an effect (poorer -> richer) holds on the blocked halves in time and, in
-  // gyro recordings, on the frames of low and of high angular rate (every effect there shows
-  // through the rate: a stand-in for a gyro that clips fits only the fast frames).
-  // The drops (the worse direction of each split; NaN where a split does not apply) go to
-  // `time_drop` and `rate_drop`.
-  bool consistent(const State& poorer, const State& richer, double& time_drop, double& rate_drop) const {
+  // Whether adding an effect (poorer -> richer) holds on the blocked halves (blocked_halves.hpp)
+  // in time and, in gyro recordings, on the frames of low and of high angular rate (every effect
+  // there shows through the rate: a stand-in for a gyro that clips fits only the fast frames):
+  // it predicts the half it was not fitted on, and the two halves agree on its value within
+  // kHalvesAgreeSigmas. The drops (the worse direction of each split; NaN where a split does
+  // not apply) go to `time_drop` and `rate_drop`, the larger disagreement to `apart`.
+  bool consistent(const State& poorer, const State& richer, double& time_drop, double& rate_drop, double& apart) const {
     time_drop = rate_drop = std::numeric_limits<double>::quiet_NaN();
-    if (time_halves_.usable()) time_drop = cross_drop(time_halves_, poorer, richer);
-    if (rate_halves_.usable()) rate_drop = cross_drop(rate_halves_, poorer, richer);
+    apart = 0;
+    const Hypothesis p{poorer.params, mask_of(poorer.effects, lens_)}, r{richer.params, mask_of(richer.effects, lens_)};
+    for (auto [h, drop] : {std::pair{&time_halves_, &time_drop}, std::pair{&rate_halves_, &rate_drop}}) {
+      if (!h->usable()) continue;
+      const HalvesVerdict v = cross_check(m_, *h, p, r, sigma_, opt_.screen_iterations);
+      *drop = v.drop, apart = std::max(apart, v.apart_sigmas);
+    }
     // A drop of exactly zero is a half that cannot show the effect (no motion there): it holds.
-    return !(time_drop < 0) && !(rate_drop < 0);
+    return !(time_drop < 0) && !(rate_drop < 0) && apart <= kHalvesAgreeSigmas;
   }
 
   // BIC = robust chi-square + k ln(2N) + the implausibility of the values (plausibility.hpp):
@@ -390,12 +335,14 @@ void consistency(const Selector& sel, State& s, std::vector<SelectedEffect>& ste
     for (auto it = s.effects.rbegin(); it != s.effects.rend(); ++it) {
       const Effect e = *it;
       const State without = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
-      double time_drop = 0, rate_drop = 0;
-      const bool holds = sel.consistent(without, s, time_drop, rate_drop);
+      double time_drop = 0, rate_drop = 0, apart = 0;
+      const bool holds = sel.consistent(without, s, time_drop, rate_drop, apart);
       for (SelectedEffect& st : steps)
         if (st.effect == e) st.blocked_time_drop = time_drop, st.blocked_rate_drop = rate_drop;
       if (holds) continue;
-      if (sel.opt_.progress) sel.opt_.progress(std::string("dropped ") + effect_name(e) + ": it does not hold on the blocked halves");
+      if (sel.opt_.progress)
+        sel.opt_.progress(std::string("dropped ") + effect_name(e) + ": it does not hold on the blocked halves" +
+                          (apart > kHalvesAgreeSigmas ? " (they put its value " + std::to_string(std::lround(apart)) + " sigmas apart)" : ""));
       s = without;
       forget(steps, e);
       changed = true;

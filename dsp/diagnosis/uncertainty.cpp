@@ -56,7 +56,8 @@ FitInliers fit_inliers(const DiagnosisModel& m, const ModelParams& fitted, const
 // clustered by frame. Errors shared by a frame's observations (a matches recording's gyro
 // noise and stamp jitter move all of a frame pair's matches together) make the classic
 // estimate optimistic; the sandwich over per-frame score sums sees them. Empty if singular.
-std::optional<Eigen::VectorXd> variances(const DiagnosisModel& m, const Eigen::MatrixXd& J, const FitInliers& f) {
+std::optional<Eigen::VectorXd> variances(const DiagnosisModel& m, const Eigen::MatrixXd& J, const FitInliers& f,
+                                         int cluster_frames) {
   const Eigen::Index n = J.cols();
   if (n == 0 || J.rows() <= n) return std::nullopt;
   const Eigen::FullPivLU<Eigen::MatrixXd> lu(J.transpose() * J);
@@ -68,10 +69,11 @@ std::optional<Eigen::VectorXd> variances(const DiagnosisModel& m, const Eigen::M
   Eigen::VectorXd v = s2 * B.diagonal();
   std::map<int, Eigen::VectorXd> score;
   for (size_t k = 0; k < f.idx.size(); ++k) {
-    auto it = score.try_emplace(m.frame_rank(f.idx[k]), Eigen::VectorXd::Zero(n)).first;
+    auto it = score.try_emplace(m.frame_rank(f.idx[k]) / cluster_frames, Eigen::VectorXd::Zero(n)).first;
     it->second += J.middleRows(2 * k, 2).transpose() * f.r[k];
   }
   const double g = static_cast<double>(score.size());
+  if (cluster_frames > 1 && g < 20) return std::nullopt;
   if (g >= 20) {  // fewer clusters make the sandwich itself too noisy
     Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(n, n);
     for (const auto& [rank, sc] : score) meat += sc * sc.transpose();
@@ -83,10 +85,11 @@ std::optional<Eigen::VectorXd> variances(const DiagnosisModel& m, const Eigen::M
 }  // namespace
 
 std::optional<Eigen::VectorXd> parameter_variances(const DiagnosisModel& m, const ModelParams& fitted,
-                                                   const std::vector<Param>& free, const std::vector<int>& idx) {
+                                                   const std::vector<Param>& free, const std::vector<int>& idx,
+                                                   int cluster_frames) {
   if (free.empty()) return std::nullopt;
   const FitInliers f = fit_inliers(m, fitted, idx);
-  return variances(m, residual_jacobian(m, fitted, free, f.idx), f);
+  return variances(m, residual_jacobian(m, fitted, free, f.idx), f, std::max(cluster_frames, 1));
 }
 
 std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, const std::vector<NamedEffect>& effects,

@@ -41,8 +41,13 @@ std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, cons
 // `free`), from the inliers among observations idx, as effect_uncertainties computes them:
 // the larger of the classic and the frame-clustered sandwich estimate. nullopt when the
 // parameters are not identifiable from these observations (singular information).
+// With `cluster_frames` > 1 the sandwich's clusters are blocks of that many consecutive frames,
+// and it must have at least 20 of them (else nullopt): errors that persist over a block (a model
+// that is not quite the camera's, whose misfit follows the motion) widen it as they widen the
+// spread of values fitted on different stretches of the recording.
 std::optional<Eigen::VectorXd> parameter_variances(const DiagnosisModel& m, const ModelParams& fitted,
-                                                   const std::vector<Param>& free, const std::vector<int>& idx);
+                                                   const std::vector<Param>& free, const std::vector<int>& idx,
+                                                   int cluster_frames = 1);
 
 // d residual / d parameter (px per unit) of the observations idx at `at`: rows 2k, 2k + 1 are
 // idx[k]'s, a column per parameter of `free`. Central differences of a hundredth of the

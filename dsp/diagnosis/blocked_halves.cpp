@@ -1,0 +1,101 @@
+#include "dsp/diagnosis/blocked_halves.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "dsp/diagnosis/fit.hpp"
+#include "dsp/diagnosis/uncertainty.hpp"
+
+namespace rsd::dsp {
+
+namespace {
+
+template <class Key>
+Halves split_at_median(const std::vector<int>& idx, Key key) {
+  std::vector<double> k;
+  for (int i : idx) k.push_back(key(i));
+  if (k.empty()) return {};
+  std::vector<double> sorted = k;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double mid = sorted[sorted.size() / 2];
+  Halves h;
+  for (size_t j = 0; j < idx.size(); ++j) (k[j] < mid ? h.a : h.b).push_back(idx[j]);
+  return h;
+}
+
+// S = sum |d_i|^2 / sigma^2 over the observations both models predict within the robust loss's
+// quadratic core (an outlier's change says nothing about the noise of the drop).
+double signal_energy(const std::vector<Eigen::Vector2d>& r0, const std::vector<Eigen::Vector2d>& r1, double sigma) {
+  double s = 0;
+  const double core = 2.0 * sigma;
+  for (size_t k = 0; k < r0.size(); ++k)
+    if (r0[k].allFinite() && r1[k].allFinite() && r0[k].norm() < core && r1[k].norm() < core)
+      s += (r0[k] - r1[k]).squaredNorm() / (sigma * sigma);
+  return s;
+}
+
+// How far apart fits on the two halves put the parameters `added`, in combined sigmas (each
+// half's variance with every free parameter of the hypothesis free, so correlations widen it,
+// and clustered by blocks of a quarter of a second: a model that is not quite the camera's (a
+// lens that is nearly right) misfits in a way that follows the motion, and moves a value fitted
+// on one stretch of motion from one fitted on another; the blocks' spread sees that, the
+// frames' alone did not, and a real 12 ms clock offset through a rendered fisheye lens was
+// called two halves apart).
+double apart(const DiagnosisModel& m, const Halves& h, const ModelParams& on_a, const ModelParams& on_b,
+             const ParamMask& free_mask, const ParamMask& added) {
+  std::vector<Param> free;
+  for (int k = 0; k < kParamCount; ++k)
+    if (free_mask[k]) free.push_back(Param(k));
+  const int block = std::max(1, static_cast<int>(std::lround(kHalvesBlockS * m.recording().nominal.frame_rate_hz)));
+  const auto va = parameter_variances(m, on_a, free, h.a, block), vb = parameter_variances(m, on_b, free, h.b, block);
+  if (!va || !vb) return 0;  // a half that cannot measure them (no motion there) has no say
+  double worst = 0;
+  for (size_t j = 0; j < free.size(); ++j) {
+    const double s = std::sqrt((*va)[j] + (*vb)[j]);
+    if (added[static_cast<size_t>(free[j])] && s > 0) worst = std::max(worst, std::abs(on_a[free[j]] - on_b[free[j]]) / s);
+  }
+  return worst;
+}
+
+}  // namespace
+
+Halves time_halves(const DiagnosisModel& m, const std::vector<int>& idx) {
+  return split_at_median(idx, [&](int i) { return m.frame_time(i); });
+}
+
+Halves rate_halves(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p) {
+  const auto& g = m.recording().gyro;
+  return split_at_median(idx, [&](int i) {
+    const double t = m.frame_time(i) + p[Param::TimeOffset];
+    auto it = std::lower_bound(g.begin(), g.end(), t, [](const GyroSample& s, double x) { return s.t < x; });
+    if (it == g.end()) it = std::prev(g.end());
+    return it->w.norm();
+  });
+}
+
+// An effect that describes the physics predicts what it has not seen; a stand-in, fitted to
+// structure that differs between the halves, does not. But a real effect that one half shows
+// only weakly (little motion there) may lower that half's chi-square by less than its noise, or
+// raise it a little: it holds unless it degrades the half beyond that noise (issue 34, point 3).
+// The noise of the drop: with d_i the change the effect makes to observation i's prediction and
+// S = sum |d_i|^2 / sigma^2 its signal energy on the half, the drop is S + 2 sum r_i.d_i /
+// sigma^2 with standard deviation 2 sqrt(S) for independent noise; the margin is 3 sqrt(S). A
+// stand-in's wrong half costs about S itself, far past the margin once S is more than 9.
+HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const Hypothesis& poorer, const Hypothesis& richer,
+                          double sigma, int iterations) {
+  HalvesVerdict v{std::numeric_limits<double>::infinity(), 0};
+  ModelParams fitted[2];
+  for (int dir = 0; dir < 2; ++dir) {
+    const std::vector<int>& learn = dir ? h.b : h.a;
+    const std::vector<int>& judge = dir ? h.a : h.b;
+    const ModelParams p0 = fit_params(m, learn, poorer.params, poorer.free, sigma, iterations);
+    fitted[dir] = fit_params(m, learn, richer.params, richer.free, sigma, iterations);
+    const auto r0 = m.residuals(p0, judge), r1 = m.residuals(fitted[dir], judge);
+    v.drop = std::min(v.drop, robust_chi2(r0, sigma) - robust_chi2(r1, sigma) + 3.0 * std::sqrt(signal_energy(r0, r1, sigma)));
+  }
+  v.apart_sigmas = apart(m, h, fitted[0], fitted[1], richer.free, richer.free & ~poorer.free);
+  return v;
+}
+
+}  // namespace rsd::dsp

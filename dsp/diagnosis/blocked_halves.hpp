@@ -1,0 +1,48 @@
+// The blocked-halves check of the selection (select.hpp): an effect must hold out of the half of
+// the recording it was fitted on, split in time and (gyro recordings) by angular rate. A stand-in
+// for physics outside the table (a clock that jumps, a gyro that clips) fits one half's structure
+// and mispredicts the other's, or puts its value where the other half does not.
+#pragma once
+
+#include <vector>
+
+#include "dsp/diagnosis/model.hpp"
+
+namespace rsd::dsp {
+
+// Two halves of some observations, split at the median of a key.
+struct Halves {
+  std::vector<int> a, b;
+  bool usable() const { return a.size() >= 50 && b.size() >= 50; }
+};
+// Split by the frame's time.
+Halves time_halves(const DiagnosisModel& m, const std::vector<int>& idx);
+// Split by the gyro's angular rate (magnitude) nearest each observation's frame, on the motion
+// clock of `p`.
+Halves rate_halves(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p);
+
+// A hypothesis: its parameters and which of them are free.
+struct Hypothesis {
+  ModelParams params;
+  ParamMask free;
+};
+
+struct HalvesVerdict {
+  // The robust chi-square drop from `poorer` to `richer` on the unseen half, plus the margin its
+  // noise allows, in the worse direction (positive: it holds).
+  double drop = 0;
+  // How far apart the two halves put the parameters `richer` adds, in combined sigmas (the
+  // largest; 0 where a half cannot measure them).
+  double apart_sigmas = 0;
+};
+// Fits both hypotheses on each half (at most `iterations`), judges them on the other.
+HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const Hypothesis& poorer, const Hypothesis& richer,
+                          double sigma, int iterations);
+
+// Beyond this many combined sigmas apart, the two halves disagree on an effect's value. The
+// sigmas are clustered by blocks of kHalvesBlockS; a half with fewer than 20 blocks (a recording
+// under about 10 s) has no say on the value.
+inline constexpr double kHalvesAgreeSigmas = 4.0;
+inline constexpr double kHalvesBlockS = 0.25;
+
+}  // namespace rsd::dsp
