@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <tuple>
 
 #include "dsp/core/statistics.hpp"
 #include "dsp/diagnosis/model.hpp"
@@ -82,11 +83,19 @@ Eigen::VectorXd fit_velocity(const Spline& sp, const std::vector<PairSums>& pair
 void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
                         const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s) {
   const CameraModel& cam = m.recording().nominal.cam;
-  // The pairs (by frame_a's rank) and each observation's pair and flow per unit translation.
-  std::vector<std::pair<int, size_t>> by_pair;
+  // The pairs (frame_a's rank and frame_b's time: a frame may be matched to more than one other)
+  // and each observation's pair and flow per unit translation.
+  struct Member {
+    int rank;
+    double t_b;
+    size_t second;  // position in idx
+    bool operator<(const Member& o) const { return std::tie(rank, t_b, second) < std::tie(o.rank, o.t_b, o.second); }
+    bool same_pair(const Member& o) const { return rank == o.rank && t_b == o.t_b; }
+  };
+  std::vector<Member> by_pair;
   by_pair.reserve(idx.size());
   for (size_t k = 0; k < idx.size(); ++k)
-    if (r[k].allFinite()) by_pair.emplace_back(m.frame_rank(idx[k]), k);
+    if (r[k].allFinite()) by_pair.push_back({m.frame_rank(idx[k]), m.frame_time_b(idx[k]), k});
   if (by_pair.empty()) return;
   std::sort(by_pair.begin(), by_pair.end());
   std::vector<PairSums> pairs;
@@ -94,7 +103,7 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   std::vector<Eigen::Matrix<double, 2, 3>> J(by_pair.size());
   for (size_t k = 0; k < by_pair.size(); ++k) {
     const int i = idx[by_pair[k].second];
-    if (k == 0 || by_pair[k].first != by_pair[k - 1].first) {
+    if (k == 0 || !by_pair[k].same_pair(by_pair[k - 1])) {
       PairSums s;
       s.t = 0.5 * (m.frame_time(i) + m.frame_time_b(i));
       const Eigen::Matrix3d world_from_camera = track.camera_at(tm.motion_time(m.frame_time(i))) * mount_t;
