@@ -5,7 +5,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "dsp/core/statistics.hpp"
+#include "dsp/diagnosis/blocked_halves.hpp"
 #include "dsp/diagnosis/observation_choice.hpp"
 #include "dsp/diagnosis/select.hpp"
 
@@ -221,19 +221,15 @@ Selection select_with_parallax(const DiagnosisModel& m, const std::vector<int>& 
   return select_effects(m, use_fit, use_held, screen, n, g, d.sigma_px, so);
 }
 
-// The held-out observations split at their median frame time, each half's RMS under the nominal
-// and the final model.
+// The held-out observations split at their median frame time (the blocked halves' split in
+// time), each half's RMS under the nominal and the final model.
 void heldout_halves(const DiagnosisModel& m, const ModelParams& nominal, const std::vector<int>& held, Diagnosis& d) {
-  if (held.empty()) return;
-  std::vector<double> t;
-  for (int i : held) t.push_back(m.frame_time(i));
-  const double mid = median(t);
-  std::array<std::vector<int>, 2> half;
-  for (int i : held) half[m.frame_time(i) < mid ? 0 : 1].push_back(i);
+  const Halves split = time_halves(m, held);
+  const std::array<const std::vector<int>*, 2> half = {&split.a, &split.b};
   for (int h = 0; h < 2; ++h) {
-    if (half[h].empty()) continue;
-    d.heldout_halves[h] = {robust_stats(m.residuals(nominal, half[h])).rms_px,
-                           robust_stats(m.residuals(d.fitted, half[h])).rms_px, static_cast<int>(half[h].size())};
+    if (half[h]->empty()) continue;
+    d.heldout_halves[h] = {robust_stats(m.residuals(nominal, *half[h])).rms_px,
+                           robust_stats(m.residuals(d.fitted, *half[h])).rms_px, static_cast<int>(half[h]->size())};
   }
 }
 
