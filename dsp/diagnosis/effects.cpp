@@ -25,7 +25,7 @@ ParamMask effect_params(Effect e, LensModel nominal_lens) {
     case Effect::ClockDrift: set(Param::Drift); break;
     case Effect::LensDistortion: radial(nominal_lens); break;
     case Effect::LensModel: radial(other); break;
-    case Effect::FocalLength: set(Param::Fx), set(Param::Fy); break;
+    case Effect::FocalLength: set(Param::Fx); break;  // fy follows at the nominal aspect (set_param)
     case Effect::GyroBias: set(Param::BiasX), set(Param::BiasY), set(Param::BiasZ); break;
     case Effect::LeverArm: set(Param::LeverX), set(Param::LeverY), set(Param::LeverZ); break;
     case Effect::MountRotation: set(Param::MountX), set(Param::MountY), set(Param::MountZ); break;

@@ -108,18 +108,20 @@ namespace {
 
 // The fit's coordinates: x_j = (p_j - start_j) / scale_j for the free parameters.
 struct Coordinates {
+  const NominalModel& nominal;
   ModelParams start;
   std::vector<Param> free;
   Eigen::VectorXd scale, lo, hi;
 
-  Coordinates(const DiagnosisModel& m, ModelParams s, const ParamMask& mask) : start(s) {
+  Coordinates(const DiagnosisModel& m, ModelParams s, const ParamMask& mask)
+      : nominal(m.recording().nominal), start(s) {
     for (int k = 0; k < kParamCount; ++k)
       if (mask[k]) free.push_back(Param(k));
     const int n = static_cast<int>(free.size());
     scale.resize(n), lo.resize(n), hi.resize(n);
     for (int j = 0; j < n; ++j) {
       const auto [a, b] = param_bounds(free[j], m);
-      start[free[j]] = std::clamp(start[free[j]], a, std::max(a, b));
+      set_param(start, free[j], std::clamp(start[free[j]], a, std::max(a, b)), nominal);
       scale[j] = param_scale(free[j], m.recording().nominal);
       lo[j] = (a - start[free[j]]) / scale[j];
       hi[j] = (std::max(a, b) - start[free[j]]) / scale[j];
@@ -127,7 +129,7 @@ struct Coordinates {
   }
   ModelParams at(const double* x) const {
     ModelParams p = start;
-    for (size_t j = 0; j < free.size(); ++j) p[free[j]] += x[j] * scale[j];
+    for (size_t j = 0; j < free.size(); ++j) set_param(p, free[j], start[free[j]] + x[j] * scale[j], nominal);
     return p;
   }
 };

@@ -37,6 +37,11 @@ ModelParams nominal_params(const NominalModel& n) {
   return p;  // gyro bias and mount rotation: the nominal model has none
 }
 
+void set_param(ModelParams& p, Param q, double v, const NominalModel& n) {
+  p[q] = v;
+  if (q == Param::Fx) p[Param::Fy] = v * n.cam.fy / n.cam.fx;
+}
+
 double param_scale(Param p, const NominalModel& n) {
   switch (p) {
     case Param::LineDelay: return 0.1 / (n.frame_rate_hz * n.cam.height);  // 10% of a full-frame readout

@@ -60,6 +60,11 @@ ModelParams nominal_params(const NominalModel& n);
 // A typical size of a change of each parameter: the fit works in these units so that one
 // step size suits all (a line delay of 1e-5 s and a focal length of 900 px alike).
 double param_scale(Param p, const NominalModel& n);
+// Sets parameter q of p to v. Pixels are square (to far better than a diagnosis resolves), so
+// the focal_length effect is one focal scale: setting fx sets fy at the nominal's aspect. Fitted
+// apart, fy stood in for the vertical stretch a rolling shutter gives a pan (a 13% focal error
+// under parallax came out as fx and fy 5% apart, and was refused). Fy is never free on its own.
+void set_param(ModelParams& p, Param q, double v, const NominalModel& n);
 
 // Landmarks recordings with a trajectory, matches recordings with a gyro. Not thread-safe:
 // the gyro track of the last few bias values is cached inside.

@@ -22,12 +22,6 @@ Excess excess(const ModelParams& p, Effect e) {
   std::ostringstream o;
   Excess x;
   switch (e) {
-    case Effect::FocalLength: {
-      const double a = std::abs(p[Param::Fx] / p[Param::Fy] - 1);
-      x.beyond = over(a, 0.01, 0.002);
-      o << "fx and fy differ by " << 100 * a << "%: pixels are square to within 1%";
-      break;
-    }
     case Effect::GyroBias: {
       const double b = Eigen::Vector3d(p[Param::BiasX], p[Param::BiasY], p[Param::BiasZ]).norm();
       x.beyond = over(b, 0.1, 0.02);

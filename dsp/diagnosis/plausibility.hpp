@@ -1,9 +1,7 @@
 // What a real rig can plausibly have, as a penalty on a hypothesis (in chi-square units, added
 // to its BIC): an effect whose fitted value lies beyond what the physics allows is more likely
 // standing in for something else. Each bound is soft: every `width` beyond it costs one
-// sigma squared.
-//   - focal_length: pixels are square to within 1% (fx/fy; width 0.2%). A phone's 6%
-//     anisotropy stood in for a camera turned on its mount.
+// sigma squared. (Pixels are square by construction: the focal length is one scale, set_param.)
 //   - gyro_bias: a MEMS gyro's bias stays within 0.1 rad/s (about 6 deg/s; width 0.02 rad/s).
 //     A bias of 66-86 mrad/s stood in for parallax.
 //   - gyro_scale: a scale factor within 5% of one per axis (width 1%).

@@ -25,7 +25,8 @@ Eigen::MatrixXd residual_jacobian(const DiagnosisModel& m, const ModelParams& at
   for (size_t j = 0; j < free.size(); ++j) {
     const double h = 1e-2 * param_scale(free[j], m.recording().nominal);
     ModelParams hi = at, lo = at;
-    hi[free[j]] += h, lo[free[j]] -= h;
+    set_param(hi, free[j], at[free[j]] + h, m.recording().nominal);
+    set_param(lo, free[j], at[free[j]] - h, m.recording().nominal);
     const auto rh = m.residuals(hi, idx), rl = m.residuals(lo, idx);
     for (size_t k = 0; k < idx.size(); ++k) {
       const Eigen::Vector2d g = (rh[k] - rl[k]) / (2 * h);
@@ -94,19 +95,22 @@ std::optional<Eigen::VectorXd> parameter_variances(const DiagnosisModel& m, cons
 
 std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, const std::vector<NamedEffect>& effects,
                                                    const ModelParams& fitted, const std::vector<int>& fit) {
-  // Every continuous parameter of every named effect is free at once.
+  // Every continuous parameter of every named effect is free at once; fy follows fx (set_param).
   std::vector<Param> free;
   for (const NamedEffect& e : effects)
     for (const EffectParam& p : e.params)
-      if (const auto k = param_by_name(p.name); k && p.text.empty() &&
+      if (const auto k = param_by_name(p.name); k && *k != Param::Fy && p.text.empty() &&
                                                  std::find(free.begin(), free.end(), *k) == free.end())
         free.push_back(*k);
+  const NominalModel& n = m.recording().nominal;
   const std::optional<Eigen::VectorXd> var = parameter_variances(m, fitted, free, fit);
   auto sigma_of = [&](Param p) -> std::optional<double> {
+    const double follows = p == Param::Fy ? n.cam.fy / n.cam.fx : 1.0;
+    if (p == Param::Fy) p = Param::Fx;
     const auto it = std::find(free.begin(), free.end(), p);
     if (!var || it == free.end()) return std::nullopt;
     const double v = (*var)[it - free.begin()];
-    return v >= 0 ? std::optional<double>(std::sqrt(v)) : std::nullopt;
+    return v >= 0 ? std::optional<double>(follows * std::sqrt(v)) : std::nullopt;
   };
 
   std::vector<ParamUncertainty> out;
