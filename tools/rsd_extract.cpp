@@ -23,9 +23,11 @@
 
 #include "tools/common/cli_util.hpp"
 #include "formats/image_file.hpp"
+#include "formats/gcsv.hpp"
 #include "formats/gpmf_mp4.hpp"
 #include "formats/sensor_csv.hpp"
 #include "formats/video_file.hpp"
+#include "formats/video_frame_times.hpp"
 #include "formats/image_t_codec.hpp"
 #include "formats/intrinsics_file.hpp"
 #include "formats/lcm_log.hpp"
@@ -66,14 +68,16 @@ constexpr const char* kDescription =
     "With --images it writes an images recording instead: the frames as PNG files and the motion.\n"
     "Given an images recording directory (a phone's frames and gyro, say), it makes the observations\n"
     "from the pictures, with the recording's own recording.yaml as the nominal model.\n"
-    "Given a GoPro MP4, or any video with --frame-times and --gyro-csv (a phone logger's files), it\n"
-    "writes an images recording whose pictures stay in the video.\n\n"
+    "Given a GoPro MP4, any video with --frame-times and --gyro-csv (a phone logger's files), or any\n"
+    "video with --gcsv (gyroflow's sidecar gyro log), it writes an images recording whose pictures\n"
+    "stay in the video.\n\n"
     "Examples:\n"
     "  rsd-extract run.lcmlog rec/ --nominal nominal.yaml --assume-global-shutter \\\n"
     "      --target checkerboard:9x7:0.05 && rsd-diagnose rec/ --json diagnosis.json\n"
     "  rsd-extract run.lcmlog pictures/ --nominal nominal.yaml --images\n"
     "  rsd-extract pictures/ rec/\n"
     "  rsd-extract video.mp4 rec/ --frame-times frames.txt --gyro-csv gyro.csv --time-unit ns --nominal phone.yaml\n"
+    "  rsd-extract clip.mp4 rec/ --gcsv clip.gcsv --intrinsics camchain.yaml\n"
     "Exit status: 0 on success, 2 on bad arguments, 1 on other errors. See docs/extract.md.";
 
 struct Options {
@@ -86,6 +90,7 @@ struct Options {
   // A video with its frames' times and gyro as text (a phone logger's files).
   std::string frame_times, gyro_csv, gyro_columns = "t,wx,wy,wz", time_unit = "s";
   long first_frame_index = 0;
+  std::string gcsv;  // a video with gyroflow's .gcsv sidecar log
   TrackOptions track;
 };
 
@@ -167,7 +172,7 @@ Nominal nominal_model(const Options& o, const MotionLog& s) {
   std::string line_delay_from = "global shutter (nothing says otherwise)";
   bool line_delay_given = false;
   // Lowest precedence first: the log's metadata, then the intrinsics file, the nominal file, options.
-  if (f0.line_delay_s) n.model.time.line_delay_s = *f0.line_delay_s, line_delay_from = "the log's line_delay_ns metadata";
+  if (f0.line_delay_s) n.model.time.line_delay_s = *f0.line_delay_s, line_delay_from = "the log's metadata (line_delay_ns, or a .gcsv's frame_readout_time)";
   if (f0.readout) n.model.time.readout = *f0.readout;
   if (!o.intrinsics.empty()) {
     const formats::Intrinsics in = formats::load_intrinsics(o.intrinsics, o.intrinsics_camera);
@@ -392,8 +397,40 @@ int run_on_video_with_csv(const Options& o) {
   return write_video_recording(o, s);
 }
 
+// rsd-extract VIDEO OUT --gcsv LOG: a video with gyroflow's sidecar gyro log (formats/gcsv.hpp).
+// The log's times count from the video's first frame on the same clock (as gyroflow's format
+// asks of a camera); rsd-diagnose's time_offset measures what they do not. Its readout time and
+// direction are the nominal timing unless options or --nominal say otherwise.
+int run_on_video_with_gcsv(const Options& o) {
+  if (!o.target.empty()) throw UsageError("--gcsv: the motion is a gyro; --target needs a trajectory");
+  if (!o.gyro_csv.empty() || !o.frame_times.empty()) throw UsageError("--gcsv is the video's gyro: not with --gyro-csv or --frame-times");
+  const formats::GcsvLog g = formats::read_gcsv(o.gcsv);
+  const std::vector<double> times = formats::read_video_frame_times(o.log);
+  const formats::VideoReader video(o.log);
+  std::optional<double> line_delay;
+  std::optional<dsp::Readout> readout;
+  if (g.readout_direction && *g.readout_direction > 1)
+    std::fprintf(stderr, "rsd-extract: %s: frame_readout_direction %d reads columns; rsd's rolling shutter reads rows, so its readout is "
+                 "left out of the nominal model\n", o.gcsv.c_str(), *g.readout_direction);
+  else if (g.frame_readout_s) {
+    line_delay = *g.frame_readout_s / video.height();
+    readout = g.readout_direction == 1 ? dsp::Readout::BottomToTop : dsp::Readout::TopToBottom;
+  }
+  MotionLog s;
+  for (double t : times) s.frames.push_back({t, line_delay, readout, video.width(), video.height()});
+  s.gyro = g.gyro;
+  s.gyro_frame = static_cast<int>(rsd::velocity_t::FRAME_IMU);
+  s.channels = {{o.log + " video", static_cast<int>(times.size())}, {o.gcsv, static_cast<int>(g.gyro.size())}};
+  s.events = static_cast<int>(times.size() + g.gyro.size());
+  std::fprintf(stderr, "rsd-extract: %zu frames at %dx%d from %s, %zu gyro samples from %s (id '%s', orientation '%s': gyroflow's axes "
+               "convention, not read; rsd-diagnose --imu-axes search finds the axes)\n", times.size(), video.width(), video.height(),
+               o.log.c_str(), g.gyro.size(), o.gcsv.c_str(), g.id.c_str(), g.orientation.c_str());
+  return write_video_recording(o, s);
+}
+
 int run(const Options& o) {
   if (std::filesystem::is_directory(o.log)) return run_on_recording(o);
+  if (!o.gcsv.empty()) return run_on_video_with_gcsv(o);
   if (!o.gyro_csv.empty()) return run_on_video_with_csv(o);
   if (!o.frame_times.empty()) throw UsageError("--frame-times goes with --gyro-csv (a video with its gyro as text)");
   if (looks_like_mp4(o.log)) return run_on_gopro_clip(o);
@@ -458,7 +495,7 @@ int main(int argc, char** argv) {
   CLI::App app(kDescription, "rsd-extract");
   app.add_option("INPUT", o.log,
                  "LCM log with raw frames and motion, an images recording directory, a GoPro MP4 (its GPMF gyro), or a video "
-                 "with --frame-times and --gyro-csv")
+                 "with --frame-times and --gyro-csv, or with --gcsv")
       ->required()->check(CLI::ExistingPath);
   app.add_option("OUTDIR", o.out, "Observation recording directory to write (created)")->required();
   app.add_option("--nominal", o.nominal, "YAML with recording.yaml's camera: / timing: / motion: keys (a recording.yaml will do)")
@@ -486,6 +523,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--time-unit", o.time_unit, "unit of the times in --frame-times and --gyro-csv")
       ->check(CLI::IsMember({"s", "ms", "us", "ns"}))->capture_default_str();
+  app.add_option("--gcsv", o.gcsv, "the video's gyro as gyroflow's .gcsv log (times from the video's first frame; its readout time and direction the nominal timing)")
+      ->check(CLI::ExistingFile);
   app.add_option("--first-frame-index", o.first_frame_index, "the line of --frame-times (from 0) that is the video's first frame")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--image-channel", o.image_channel, "bot_core.image_t channel")->capture_default_str();

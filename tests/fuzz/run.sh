@@ -16,7 +16,7 @@ merge=0
 if [ "${1:-}" = "--merge" ]; then merge=1; shift; fi
 minutes=${1:-10}
 [ $# -gt 0 ] && shift
-all="config calibration intrinsics scenario recording images_recording lcm_log lcm_message lcm_transport image gpmf sensor_csv replay"
+all="config calibration intrinsics scenario recording images_recording lcm_log lcm_message lcm_transport image gpmf sensor_csv gcsv replay"
 targets=${*:-$all}
 case $minutes in ''|*[!0-9.]*) echo "run.sh: MINUTES must be a number, not '$minutes'" >&2; exit 2 ;; esac
 for t in $targets; do
