@@ -1,35 +1,19 @@
 #include "formats/gpmf_mp4.hpp"
 
-extern "C" {
-#include <libavformat/avformat.h>
-#include <libavutil/error.h>
-}
-
 #include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
 
 #include "formats/gpmf.hpp"
+#include "formats/libav_handles.hpp"
 
 namespace rsd::formats {
 
 namespace {
 
-struct FormatCloser {
-  void operator()(AVFormatContext* c) const { avformat_close_input(&c); }
-};
-struct PacketFreer {
-  void operator()(AVPacket* p) const { av_packet_free(&p); }
-};
-
-std::string av_error(int code) {
-  char text[AV_ERROR_MAX_STRING_SIZE] = {};
-  av_strerror(code, text, sizeof text);
-  return text;
-}
-
-double seconds(int64_t t, AVRational base) { return static_cast<double>(t) * base.num / base.den; }
+using libav::error_text;
+using libav::seconds;
 
 // One metadata sample: its bytes and its span on the MP4's clock.
 struct Payload {
@@ -64,14 +48,15 @@ void add_gyro(const Payload& p, int index, const std::string& path, GpmfVideo& o
 }  // namespace
 
 GpmfVideo read_gpmf_video(const std::string& path) {
+  libav::quiet();
   AVFormatContext* raw = nullptr;
   // The MP4 demuxer only: libavformat would take other files for something else (a raw GPMF
   // payload for a picture).
   if (const int e = avformat_open_input(&raw, path.c_str(), av_find_input_format("mp4"), nullptr); e < 0)
-    throw std::runtime_error(path + ": cannot open as an MP4: " + av_error(e));
-  const std::unique_ptr<AVFormatContext, FormatCloser> ctx(raw);
+    throw std::runtime_error(path + ": cannot open as an MP4: " + error_text(e));
+  const libav::Format ctx(raw);
   if (const int e = avformat_find_stream_info(ctx.get(), nullptr); e < 0)
-    throw std::runtime_error(path + ": cannot read its streams: " + av_error(e));
+    throw std::runtime_error(path + ": cannot read its streams: " + error_text(e));
   const int video = av_find_best_stream(ctx.get(), AVMEDIA_TYPE_VIDEO, -1, -1, nullptr, 0);
   if (video < 0) throw std::runtime_error(path + ": no video stream");
   const int meta = gpmf_stream(*ctx);
@@ -82,9 +67,9 @@ GpmfVideo read_gpmf_video(const std::string& path) {
   GpmfVideo out;
   out.width = vs.codecpar->width, out.height = vs.codecpar->height;
   std::vector<Payload> payloads;
-  const std::unique_ptr<AVPacket, PacketFreer> pkt(av_packet_alloc());
+  const libav::Packet pkt(av_packet_alloc());
   for (int e; (e = av_read_frame(ctx.get(), pkt.get())) != AVERROR_EOF; av_packet_unref(pkt.get())) {
-    if (e < 0) throw std::runtime_error(path + ": cannot read: " + av_error(e));
+    if (e < 0) throw std::runtime_error(path + ": cannot read: " + error_text(e));
     const int64_t pts = pkt->pts != AV_NOPTS_VALUE ? pkt->pts : pkt->dts;
     if (pkt->stream_index == video) {
       if (pts == AV_NOPTS_VALUE) throw std::runtime_error(path + ": a video frame without a time stamp");

@@ -1,53 +1,33 @@
 #include "formats/video_frame_times.hpp"
 
-extern "C" {
-#include <libavformat/avformat.h>
-#include <libavutil/error.h>
-}
-
 #include <algorithm>
-#include <memory>
 #include <stdexcept>
+
+#include "formats/libav_handles.hpp"
 
 namespace rsd::formats {
 
-namespace {
-
-struct FormatCloser {
-  void operator()(AVFormatContext* c) const { avformat_close_input(&c); }
-};
-struct PacketFreer {
-  void operator()(AVPacket* p) const { av_packet_free(&p); }
-};
-
-std::string av_error(int code) {
-  char text[AV_ERROR_MAX_STRING_SIZE] = {};
-  av_strerror(code, text, sizeof text);
-  return text;
-}
-
-}  // namespace
-
 std::vector<double> read_video_frame_times(const std::string& path) {
+  libav::quiet();
   AVFormatContext* raw = nullptr;
   if (const int e = avformat_open_input(&raw, path.c_str(), nullptr, nullptr); e < 0)
-    throw std::runtime_error(path + ": cannot open as a video: " + av_error(e));
-  const std::unique_ptr<AVFormatContext, FormatCloser> ctx(raw);
+    throw std::runtime_error(path + ": cannot open as a video: " + libav::error_text(e));
+  const libav::Format ctx(raw);
   if (const int e = avformat_find_stream_info(ctx.get(), nullptr); e < 0)
-    throw std::runtime_error(path + ": cannot read its streams: " + av_error(e));
+    throw std::runtime_error(path + ": cannot read its streams: " + libav::error_text(e));
   const int video = av_find_best_stream(ctx.get(), AVMEDIA_TYPE_VIDEO, -1, -1, nullptr, 0);
   if (video < 0) throw std::runtime_error(path + ": no video stream");
   const AVRational base = ctx->streams[video]->time_base;
   const int64_t start = ctx->streams[video]->start_time;
   std::vector<double> t;
-  const std::unique_ptr<AVPacket, PacketFreer> pkt(av_packet_alloc());
+  const libav::Packet pkt(av_packet_alloc());
   for (int e; (e = av_read_frame(ctx.get(), pkt.get())) != AVERROR_EOF; av_packet_unref(pkt.get())) {
-    if (e < 0) throw std::runtime_error(path + ": cannot read: " + av_error(e));
+    if (e < 0) throw std::runtime_error(path + ": cannot read: " + libav::error_text(e));
     if (pkt->stream_index != video) continue;
     int64_t pts = pkt->pts != AV_NOPTS_VALUE ? pkt->pts : pkt->dts;
     if (pts == AV_NOPTS_VALUE) throw std::runtime_error(path + ": video frame " + std::to_string(t.size()) + " has no time stamp");
     if (start != AV_NOPTS_VALUE) pts -= start;  // the video's first frame at 0, as a sidecar log counts
-    t.push_back(static_cast<double>(pts) * base.num / base.den);
+    t.push_back(libav::seconds(pts, base));
   }
   std::sort(t.begin(), t.end());  // decode order -> display order
   if (t.empty()) throw std::runtime_error(path + ": its video stream holds no frame");
