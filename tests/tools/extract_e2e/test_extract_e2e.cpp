@@ -139,7 +139,7 @@ TEST(ExtractDiagnose, LandmarksFromACheckerboardNameTheRollingShutterAndOnlyIt) 
                "/nominal.yaml --target checkerboard:9x7:0.04",
            dir + "/extract-true.txt");
   EXPECT_NEAR(formats::read_recording(dir + "/rec-true").nominal.time.line_delay_s, truth, 1e-12);
-  EXPECT_NE(slurp(dir + "/extract-true.txt").find("line_delay_ns metadata"), std::string::npos) << slurp(dir + "/extract-true.txt");
+  EXPECT_NE(slurp(dir + "/extract-true.txt").find("the log's metadata (line_delay_ns"), std::string::npos) << slurp(dir + "/extract-true.txt");
   must_run(std::string(RSD_DIAGNOSE) + " " + dir + "/rec-true --json " + dir + "/diagnosis-true.json", dir + "/diagnose-true.txt");
   expect_no_other_effects(read_verdict(dir + "/diagnosis-true.json"), {}, slurp(dir + "/diagnosis-true.json"));
 }
