@@ -122,7 +122,7 @@ struct Coordinates {
     for (int j = 0; j < n; ++j) {
       const auto [a, b] = param_bounds(free[j], m);
       set_param(start, free[j], std::clamp(start[free[j]], a, std::max(a, b)), nominal);
-      scale[j] = param_scale(free[j], m.recording().nominal);
+      scale[j] = param_scale(free[j], nominal);
       lo[j] = (a - start[free[j]]) / scale[j];
       hi[j] = (std::max(a, b) - start[free[j]]) / scale[j];
     }
