@@ -4,48 +4,33 @@
 // kind from detecting a checkerboard or AprilGrid (dsp/features/target_observations.hpp). The nominal
 // model is the user's (--nominal / --intrinsics and the timing options); see docs/extract.md.
 #include <CLI/CLI.hpp>
-#include <bot_core/image_t.hpp>
-#include <bot_core/pose_t.hpp>
-#include <opencv2/imgproc.hpp>
 #include <rsd/velocity_t.hpp>
 
-#include <algorithm>
-#include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <map>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
-#include "tools/common/cli_util.hpp"
+#include "dsp/features/feature_tracks.hpp"
+#include "dsp/features/target_observations.hpp"
 #include "formats/image_file.hpp"
-#include "formats/gcsv.hpp"
-#include "formats/gpmf_mp4.hpp"
-#include "formats/sensor_csv.hpp"
-#include "formats/video_file.hpp"
-#include "formats/video_frame_times.hpp"
-#include "formats/image_t_codec.hpp"
-#include "formats/intrinsics_file.hpp"
 #include "formats/lcm_log.hpp"
 #include "formats/motion_log.hpp"
-#include "formats/yaml_map.hpp"
-#include "dsp/core/statistics.hpp"
-#include "dsp/features/feature_tracks.hpp"
-#include "tools/common/frame_sources.hpp"
-#include "tools/common/picture_observations.hpp"
 #include "formats/recording_v1.hpp"
 #include "formats/target_spec.hpp"
-#include "formats/nominal_sections.hpp"
-#include "dsp/features/target_observations.hpp"
+#include "tools/common/cli_util.hpp"
+#include "tools/common/frame_sources.hpp"
+#include "tools/common/picture_observations.hpp"
+#include "tools/extract/extract_options.hpp"
+#include "tools/extract/nominal_model.hpp"
+#include "tools/extract/video_inputs.hpp"
 
 namespace formats = rsd::formats;
 using namespace rsd;
 using namespace rsd::tools;
 using namespace rsd::dsp;
+using namespace rsd::tools::extract;
 
 using formats::MotionLog;
 using formats::channel_list;
@@ -80,125 +65,6 @@ constexpr const char* kDescription =
     "  rsd-extract clip.mp4 rec/ --gcsv clip.gcsv --intrinsics camchain.yaml\n"
     "Exit status: 0 on success, 2 on bad arguments, 1 on other errors. See docs/extract.md.";
 
-struct Options {
-  std::string log, out, nominal, intrinsics, intrinsics_camera, kind = "auto", target;
-  std::string image_channel = "RSD_RAW", velocity_channel = "RSD_VELOCITY", pose_channel = "RSD_POSE";
-  bool global_shutter = false;
-  bool images = false;  // write an images recording (the pictures) instead of observations
-  std::optional<double> line_delay_s, frame_rate_hz, time_offset_s, noise_px;
-  std::string readout, imu_to_camera, lever_arm;
-  // A video with its frames' times and gyro as text (a phone logger's files).
-  std::string frame_times, gyro_csv, gyro_columns = "t,wx,wy,wz", time_unit = "s";
-  long first_frame_index = 0;
-  std::string gcsv;  // a video with gyroflow's .gcsv sidecar log
-  TrackOptions track;
-};
-
-// ---------------------------------------------------------------- the nominal model
-
-Eigen::Matrix3d rotation(const std::vector<double>& r, const std::string& what) {
-  const Eigen::Matrix3d R = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(r.data());
-  if ((R * R.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-6 || R.determinant() < 0)
-    throw UsageError(what + ": not a rotation matrix (row-major, orthonormal, determinant +1)");
-  return R;
-}
-
-// What the user says the camera is, with where each value came from (printed on stderr).
-struct Nominal {
-  dsp::NominalModel model;
-  bool have_camera = false;
-  std::optional<Eigen::Matrix3d> imu_to_camera;
-  std::vector<std::string> notes;
-};
-
-// --nominal: recording.yaml's camera, timing and motion keys; a whole recording.yaml is
-// accepted (its other keys are ignored), so a simulator's header can serve as the nominal.
-void read_nominal_file(const std::string& file, Nominal& n, bool& line_delay_given) {
-  formats::YamlMap root = formats::YamlMap::load(file);
-  if (root.has("camera")) {
-    formats::YamlMap c = root.map("camera");
-    if (!c.has("fx")) c.fail("fx", "is missing (the nominal focal length, pixels)");
-    n.model.cam = formats::read_camera_section(c, n.model.cam);
-    n.have_camera = true;
-  }
-  if (root.has("timing")) {
-    formats::YamlMap t = root.map("timing");
-    if (t.has("line_delay_s")) line_delay_given = true;
-    formats::read_timing_section(t, n.model);
-  }
-  if (root.has("motion")) {
-    formats::YamlMap m = root.map("motion");
-    formats::read_motion_extrinsics(m, n.model);
-    if (m.has("imu_to_camera")) n.imu_to_camera = n.model.imu_to_camera;
-    m.text("kind", ""), m.text("file", "");  // a recording.yaml's own files: not ours to follow
-    m.finish();
-  }
-  if (root.has("observations")) root.map("observations");
-  root.text("format", ""), root.text("frames", ""), root.number("noise_px", 0.0);
-  root.finish();
-}
-
-// The options, highest precedence, over what the files and the log said.
-void apply_options(const Options& o, Nominal& n, std::string& line_delay_from) {
-  if (o.frame_rate_hz) n.model.frame_rate_hz = *o.frame_rate_hz;
-  if (o.time_offset_s) n.model.time.time_offset_s = *o.time_offset_s;
-  if (!o.readout.empty() && !dsp::parse_readout(o.readout, n.model.time.readout))
-    throw UsageError("--readout: expected top_to_bottom or bottom_to_top, got '" + o.readout + "'");
-  if (o.line_delay_s) n.model.time.line_delay_s = *o.line_delay_s, line_delay_from = "--line-delay";
-  if (o.global_shutter) n.model.time.line_delay_s = 0, line_delay_from = "--assume-global-shutter";
-  if (!o.lever_arm.empty()) n.model.lever_arm = *parse_vec3(o.lever_arm);
-  if (!o.imu_to_camera.empty()) {
-    const std::string expected = "--imu-to-camera: expected nine comma-separated numbers, got '" + o.imu_to_camera + "'";
-    std::vector<double> r;
-    std::stringstream in(o.imu_to_camera);
-    for (std::string x; std::getline(in, x, ',');) {
-      const auto v = parse_number(x);
-      if (!v) throw UsageError(expected);
-      r.push_back(*v);
-    }
-    if (r.size() != 9) throw UsageError(expected);
-    n.imu_to_camera = rotation(r, "--imu-to-camera");
-  }
-}
-
-Nominal nominal_model(const Options& o, const MotionLog& s) {
-  Nominal n;
-  const formats::LogFrame& f0 = s.frames.front();
-  n.model.cam.width = f0.width, n.model.cam.height = f0.height;
-  n.model.cam.cx = 0.5 * (f0.width - 1), n.model.cam.cy = 0.5 * (f0.height - 1);
-  std::vector<double> dt;
-  for (size_t k = 1; k < s.frames.size(); ++k) dt.push_back(s.frames[k].t - s.frames[k - 1].t);
-  if (!dt.empty() && median(dt) > 0) n.model.frame_rate_hz = 1.0 / median(dt);
-  std::string line_delay_from = "global shutter (nothing says otherwise)";
-  bool line_delay_given = false;
-  // Lowest precedence first: the log's metadata, then the intrinsics file, the nominal file, options.
-  if (f0.line_delay_s) n.model.time.line_delay_s = *f0.line_delay_s, line_delay_from = "the log's metadata (line_delay_ns, or a .gcsv's frame_readout_time)";
-  if (f0.readout) n.model.time.readout = *f0.readout;
-  if (!o.intrinsics.empty()) {
-    const formats::Intrinsics in = formats::load_intrinsics(o.intrinsics, o.intrinsics_camera);
-    n.model.cam = in.cam, n.have_camera = true;
-    if (in.line_delay_s) n.model.time.line_delay_s = *in.line_delay_s, line_delay_from = in.source;
-    if (in.timeshift_cam_imu_s) n.model.time.time_offset_s = *in.timeshift_cam_imu_s;  // t_imu = t_cam + shift
-    n.notes.push_back("intrinsics from " + in.source);
-  }
-  if (!o.nominal.empty()) {
-    if (!o.intrinsics.empty()) {
-      formats::YamlMap probe = formats::YamlMap::load(o.nominal);
-      if (probe.has("camera")) throw UsageError("--nominal " + o.nominal + " has a camera: block and --intrinsics was given: state the camera once");
-    }
-    read_nominal_file(o.nominal, n, line_delay_given);
-    if (line_delay_given) line_delay_from = o.nominal;
-  }
-  if (!n.have_camera)
-    throw UsageError("no nominal intrinsics: give --nominal FILE with a camera: block (fx, fy, cx, cy) or --intrinsics FILE");
-  if (n.model.cam.width != f0.width || n.model.cam.height != f0.height)
-    throw UsageError("the nominal camera is " + std::to_string(n.model.cam.width) + "x" + std::to_string(n.model.cam.height) +
-                     " but " + o.log + " has " + std::to_string(f0.width) + "x" + std::to_string(f0.height) + " frames on " + o.image_channel);
-  apply_options(o, n, line_delay_from);
-  n.notes.push_back("line delay " + format_number(n.model.time.line_delay_s, 6) + " s from " + line_delay_from);
-  return n;
-}
-
 // ---------------------------------------------------------------- pass 2: observations
 
 // The log's frames, read a second time, as pictures for tools/common/picture_observations.
@@ -217,24 +83,6 @@ struct LogPictures {
     };
   }
 };
-
-std::vector<bool> covered(const MotionLog& s, const Nominal& n, bool by_gyro) {
-  std::vector<double> t;
-  for (const formats::LogFrame& f : s.frames) t.push_back(f.t);
-  return covered_by_motion(t, by_gyro ? s.gyro.front().t : s.poses.front().t, by_gyro ? s.gyro.back().t : s.poses.back().t,
-                           n.model);
-}
-
-// The frames whose readout the motion covers, as the recording's frames (numbered by their place
-// in the input); none is an error.
-std::vector<dsp::FrameStamp> covered_frames(const MotionLog& s, const std::vector<bool>& ok, const std::string& input) {
-  std::vector<dsp::FrameStamp> frames;
-  for (size_t k = 0; k < s.frames.size(); ++k)
-    if (ok[k]) frames.push_back({static_cast<int>(k), s.frames[k].t});
-  if (frames.empty())
-    throw std::runtime_error(input + ": the motion does not cover any frame's readout (frames and motion on different clocks?)");
-  return frames;
-}
 
 // ---------------------------------------------------------------- the run
 
@@ -306,126 +154,6 @@ int run_on_recording(const Options& o) {
   formats::write_recording(o.out, rec);
   std::printf("rsd-extract: wrote a %s recording (%zu frames) to %s\n", dsp::to_string(rec.kind), rec.frames.size(), o.out.c_str());
   return 0;
-}
-
-// An MP4 (ISO base media file: "ftyp" at byte 4).
-bool looks_like_mp4(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  char head[8] = {};
-  return in.read(head, 8) && std::memcmp(head + 4, "ftyp", 4) == 0;
-}
-
-// A GoPro clip's frames and GPMF gyro as the motion log the rest of rsd-extract reads.
-MotionLog motion_of(const formats::GpmfVideo& v, const std::string& clip) {
-  MotionLog s;
-  for (double t : v.frame_t_s) s.frames.push_back({t, std::nullopt, std::nullopt, v.width, v.height});
-  for (size_t i = 0; i < v.gyro_t_s.size(); ++i) s.gyro.push_back({v.gyro_t_s[i], v.gyro_rad_s[i]});
-  s.gyro_frame = static_cast<int>(rsd::velocity_t::FRAME_IMU);  // a value: the constant has no definition to bind to
-  s.channels = {{clip + " video", static_cast<int>(v.frame_t_s.size())}, {clip + " GPMF", v.payloads}};
-  s.events = static_cast<int>(v.frame_t_s.size()) + v.payloads;
-  return s;
-}
-
-// A video's frames and a gyro in IMU axes (s) as an images recording whose pictures stay in the
-// video (observations.video), for rsd-diagnose OUT and rsd --replay OUT. The gyro's axes in the
-// camera are what --imu-to-camera (or --nominal's motion.imu_to_camera) says, else the identity:
-// rsd-diagnose --imu-axes search asks the pictures.
-int write_video_recording(const Options& o, const MotionLog& s) {
-  Nominal n = nominal_model(o, s);
-  if (n.imu_to_camera) n.model.imu_to_camera = *n.imu_to_camera;
-  else
-    n.notes.push_back("the gyro's axes in the camera: not given, taken as the identity (rsd-diagnose --imu-axes search "
-                      "finds them from the pictures; --imu-to-camera states them)");
-  dsp::Recording rec;
-  rec.kind = dsp::ObservationKind::Matches;
-  rec.motion = dsp::MotionKind::Gyro;
-  rec.gyro = s.gyro;
-  rec.noise_px = o.noise_px;
-  rec.nominal = n.model;
-  for (const std::string& note : n.notes) std::fprintf(stderr, "rsd-extract: %s\n", note.c_str());
-  const std::vector<bool> ok = covered(s, n, true);
-  rec.frames = covered_frames(s, ok, o.log);
-  formats::ImagesRecording out;
-  out.rec = rec;
-  out.video = o.log;
-  std::filesystem::create_directories(o.out);
-  formats::write_images_recording(o.out, out);
-  std::printf("rsd-extract: wrote an images recording (%zu of %zu frames, the pictures in %s; %zu gyro samples) to %s\n",
-              rec.frames.size(), s.frames.size(), o.log.c_str(), rec.gyro.size(), o.out.c_str());
-  return 0;
-}
-
-// rsd-extract CLIP.mp4 OUT: a GoPro clip (its GPMF gyro) as an images recording.
-int run_on_gopro_clip(const Options& o) {
-  if (!o.target.empty()) throw UsageError(o.log + " is a GoPro clip: its motion is its gyro; --target needs a trajectory");
-  std::fprintf(stderr, "rsd-extract: reading the GoPro clip %s\n", o.log.c_str());
-  const formats::GpmfVideo v = formats::read_gpmf_video(o.log);
-  std::fprintf(stderr, "rsd-extract: %zu frames at %dx%d, %zu gyro samples in %d GPMF payloads (%s, ORIN '%s')\n", v.frame_t_s.size(),
-               v.width, v.height, v.gyro_t_s.size(), v.payloads, v.device.c_str(), v.orin.c_str());
-  return write_video_recording(o, motion_of(v, o.log));
-}
-
-// rsd-extract VIDEO OUT --frame-times F --gyro-csv G: a phone logger's video with its frames' times
-// and its gyro as text (formats/sensor_csv.hpp); video frame k is line first_frame_index + k of F.
-int run_on_video_with_csv(const Options& o) {
-  if (!o.target.empty()) throw UsageError("--gyro-csv: the motion is a gyro; --target needs a trajectory");
-  if (o.frame_times.empty()) throw UsageError("--gyro-csv needs --frame-times (the video's frames' times)");
-  formats::GyroColumns columns;
-  try {
-    columns = formats::parse_gyro_columns(o.gyro_columns);
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(std::string("--gyro-columns: ") + e.what());
-  }
-  const double unit_s = formats::time_unit_seconds(o.time_unit);  // the option's check allows only known units
-  const std::vector<double> times = formats::read_frame_times(o.frame_times, unit_s);
-  MotionLog s;
-  s.gyro = formats::read_gyro_csv(o.gyro_csv, columns, unit_s);
-  s.gyro_frame = static_cast<int>(rsd::velocity_t::FRAME_IMU);
-  std::fprintf(stderr, "rsd-extract: counting the frames of %s\n", o.log.c_str());
-  formats::VideoReader video(o.log);
-  dsp::Image frame;
-  long n = 0;
-  while (video.next(frame)) ++n;
-  if (o.first_frame_index + n > static_cast<long>(times.size()))
-    throw std::runtime_error(o.log + ": " + std::to_string(n) + " frames, but " + o.frame_times + " lists " + std::to_string(times.size()) +
-                             " times, " + std::to_string(o.first_frame_index) + " of them before the video's first frame (--first-frame-index)");
-  for (long k = 0; k < n; ++k) s.frames.push_back({times[o.first_frame_index + k], std::nullopt, std::nullopt, video.width(), video.height()});
-  s.channels = {{o.log + " video", static_cast<int>(n)}, {o.gyro_csv, static_cast<int>(s.gyro.size())}};
-  s.events = static_cast<int>(n + s.gyro.size());
-  std::fprintf(stderr, "rsd-extract: %ld frames at %dx%d (times from line %ld of %s on), %zu gyro samples from %s\n", n, video.width(),
-               video.height(), o.first_frame_index, o.frame_times.c_str(), s.gyro.size(), o.gyro_csv.c_str());
-  return write_video_recording(o, s);
-}
-
-// rsd-extract VIDEO OUT --gcsv LOG: a video with gyroflow's sidecar gyro log (formats/gcsv.hpp).
-// The log's times count from the video's first frame on the same clock (as gyroflow's format
-// asks of a camera); rsd-diagnose's time_offset measures what they do not. Its readout time and
-// direction are the nominal timing unless options or --nominal say otherwise.
-int run_on_video_with_gcsv(const Options& o) {
-  if (!o.target.empty()) throw UsageError("--gcsv: the motion is a gyro; --target needs a trajectory");
-  if (!o.gyro_csv.empty() || !o.frame_times.empty()) throw UsageError("--gcsv is the video's gyro: not with --gyro-csv or --frame-times");
-  const formats::GcsvLog g = formats::read_gcsv(o.gcsv);
-  const std::vector<double> times = formats::read_video_frame_times(o.log);
-  const formats::VideoReader video(o.log);
-  std::optional<double> line_delay;
-  std::optional<dsp::Readout> readout;
-  if (g.readout_direction && *g.readout_direction > 1)
-    std::fprintf(stderr, "rsd-extract: %s: frame_readout_direction %d reads columns; rsd's rolling shutter reads rows, so its readout is "
-                 "left out of the nominal model\n", o.gcsv.c_str(), *g.readout_direction);
-  else if (g.frame_readout_s) {
-    line_delay = *g.frame_readout_s / video.height();
-    readout = g.readout_direction == 1 ? dsp::Readout::BottomToTop : dsp::Readout::TopToBottom;
-  }
-  MotionLog s;
-  for (double t : times) s.frames.push_back({t, line_delay, readout, video.width(), video.height()});
-  s.gyro = g.gyro;
-  s.gyro_frame = static_cast<int>(rsd::velocity_t::FRAME_IMU);
-  s.channels = {{o.log + " video", static_cast<int>(times.size())}, {o.gcsv, static_cast<int>(g.gyro.size())}};
-  s.events = static_cast<int>(times.size() + g.gyro.size());
-  std::fprintf(stderr, "rsd-extract: %zu frames at %dx%d from %s, %zu gyro samples from %s (id '%s', orientation '%s': gyroflow's axes "
-               "convention, not read; rsd-diagnose --imu-axes search finds the axes)\n", times.size(), video.width(), video.height(),
-               o.log.c_str(), g.gyro.size(), o.gcsv.c_str(), g.id.c_str(), g.orientation.c_str());
-  return write_video_recording(o, s);
 }
 
 int run(const Options& o) {

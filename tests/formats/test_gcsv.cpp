@@ -6,12 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <fstream>
-#include <functional>
 #include <string>
 
 #include "formats/gcsv.hpp"
 #include "formats/video_frame_times.hpp"
+#include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace rsd::formats {
@@ -19,20 +18,8 @@ namespace {
 
 const test::TempDir& g_tmp = test::register_temp_dir("rsd_test_gcsv_");
 
-std::string file_with(const std::string& name, const std::string& text) {
-  const std::string path = g_tmp.path(name);
-  std::ofstream(path) << text;
-  return path;
-}
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string file_with(const std::string& name, const std::string& text) { return g_tmp.file_with(name, text); }
+using test::error_of;
 
 const std::string kHeader =
     "GYROFLOW IMU LOG\n"

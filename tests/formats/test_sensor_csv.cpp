@@ -4,11 +4,10 @@
 // decimals); damaged files refused naming the file, the line and the column.
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <functional>
 #include <string>
 
 #include "formats/sensor_csv.hpp"
+#include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace rsd::formats {
@@ -16,20 +15,8 @@ namespace {
 
 const test::TempDir& g_tmp = test::register_temp_dir("rsd_test_sensor_csv_");
 
-std::string file_with(const std::string& name, const std::string& text) {
-  const std::string path = g_tmp.path(name);
-  std::ofstream(path) << text;
-  return path;
-}
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string file_with(const std::string& name, const std::string& text) { return g_tmp.file_with(name, text); }
+using test::error_of;
 
 TEST(SensorCsv, ColumnsInAnyOrderWithSkippedOnes) {
   const GyroColumns c = parse_gyro_columns("wx,wy,wz,t");

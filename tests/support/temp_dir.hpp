@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <system_error>
 
@@ -20,6 +21,12 @@ class TempDir : public ::testing::Environment {
   std::string path(const std::string& name) const {
     std::filesystem::create_directories(dir_);
     return (dir_ / name).string();
+  }
+  // A file `name` in the directory holding `text`; its path.
+  std::string file_with(const std::string& name, const std::string& text) const {
+    const std::string p = path(name);
+    std::ofstream(p) << text;
+    return p;
   }
   void TearDown() override {
     std::error_code ec;
