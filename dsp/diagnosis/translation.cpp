@@ -78,6 +78,25 @@ Eigen::VectorXd fit_velocity(const Spline& sp, const std::vector<PairSums>& pair
   return ldlt.solve(rhs);
 }
 
+// The scene's slope g (inverse depth 1 + g . xn over the depth at the optical axis) that best
+// explains the inliers' residuals given the translations u: r - f = (g . xn) f, f = J u per
+// observation, linear in g. A light ridge keeps g at zero where the translation shows none.
+template <class Residual>
+Eigen::Vector2d scene_slope(const std::vector<Eigen::Matrix<double, 2, 3>>& J, const std::vector<Eigen::Vector2d>& xn,
+                            const std::vector<int>& pair_of, const std::vector<Eigen::Vector3d>& u, const std::vector<bool>& in,
+                            const Residual& r) {
+  Eigen::Matrix2d N = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d b = Eigen::Vector2d::Zero();
+  for (size_t k = 0; k < J.size(); ++k) {
+    if (!in[k]) continue;
+    const Eigen::Vector2d f = J[k] * u[pair_of[k]];
+    const Eigen::Matrix2d A = f * xn[k].transpose();  // d(flow)/dg
+    N += A.transpose() * A, b += A.transpose() * (r(k) - f);
+  }
+  N.diagonal().array() += 1e-3 * N.trace() + 1e-12;
+  return N.ldlt().solve(b);
+}
+
 }  // namespace
 
 void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
@@ -101,6 +120,7 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   std::vector<PairSums> pairs;
   std::vector<int> pair_of(by_pair.size());
   std::vector<Eigen::Matrix<double, 2, 3>> J(by_pair.size());
+  std::vector<Eigen::Vector2d> xn(by_pair.size());  // normalised image coordinates
   for (size_t k = 0; k < by_pair.size(); ++k) {
     const int i = idx[by_pair[k].second];
     if (k == 0 || !by_pair[k].same_pair(by_pair[k - 1])) {
@@ -112,24 +132,35 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
     }
     pair_of[k] = static_cast<int>(pairs.size()) - 1;
     J[k] = translation_flow(cam, m.observed(i)) * pairs.back().turn;  // per unit u, world axes
+    xn[k] = Eigen::Vector2d((m.observed(i).x() - cam.cx) / cam.fx, (m.observed(i).y() - cam.cy) / cam.fy);
   }
   double t_lo = pairs.front().t, t_hi = t_lo;
   for (const PairSums& p : pairs) t_lo = std::min(t_lo, p.t), t_hi = std::max(t_hi, p.t);
   const Spline sp{t_lo, knot_s, std::max(1, static_cast<int>(std::ceil((t_hi - t_lo) / knot_s)))};
-  // Three passes from no translation: the inliers are the residuals within 4 robust scales of
-  // the current fit (one scale for the whole set: the noise does not depend on the pair, and a
-  // pair with a handful of observations is judged as well as one with hundreds).
+  // Six passes from no translation over a flat scene: the inliers are the residuals within 4
+  // robust scales of the current fit (one scale for the whole set: the noise does not depend on
+  // the pair, and a pair with a handful of observations is judged as well as one with
+  // hundreds). From the fourth on, the scene's slope too (scene_slope): one plane's inverse
+  // depth is affine in the normalised image coordinates, and a ground ahead of a forward-flying
+  // drone or a car leaves, at one depth, pixels of parallax growing towards the image's bottom.
   std::vector<Eigen::Vector3d> u(pairs.size(), Eigen::Vector3d::Zero());
   std::vector<double> len(by_pair.size());
-  auto left = [&](size_t k) { return Eigen::Vector2d(r[by_pair[k].second] - J[k] * u[pair_of[k]]); };
-  for (int pass = 0; pass < 3; ++pass) {
+  std::vector<bool> in(by_pair.size());
+  Eigen::Vector2d slope = Eigen::Vector2d::Zero();
+  auto depth_factor = [&](size_t k) { return 1.0 + slope.dot(xn[k]); };
+  auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * (J[k] * u[pair_of[k]])); };
+  auto left = [&](size_t k) { return Eigen::Vector2d(r[by_pair[k].second] - flow(k)); };
+  for (int pass = 0; pass < 6; ++pass) {
     for (size_t k = 0; k < len.size(); ++k) len[k] = left(k).norm();
     const double limit = 4 * std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6);
+    for (size_t k = 0; k < len.size(); ++k) in[k] = len[k] <= limit;
+    if (pass >= 3) slope = scene_slope(J, xn, pair_of, u, in, [&](size_t k) { return r[by_pair[k].second]; });
     for (PairSums& p : pairs) p.N.setZero(), p.b.setZero();
     for (size_t k = 0; k < len.size(); ++k) {
-      if (len[k] > limit) continue;
+      if (!in[k]) continue;
       PairSums& p = pairs[pair_of[k]];
-      p.N += J[k].transpose() * J[k], p.b += J[k].transpose() * r[by_pair[k].second];
+      const Eigen::Matrix<double, 2, 3> Jk = depth_factor(k) * J[k];
+      p.N += Jk.transpose() * Jk, p.b += Jk.transpose() * r[by_pair[k].second];
     }
     const Eigen::VectorXd c = fit_velocity(sp, pairs);
     for (size_t q = 0; q < pairs.size(); ++q) {

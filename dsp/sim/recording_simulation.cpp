@@ -57,6 +57,7 @@ void validate(const SimConfig& c) {
   require(u.scene_depth_m >= 0, "unmodelled.scene_depth_m must not be negative");
   require(u.scene_depth_m == 0 || c.kind == ObservationKind::Matches,
           "unmodelled.scene_depth_m applies to matches (landmarks have their points)");
+  require(u.scene_slope.allFinite(), "unmodelled.scene_slope must be finite");
   require(u.gyro_saturation_rad_s >= 0, "unmodelled.gyro_saturation_rad_s must not be negative");
   require(u.stabilisation_hz >= 0, "unmodelled.stabilisation_hz must not be negative");
   require(u.stabilisation_hz == 0 || c.kind == ObservationKind::Matches,
@@ -195,7 +196,8 @@ std::vector<GyroSample> sample_gyro(const SimConfig& c, const BodyMotion& imu, c
   return out;
 }
 
-// Matches of features on a plane `depth` along frame_a's optical axis, seen by a camera that
+// Matches of features on a plane `depth` along frame_a's optical axis (tilted by the slope of
+// its inverse depth), seen by a camera that
 // translates with the body as well as turning: parallax, which the rotation-only model of
 // matches cannot express. Returns frame_b's pixel of the feature at pixel `a` of frame_a.
 class ParallaxScene {
@@ -203,16 +205,18 @@ class ParallaxScene {
   ParallaxScene(const SimConfig& c, const TrueModel& m, const BodyMotion& body, double t_begin, double t_end,
                 const Eigen::Matrix3d& imu_to_camera)
       : setup_{m.cam, m.time, Eigen::Vector3d::Zero(), imu_to_camera.transpose()}, depth_(c.unmodelled.scene_depth_m),
-        body_(samples(body, t_begin, t_end)) {}
+        slope_(c.unmodelled.scene_slope), body_(samples(body, t_begin, t_end)) {}
   std::optional<Prediction> predict(double T_a, const Eigen::Vector2d& a, double T_b) const {
     const auto ray = setup_.cam.ray(a);
     if (!ray || ray->z() <= 0) return std::nullopt;
+    const double inverse_depth = 1 + slope_.dot(ray->head<2>() / ray->z());  // over depth_'s
+    if (inverse_depth < 0.1) return std::nullopt;
     const double t = setup_.time.motion_time(T_a + row_timing(setup_.time, setup_.cam.height).row_time(a.y()));
     // World from camera at the row's capture: the body's pose turned by the mount.
     const Eigen::Affine3d body_from_world = body_.at(t);
     const Eigen::Matrix3d R_wc = body_from_world.linear().transpose() * setup_.mount;
     const Eigen::Vector3d p_wc = -body_from_world.linear().transpose() * body_from_world.translation();
-    const Eigen::Vector3d X = p_wc + R_wc * (*ray / ray->z() * depth_);
+    const Eigen::Vector3d X = p_wc + R_wc * (*ray / ray->z() * depth_ / inverse_depth);
     return predict_landmark(setup_, body_, T_b, X);
   }
 
@@ -227,6 +231,7 @@ class ParallaxScene {
   }
   LandmarkSetup setup_;
   double depth_;
+  Eigen::Vector2d slope_;
   SampledTrajectory body_;
 };
 

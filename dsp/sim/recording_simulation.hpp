@@ -56,6 +56,11 @@ struct Unmodelled {
   // Matches: the features lie on a plane this far along frame_a's optical axis (0: at
   // infinity, the rotation-only model's world). The body's translation then gives parallax.
   double scene_depth_m = 0;
+  // The plane's slope: its inverse depth is (1 + slope . (x, y)) / scene_depth_m at the
+  // normalised image coordinates (x, y) of frame_a (a ground ahead: slope.y() > 0, nearer
+  // towards the image's bottom); no feature where the plane lies behind the camera or beyond
+  // ten times the depth. Zero: the plane faces the camera.
+  Eigen::Vector2d scene_slope = Eigen::Vector2d::Zero();
   double gyro_saturation_rad_s = 0;  // the gyro clips each axis at +- this (0: never)
   // The frame stamps jump by clock_jump_s from clock_jump_at_s after the first frame on.
   double clock_jump_s = 0;

@@ -1,5 +1,6 @@
 // The translation nuisance of matches (dsp/diagnosis/translation.hpp) against simulated flights:
-// it takes out the parallax a near scene gives (at the true model the noise is left), it cannot
+// it takes out the parallax a near scene gives, facing the camera or tilted as a ground ahead
+// is (at the true model the noise is left), it cannot
 // take up what a clock offset leaves (a free translation per frame pair took up most of it),
 // a forward flight with a pan yields its clock offset, and a hand-held phone 4 m from a wall its
 // focal length, lens, mount, clock offset and shutter (issue 34, point 2).
@@ -40,9 +41,20 @@ ModelParams with_offset(const SimulatedRecording& sim, double offset_s, bool nui
   return p;
 }
 
+// A ground ahead of the drone, as a tilted plane: its inverse depth grows towards the image's
+// bottom (and a little to the right), from 0.4 to 1.6 times the depth's at the image's top and
+// bottom rows (VGA, f 500 px).
+const Eigen::Vector2d kGround(0.3, 1.25);
+
 TEST(Translation, AtTheTrueModelTheVelocitySplineLeavesTheNoise) {
-  for (double depth : {40.0, 15.0}) {
+  struct Case {
+    double depth;
+    Eigen::Vector2d slope;
+  };
+  for (const Case& k : {Case{40.0, Eigen::Vector2d::Zero()}, Case{15.0, Eigen::Vector2d::Zero()}, Case{15.0, kGround}}) {
+    const double depth = k.depth;
     SimConfig c = forward_flight(8, depth);
+    c.unmodelled.scene_slope = k.slope;
     c.effects.time_offset_s = 0.01;
     const SimulatedRecording sim = simulate_recording(c);
     const DiagnosisModel m(sim.rec);
@@ -51,7 +63,7 @@ TEST(Translation, AtTheTrueModelTheVelocitySplineLeavesTheNoise) {
     const RobustStats plain = robust_stats(m.residuals(with_offset(sim, 0.01, false), all));
     const RobustStats taken = robust_stats(m.residuals(with_offset(sim, 0.01, true), all));
     EXPECT_GT(plain.rms_px, 2 * noise) << "depth " << depth;  // the parallax is there
-    EXPECT_NEAR(taken.rms_px, noise, 0.03 * noise) << "depth " << depth;
+    EXPECT_NEAR(taken.rms_px, noise, 0.03 * noise) << "depth " << depth << " slope " << k.slope.transpose();
   }
 }
 
@@ -101,14 +113,16 @@ TEST(Translation, TheVelocitySplineCannotTakeUpAClockOffset) {
 }
 
 TEST(Translation, AForwardFlightWithAPanYieldsItsClockOffset) {
-  // Far (40 m) and near (15 m) scenes, and a long lens (f = 1200 px: the pan's flow is nearly a
-  // shift, as a sideways translation's is).
+  // Far (40 m) and near (15 m) scenes, a long lens (f = 1200 px: the pan's flow is nearly a
+  // shift, as a sideways translation's is), and the ground ahead (a tilted plane).
   struct Case {
     unsigned seed;
     double depth_m, focal_px;
+    Eigen::Vector2d slope = Eigen::Vector2d::Zero();
   };
-  for (const Case& k : {Case{11, 40.0, 500.0}, Case{12, 15.0, 500.0}, Case{13, 40.0, 1200.0}}) {
+  for (const Case& k : {Case{11, 40.0, 500.0}, Case{12, 15.0, 500.0}, Case{13, 40.0, 1200.0}, Case{14, 15.0, 500.0, kGround}}) {
     SimConfig c = forward_flight(k.seed, k.depth_m);
+    c.unmodelled.scene_slope = k.slope;
     c.nominal.cam.fx = c.nominal.cam.fy = k.focal_px;
     c.effects.time_offset_s = 0.01;
     const SimulatedRecording sim = simulate_recording(c);
