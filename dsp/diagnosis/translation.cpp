@@ -137,10 +137,10 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   double t_lo = pairs.front().t, t_hi = t_lo;
   for (const PairSums& p : pairs) t_lo = std::min(t_lo, p.t), t_hi = std::max(t_hi, p.t);
   const Spline sp{t_lo, knot_s, std::max(1, static_cast<int>(std::ceil((t_hi - t_lo) / knot_s)))};
-  // Six passes from no translation over a flat scene: the inliers are the residuals within 4
+  // Four passes from no translation over a flat scene: the inliers are the residuals within 4
   // robust scales of the current fit (one scale for the whole set: the noise does not depend on
   // the pair, and a pair with a handful of observations is judged as well as one with
-  // hundreds). From the fourth on, the scene's slope too (scene_slope): one plane's inverse
+  // hundreds). From the second on, the scene's slope too (scene_slope): one plane's inverse
   // depth is affine in the normalised image coordinates, and a ground ahead of a forward-flying
   // drone or a car leaves, at one depth, pixels of parallax growing towards the image's bottom.
   std::vector<Eigen::Vector3d> u(pairs.size(), Eigen::Vector3d::Zero());
@@ -150,11 +150,11 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   auto depth_factor = [&](size_t k) { return 1.0 + slope.dot(xn[k]); };
   auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * (J[k] * u[pair_of[k]])); };
   auto left = [&](size_t k) { return Eigen::Vector2d(r[by_pair[k].second] - flow(k)); };
-  for (int pass = 0; pass < 6; ++pass) {
+  for (int pass = 0; pass < 4; ++pass) {
     for (size_t k = 0; k < len.size(); ++k) len[k] = left(k).norm();
     const double limit = 4 * std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6);
     for (size_t k = 0; k < len.size(); ++k) in[k] = len[k] <= limit;
-    if (pass >= 3) slope = scene_slope(J, xn, pair_of, u, in, [&](size_t k) { return r[by_pair[k].second]; });
+    if (pass >= 1) slope = scene_slope(J, xn, pair_of, u, in, [&](size_t k) { return r[by_pair[k].second]; });
     for (PairSums& p : pairs) p.N.setZero(), p.b.setZero();
     for (size_t k = 0; k < len.size(); ++k) {
       if (!in[k]) continue;

@@ -28,9 +28,9 @@ constexpr double kTranslationKnotS = 0.5;
 // the camera's translation: per frame pair, the flow over one plane (translation_flow,
 // parallax.hpp, times the plane's inverse depth 1 + g . (x, y) at the normalised image
 // coordinates) of u(t) dt turned into camera axes, u(t) = v(t) / depth a cubic B-spline in world
-// axes fitted to the inliers of every pair at once (six passes; an inlier lies within 4 robust
+// axes fitted to the inliers of every pair at once (four passes; an inlier lies within 4 robust
 // scales of the current fit), the slope g (one for the recording: a ground ahead of a vehicle)
-// from the fourth pass on. A pair needs no minimum of observations: the spline pools its
+// from the second pass on. A pair needs no minimum of observations: the spline pools its
 // neighbours. The camera's orientation at frame time T is
 // track.camera_at(tm.motion_time(T)) mount_t, mount_t the transpose of the mount rotation
 // (model.cpp, "Matches").

@@ -16,6 +16,7 @@
 #include "dsp/sim/flight_path.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
 #include "tests/dsp/diagnosis/diagnosis_lookup.hpp"
+#include "tests/support/sanitizer.hpp"
 
 namespace rsd::test {
 namespace {
@@ -113,6 +114,7 @@ TEST(Translation, TheVelocitySplineCannotTakeUpAClockOffset) {
 }
 
 TEST(Translation, AForwardFlightWithAPanYieldsItsClockOffset) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("Translation.AtTheTrueModelTheVelocitySplineLeavesTheNoise (the nuisance, over the ground too)");
   // Far (40 m) and near (15 m) scenes, a long lens (f = 1200 px: the pan's flow is nearly a
   // shift, as a sideways translation's is), and the ground ahead (a tilted plane).
   struct Case {
@@ -139,6 +141,7 @@ TEST(Translation, AForwardFlightWithAPanYieldsItsClockOffset) {
 // the shutter's vertical stretch (fx and fy 5% apart, refused), and a gyro scale 8% off came
 // within 1% of the distortion and, winning, ended the selection: nothing named, 10 px left.
 TEST(Translation, AHandHeldPhoneUnderParallaxYieldsItsFocalLengthLensAndMount) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("Translation.AtTheTrueModelTheVelocitySplineLeavesTheNoise and TheVelocitySplineCannotTakeUpAClockOffset (the nuisance)");
   SimConfig c = simulation(ObservationKind::Matches, 5, 10.0, 1.5);
   c.nominal.cam.width = 1920, c.nominal.cam.height = 1080;
   c.nominal.cam.fx = c.nominal.cam.fy = 1330, c.nominal.cam.cx = 959.5, c.nominal.cam.cy = 539.5;
