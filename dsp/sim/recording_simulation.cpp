@@ -197,9 +197,9 @@ std::vector<GyroSample> sample_gyro(const SimConfig& c, const BodyMotion& imu, c
 }
 
 // Matches of features on a plane `depth` along frame_a's optical axis (tilted by the slope of
-// its inverse depth), seen by a camera that
-// translates with the body as well as turning: parallax, which the rotation-only model of
-// matches cannot express. Returns frame_b's pixel of the feature at pixel `a` of frame_a.
+// its inverse depth), seen by a camera that translates with the body as well as turning:
+// parallax, which the rotation-only model of matches cannot express. Returns frame_b's pixel of
+// the feature at pixel `a` of frame_a.
 class ParallaxScene {
  public:
   ParallaxScene(const SimConfig& c, const TrueModel& m, const BodyMotion& body, double t_begin, double t_end,
