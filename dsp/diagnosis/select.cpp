@@ -149,6 +149,8 @@ class Selector {
     std::vector<int> bulk;
     for (size_t k = 0; k < fit_.size(); ++k)
       if (in[k]) bulk.push_back(fit_[k]);
+    // Both models on the bulk alone, `poorer` again too: under the translation nuisance the
+    // residuals depend on the set they are taken over (its velocity is fitted to that set).
     const double before = robust_chi2(m_.residuals(poorer.params, bulk), sigma_);
     const double after = robust_chi2(m_.residuals(richer.params, bulk), sigma_);
     if (after <= before) return "";
