@@ -56,6 +56,7 @@ struct Options {
   std::string imu_axes = "check";
   int heldout_every = kHeldoutEvery;
   int fit_observations = DiagnosisOptions{}.fit_observations;
+  int track_pairs = static_cast<int>(kTrackedPairs);
 };
 
 std::string matrix_text(const Eigen::Matrix3d& R) {
@@ -166,13 +167,16 @@ int run(int argc, char** argv) {
                  "The fits see at most this many of the fitting observations, chosen by the information they carry "
                  "(0: all of them; more is slower, rarely better)")
       ->check(int_range(0, 100000000))->capture_default_str();
+  app.add_option("--track-pairs", o.track_pairs, std::string("An images recording's ") + kTrackPairsHelp)
+      ->check(int_range(0, 100000000))->capture_default_str();
   if (const auto rc = parse_command_line(app, argc, argv)) return *rc;
   require_writable(o.json, "--json");
   if (!o.calibration.empty()) require_writable(o.calibration, "--write-calibration");
   std::cerr << "rsd-diagnose: reading " << o.dir << "\n";
   // An images recording's observations are made from its pictures, as rsd-extract makes them.
   Recording rec = formats::is_images_recording(o.dir)
-                      ? observations_from_pictures(formats::read_images_recording(o.dir), rsd::dsp::TrackOptions{})
+                      ? observations_from_pictures(formats::read_images_recording(o.dir), rsd::dsp::TrackOptions{},
+                                                   static_cast<size_t>(o.track_pairs))
                       : formats::read_recording(o.dir);
   const std::string axes = check_imu_axes(rec, o.imu_axes);
   // The model is built first so that an unsupported recording fails before the long part.

@@ -75,7 +75,7 @@ struct LogPictures {
       : src(open_frame_source({o.log}, FrameSourceOptions{o.image_channel, 0})) {
     frames.what = o.log + " (" + o.image_channel + ")";
     frames.usable = ok;
-    for (size_t k = 0; k < s.frames.size(); ++k) frames.numbers.push_back(static_cast<int>(k));
+    for (size_t k = 0; k < s.frames.size(); ++k) frames.numbers.push_back(static_cast<int>(k)), frames.times.push_back(s.frames[k].t);
     frames.next = [this]() -> std::optional<dsp::Image> {
       std::optional<SourceFrame> f = src->next();
       if (!f) return std::nullopt;
@@ -149,7 +149,7 @@ int run_on_recording(const Options& o) {
                      "the nominal-model options, --target and --images apply to LCM logs");
   std::fprintf(stderr, "rsd-extract: reading the images recording %s\n", o.log.c_str());
   const formats::ImagesRecording r = formats::read_images_recording(o.log);
-  dsp::Recording rec = observations_from_pictures(r, o.track);
+  dsp::Recording rec = observations_from_pictures(r, o.track, static_cast<size_t>(o.track_pairs));
   if (o.noise_px) rec.noise_px = o.noise_px;
   formats::write_recording(o.out, rec);
   std::printf("rsd-extract: wrote a %s recording (%zu frames) to %s\n", dsp::to_string(rec.kind), rec.frames.size(), o.out.c_str());
@@ -208,7 +208,7 @@ int run(const Options& o) {
     write_pictures(o, pictures, target, rec);
     return 0;
   }
-  if (kind == dsp::ObservationKind::Matches) make_matches(pictures.frames, o.track, rec);
+  if (kind == dsp::ObservationKind::Matches) make_matches(pictures.frames, o.track, rec, static_cast<size_t>(o.track_pairs));
   else make_landmarks(pictures.frames, *target, o.target, rec);
   formats::write_recording(o.out, rec);
   std::printf("rsd-extract: wrote a %s recording (%zu frames, %zu %s samples) to %s\n", dsp::to_string(kind), rec.frames.size(),
@@ -259,6 +259,7 @@ int main(int argc, char** argv) {
   app.add_option("--velocity-channel", o.velocity_channel, "rsd.velocity_t channel (matches kind)")->capture_default_str();
   app.add_option("--pose-channel", o.pose_channel, "bot_core.pose_t channel (landmarks kind)")->capture_default_str();
   app.add_option("--max-matches", o.track.max_per_pair, "matches kept per frame pair")->check(int_range(1, 100000))->capture_default_str();
+  app.add_option("--track-pairs", o.track_pairs, kTrackPairsHelp)->check(int_range(0, 100000000))->capture_default_str();
   app.add_option("--max-fb-error", o.track.max_fb_error_px, "forward-backward tracking check, px")->check(positive("px"))->capture_default_str();
   app.add_option("--min-ncc", o.track.min_ncc, "least correlation of the patches around a match's two ends")
       ->check(CLI::Range(-1.0, 1.0))->capture_default_str();

@@ -40,7 +40,56 @@ std::vector<T> evenly(const std::vector<T>& v, size_t count) {
   return out;
 }
 
+// The gyro's mean rate over [t0, t1) and its change across it (the second half's mean less the
+// first's); zeros where no sample falls in a half.
+struct PairMotion {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero(), change = Eigen::Vector3d::Zero();
+};
+
+PairMotion pair_motion(const std::vector<GyroSample>& gyro, double t0, double t1) {
+  const auto at = [&](double t) {
+    return std::lower_bound(gyro.begin(), gyro.end(), t, [](const GyroSample& s, double x) { return s.t < x; });
+  };
+  const auto mean_over = [](auto b, auto e) {
+    Eigen::Vector3d w = Eigen::Vector3d::Zero();
+    for (auto i = b; i != e; ++i) w += i->w;
+    return b == e ? w : Eigen::Vector3d(w / static_cast<double>(e - b));
+  };
+  const auto b = at(t0), mid = at(0.5 * (t0 + t1)), e = at(t1);
+  PairMotion p;
+  p.mean = mean_over(b, e);
+  if (b != mid && mid != e) p.change = mean_over(mid, e) - mean_over(b, mid);
+  return p;
+}
+
 }  // namespace
+
+std::vector<bool> choose_frame_pairs(const std::vector<double>& frame_t, const std::vector<bool>& usable,
+                                     const std::vector<GyroSample>& gyro, double motion_offset_s, size_t count) {
+  std::vector<bool> chosen(frame_t.size(), false);
+  std::vector<size_t> pairs;  // k of each pair (k-1, k) of usable frames
+  for (size_t k = 1; k < frame_t.size(); ++k)
+    if (usable[k - 1] && usable[k]) pairs.push_back(k);
+  if (count == 0 || pairs.size() <= count) {
+    for (size_t k : pairs) chosen[k] = true;
+    return chosen;
+  }
+  // Each pair's span: from the first frame's stamp to one frame period past the second's (its
+  // readout), on the motion clock.
+  std::vector<double> rate2(pairs.size()), change2(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const double t0 = frame_t[pairs[i] - 1] + motion_offset_s, t1 = frame_t[pairs[i]] + motion_offset_s;
+    const PairMotion p = pair_motion(gyro, t0, t1 + (t1 - t0));
+    rate2[i] = p.mean.squaredNorm(), change2[i] = p.change.squaredNorm();
+  }
+  const double mean_rate2 = std::accumulate(rate2.begin(), rate2.end(), 0.0) / static_cast<double>(pairs.size());
+  const double mean_change2 = std::accumulate(change2.begin(), change2.end(), 0.0) / static_cast<double>(pairs.size());
+  std::vector<double> information(pairs.size(), 0.0);
+  for (size_t i = 0; i < pairs.size(); ++i)
+    information[i] = (mean_rate2 > 0 ? rate2[i] / mean_rate2 : 0.0) + (mean_change2 > 0 ? change2[i] / mean_change2 : 0.0);
+  for (size_t i : systematic_choice(mixed(information), count)) chosen[pairs[i]] = true;
+  return chosen;
+}
 
 std::vector<size_t> systematic_choice(const std::vector<double>& w, size_t count) {
   std::vector<size_t> out;

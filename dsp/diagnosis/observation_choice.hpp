@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "dsp/diagnosis/model.hpp"
+#include "dsp/observation/observation_model.hpp"
 
 namespace rsd::dsp {
 
@@ -39,6 +40,19 @@ std::vector<int> choose_observations(const DiagnosisModel& m, const std::vector<
 // the information, at most the number of free parameters). A failed prediction has none.
 std::vector<double> observation_leverage(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& at,
                                          const ParamMask& mask);
+
+// Before any picture is tracked: which consecutive frame pairs to track when a recording has
+// more than `count` (tracking a 1080p pair costs several times what fitting its matches does).
+// Pairs by what the gyro says they will carry: the squared mean rate over the pair (the readout,
+// the focal length and the gyro's scale show in proportion to the rotation) plus the squared
+// change of rate across it (the clock offset shows where the rate changes), each relative to its
+// mean over the recording, mixed half and half with an even share as above. `frame_t`: the
+// frames' stamps (camera clock); `usable[k]`: frame k's readout lies within the motion;
+// `motion_offset_s`: t_motion = t_camera + offset. Returns chosen[k] for the pair (k-1, k)
+// (chosen[0] false): every pair of two usable frames when there are at most `count` (0: all).
+// Without gyro samples in a pair's span its information is nil (the even share still reaches it).
+std::vector<bool> choose_frame_pairs(const std::vector<double>& frame_t, const std::vector<bool>& usable,
+                                     const std::vector<GyroSample>& gyro, double motion_offset_s, size_t count);
 
 // `count` of the items with inclusion weights `w` (non-negative), by systematic sampling on
 // inclusion probabilities proportional to w, capped at 1 (an item of high weight is taken

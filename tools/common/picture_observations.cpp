@@ -2,6 +2,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <malloc.h>
+
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -9,6 +11,7 @@
 #include <stdexcept>
 
 #include "drivers/images_source.hpp"
+#include "dsp/diagnosis/observation_choice.hpp"
 #include "dsp/features/target_observations.hpp"
 #include "tools/common/progress_line.hpp"
 
@@ -50,29 +53,73 @@ cv::Mat next_grey(PictureFrames& f, size_t k, double& scale16) {
   return grey8(*img, scale16);
 }
 
+// Reads past frame k without converting it.
+void skip(PictureFrames& f, size_t k) {
+  if (!f.next()) throw std::runtime_error(f.what + ": frame " + std::to_string(f.numbers[k]) + " could not be read");
+}
+
+// The tracker and OpenCV free and allocate each frame's picture and pyramids (megabytes at
+// 1080p) every frame; by default glibc hands such blocks back to the kernel at once, and every
+// frame's pages then fault in again, zeroed: 40% of a 1080p log's extraction went to the kernel.
+// A batch tool keeps them for reuse instead (process-wide; the tools only).
+void keep_freed_memory() {
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);
+}
+
+// The pairs (k-1, k) to track (chosen[k]), and a line saying so when they are not all.
+std::vector<bool> pairs_to_track(const PictureFrames& f, const dsp::Recording& rec, size_t max_pairs) {
+  std::vector<double> t = f.times;
+  if (t.size() != f.numbers.size()) t.assign(f.numbers.size(), 0.0);  // no stamps: the even share
+  const std::vector<bool> chosen = dsp::choose_frame_pairs(t, f.usable, rec.gyro, rec.nominal.time.time_offset_s, max_pairs);
+  size_t usable = 0, taken = 0;
+  for (size_t k = 1; k < chosen.size(); ++k) usable += f.usable[k - 1] && f.usable[k], taken += chosen[k];
+  if (taken < usable)
+    std::printf("rsd: tracking %zu of %zu frame pairs, chosen by the gyro's rates and evenly (--track-pairs)\n", taken, usable);
+  return chosen;
+}
+
+// Only the frames of tracked pairs stay in rec.frames.
+void keep_tracked_frames(const PictureFrames& f, const std::vector<bool>& chosen, dsp::Recording& rec) {
+  std::set<int> tracked;
+  for (size_t k = 1; k < chosen.size(); ++k)
+    if (chosen[k]) tracked.insert(f.numbers[k - 1]), tracked.insert(f.numbers[k]);
+  std::vector<dsp::FrameStamp> kept;
+  for (const dsp::FrameStamp& s : rec.frames)
+    if (tracked.count(s.frame)) kept.push_back(s);
+  rec.frames = kept;
+}
+
 }  // namespace
 
-void make_matches(PictureFrames& f, const dsp::TrackOptions& opt, dsp::Recording& rec) {
-  // One chain of consecutive usable frames: each frame's pyramid is built once, and every pair
+void make_matches(PictureFrames& f, const dsp::TrackOptions& opt, dsp::Recording& rec, size_t max_pairs) {
+  keep_freed_memory();
+  // Chains of consecutive chosen pairs: each frame's pyramid is built once, and every pair
   // detects its features afresh (carry off), as a pair tracked alone would (dsp::track_pair).
   dsp::TrackOptions fresh = opt;
   fresh.carry = false;
   dsp::FeatureTracker tracker(fresh);
+  const std::vector<bool> chosen = pairs_to_track(f, rec, max_pairs);
   double scale16 = 0;
   int lost = 0, fb = 0, unlike = 0, pairs = 0;
   const size_t n = f.numbers.size();
   ProgressLine line("rsd: ");
   for (size_t k = 0; k < n; ++k) {
-    const cv::Mat cur = next_grey(f, k, scale16);
-    if (!f.usable[k]) {
+    const bool opens = k + 1 < n && chosen[k + 1];
+    if (!chosen[k] && !opens) {
+      skip(f, k);
       tracker.restart();
-    } else if (k > 0 && f.usable[k - 1] && tracker.holds_frame()) {
-      const dsp::PairTracks t = tracker.next(cur);
-      for (size_t i = 0; i < t.a.size(); ++i) rec.matches.push_back({f.numbers[k - 1], t.a[i], f.numbers[k], t.b[i]});
-      lost += t.lost, fb += t.fb_rejected, unlike += t.ncc_rejected, ++pairs;
     } else {
-      tracker.restart();
-      tracker.next(cur);  // the first frame of a chain
+      const cv::Mat cur = next_grey(f, k, scale16);
+      if (chosen[k] && tracker.holds_frame()) {
+        const dsp::PairTracks t = tracker.next(cur);
+        for (size_t i = 0; i < t.a.size(); ++i) rec.matches.push_back({f.numbers[k - 1], t.a[i], f.numbers[k], t.b[i]});
+        lost += t.lost, fb += t.fb_rejected, unlike += t.ncc_rejected, ++pairs;
+        if (!opens) tracker.restart();
+      } else {
+        tracker.restart();
+        tracker.next(cur);  // the first frame of a chain
+      }
     }
     line.step("frame", static_cast<long>(k + 1), static_cast<long>(n), std::to_string(rec.matches.size()) + " matches");
   }
@@ -81,12 +128,14 @@ void make_matches(PictureFrames& f, const dsp::TrackOptions& opt, dsp::Recording
               rec.matches.size(), pairs, pairs ? double(rec.matches.size()) / pairs : 0.0, lost, fb, opt.max_fb_error_px, unlike,
               opt.min_ncc);
   if (rec.matches.empty()) throw std::runtime_error(f.what + ": no features could be tracked between consecutive frames");
+  keep_tracked_frames(f, chosen, rec);
 }
 
 void make_landmarks(PictureFrames& f, const dsp::TargetSpec& target, const std::string& target_name, dsp::Recording& rec) {
   if (rec.points.empty()) rec.points = dsp::target_points(target);
   std::set<int> ids;
   for (const dsp::Landmark& p : rec.points) ids.insert(p.id);
+  keep_freed_memory();
   double scale16 = 0;
   int seen = 0, unknown = 0;
   const size_t n = f.numbers.size();
@@ -108,7 +157,7 @@ void make_landmarks(PictureFrames& f, const dsp::TargetSpec& target, const std::
   if (rec.observations.empty()) throw std::runtime_error(f.what + ": the target " + target_name + " was not found in any frame");
 }
 
-dsp::Recording observations_from_pictures(const formats::ImagesRecording& r, const dsp::TrackOptions& opt) {
+dsp::Recording observations_from_pictures(const formats::ImagesRecording& r, const dsp::TrackOptions& opt, size_t max_pairs) {
   dsp::Recording rec = r.rec;
   drivers::ImagesConfig ic;
   if (r.video.empty()) ic.files = r.files;
@@ -129,11 +178,10 @@ dsp::Recording observations_from_pictures(const formats::ImagesRecording& r, con
   };
   std::vector<double> t;
   for (const dsp::FrameStamp& s : rec.frames) f.numbers.push_back(s.frame), t.push_back(s.t);
+  f.times = t;
   const bool gyro = rec.motion == dsp::MotionKind::Gyro;
   f.usable = covered_by_motion(t, gyro ? rec.gyro.front().t : rec.trajectory.front().t,
                                gyro ? rec.gyro.back().t : rec.trajectory.back().t, rec.nominal);
-  if (rec.kind == dsp::ObservationKind::Matches) make_matches(f, opt, rec);
-  else make_landmarks(f, *r.target, "of recording.yaml", rec);
   // Only the frames observed: the rest lie outside the motion.
   std::vector<dsp::FrameStamp> kept;
   for (size_t k = 0; k < rec.frames.size(); ++k)
@@ -142,6 +190,8 @@ dsp::Recording observations_from_pictures(const formats::ImagesRecording& r, con
     std::fprintf(stderr, "rsd: %zu of %zu frames lie outside the motion's time span (with 50 ms to spare) and are left out\n",
                  rec.frames.size() - kept.size(), rec.frames.size());
   rec.frames = kept;
+  if (rec.kind == dsp::ObservationKind::Matches) make_matches(f, opt, rec, max_pairs);
+  else make_landmarks(f, *r.target, "of recording.yaml", rec);
   return rec;
 }
 

@@ -22,6 +22,7 @@ namespace rsd::tools {
 struct PictureFrames {
   std::function<std::optional<dsp::Image>()> next;  // the next picture, in frame order
   std::vector<int> numbers;                          // each picture's frame number
+  std::vector<double> times;                         // each picture's stamp (camera clock)
   std::vector<bool> usable;                          // whether the motion covers its readout
   std::string what;                                  // for messages: the log or the recording
 };
@@ -38,9 +39,20 @@ std::vector<bool> covered_by_motion(const std::vector<double>& frame_t, double m
 // whole sequence (from the first frame's maximum: tracking assumes constant brightness).
 cv::Mat grey8(const dsp::Image& img, double& scale16);
 
-// Appends the matches between consecutive usable frames to rec.matches; prints a summary.
-// Throws std::runtime_error when nothing could be tracked.
-void make_matches(PictureFrames& frames, const dsp::TrackOptions& opt, dsp::Recording& rec);
+// Frame pairs tracked at most by default (rsd-extract and rsd-diagnose --track-pairs): 240 pairs
+// of up to 300 matches (dsp::TrackOptions::max_per_pair) offer the diagnosis's fits, which see
+// at most 30 000 observations (rsd-diagnose --fit-observations), twice what they take; a minute
+// at 30 fps has 1799.
+inline constexpr size_t kTrackedPairs = 240;
+inline constexpr const char* kTrackPairsHelp =
+    "matches kind: track at most this many frame pairs, chosen by the gyro's rates and evenly over the recording "
+    "(0: every pair; more is slower, rarely better)";
+
+// Appends the matches between consecutive usable frames to rec.matches: every such pair when
+// there are at most `max_pairs` (0: no limit), else that many chosen by the gyro's rates
+// (dsp::choose_frame_pairs), and rec.frames keeps only the frames of tracked pairs. Prints a
+// summary. Throws std::runtime_error when nothing could be tracked.
+void make_matches(PictureFrames& frames, const dsp::TrackOptions& opt, dsp::Recording& rec, size_t max_pairs = kTrackedPairs);
 // Appends the target's corners seen in usable frames to rec.observations and sets rec.points.
 // Throws std::runtime_error when the target is nowhere.
 void make_landmarks(PictureFrames& frames, const dsp::TargetSpec& target, const std::string& target_name,
@@ -48,6 +60,8 @@ void make_landmarks(PictureFrames& frames, const dsp::TargetSpec& target, const 
 
 // An images recording with its observations made from its pictures: matches with a gyro,
 // landmarks of its target with a trajectory. Frames the motion does not cover are left out.
-dsp::Recording observations_from_pictures(const formats::ImagesRecording& r, const dsp::TrackOptions& opt);
+// `max_pairs` as for make_matches.
+dsp::Recording observations_from_pictures(const formats::ImagesRecording& r, const dsp::TrackOptions& opt,
+                                          size_t max_pairs = kTrackedPairs);
 
 }  // namespace rsd::tools

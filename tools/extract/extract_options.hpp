@@ -6,6 +6,7 @@
 #include <string>
 
 #include "dsp/features/feature_tracks.hpp"
+#include "tools/common/picture_observations.hpp"
 
 namespace rsd::tools::extract {
 
@@ -21,6 +22,7 @@ struct Options {
   long first_frame_index = 0;
   std::string gcsv;  // a video with gyroflow's .gcsv sidecar log
   dsp::TrackOptions track;
+  int track_pairs = static_cast<int>(kTrackedPairs);  // frame pairs tracked at most (0: all)
 };
 
 }  // namespace rsd::tools::extract

@@ -165,3 +165,79 @@ TEST(ChooseObservations, ADiagnosisOnAFractionFindsTheTruthWithAnHonestUncertain
   }
   EXPECT_LT(d.heldout_final_rms_px, 1.1 * d.noise_floor_px);
 }
+
+namespace {
+
+// Frames at 30 fps from t = 1 s and a 400 Hz gyro whose rate rate(t) gives.
+struct PairCase {
+  std::vector<double> frame_t;
+  std::vector<GyroSample> gyro;
+};
+
+template <class Rate>
+PairCase pair_case(int frames, Rate rate) {
+  PairCase c;
+  for (int k = 0; k < frames; ++k) c.frame_t.push_back(1.0 + k / 30.0);
+  for (double t = 0.5; t < 1.5 + frames / 30.0; t += 1.0 / 400) c.gyro.push_back({t, rate(t)});
+  return c;
+}
+
+std::vector<size_t> chosen_pairs(const std::vector<bool>& chosen) {
+  std::vector<size_t> k;
+  for (size_t i = 0; i < chosen.size(); ++i)
+    if (chosen[i]) k.push_back(i);
+  return k;
+}
+
+}  // namespace
+
+TEST(ChooseFramePairs, TakesEveryPairOfUsableFramesWhenTheyAreNoMoreThanTheCount) {
+  const PairCase c = pair_case(10, [](double) { return Eigen::Vector3d(0.1, 0, 0); });
+  std::vector<bool> usable(10, true);
+  usable[0] = usable[5] = false;  // pairs (0,1), (4,5), (5,6) have an unusable frame
+  const std::vector<size_t> all = {2, 3, 4, 7, 8, 9};
+  EXPECT_EQ(chosen_pairs(choose_frame_pairs(c.frame_t, usable, c.gyro, 0.0, 6)), all);
+  EXPECT_EQ(chosen_pairs(choose_frame_pairs(c.frame_t, usable, c.gyro, 0.0, 0)), all);
+  EXPECT_EQ(chosen_pairs(choose_frame_pairs(c.frame_t, usable, c.gyro, 0.0, 100)), all);
+}
+
+TEST(ChooseFramePairs, TakesEveryPairOfARotationAndSpreadsTheRestEvenly) {
+  // Still but for a turn at 1 rad/s over frames 40..50 (t 2.333..2.667 s). By hand: the ten
+  // pairs whose span (a frame period past the second frame) lies in the turn carry the rate's
+  // information, half the weight; each of them has 0.5/10 + 0.5/100 of it against 0.5/100 for a
+  // still pair, so at 30 of 100 all ten are capped at certainty and the other 20 are an even
+  // share of the 90 still pairs: no gap between them wider than ceil(90/20) + 1 pairs.
+  const double b = 1.0 + 40 / 30.0, e = 1.0 + 50 / 30.0;
+  const PairCase c = pair_case(101, [&](double t) { return t >= b && t < e ? Eigen::Vector3d(0, 0, 1) : Eigen::Vector3d::Zero(); });
+  const std::vector<bool> chosen = choose_frame_pairs(c.frame_t, std::vector<bool>(101, true), c.gyro, 0.0, 30);
+  const std::vector<size_t> k = chosen_pairs(chosen);
+  ASSERT_EQ(k.size(), 30u);
+  for (size_t pair = 41; pair <= 49; ++pair) EXPECT_TRUE(chosen[pair]) << "pair " << pair << " turns";
+  size_t last = 0;
+  for (size_t pair : k) {
+    EXPECT_LE(pair - last, 6u) << "a gap before pair " << pair;
+    last = pair;
+  }
+  EXPECT_GE(last, 95u);  // the end of the recording is reached
+}
+
+TEST(ChooseFramePairs, FindsWhereTheRateChangesAtAConstantSpeed) {
+  // 1 rad/s throughout, its axis turning from x to y at t = 2.51 s (frame 45.3): the squared
+  // rate is nearly even (0.5 rad^2/s^2 least, across the switch), the change of rate is nil but
+  // for the two pairs whose spans (frame k-1 to a period past frame k) hold the switch: (44, 45),
+  // its second half's mean less its first's 0.7 (y - x), and (45, 46), 0.3 (y - x). By hand, of
+  // the information (100 from the rates, 100 from the changes) they hold 84.5 + 0.6 and
+  // 15.5 + 0.6, so at 30 of 100 pairs both are certain (inclusion 30 x (0.5 x 16.1 / 200 +
+  // 0.5 / 100) > 1).
+  const double ts = 2.51;
+  const PairCase c = pair_case(101, [&](double t) { return t < ts ? Eigen::Vector3d(1, 0, 0) : Eigen::Vector3d(0, 1, 0); });
+  const std::vector<bool> chosen = choose_frame_pairs(c.frame_t, std::vector<bool>(101, true), c.gyro, 0.0, 30);
+  EXPECT_EQ(chosen_pairs(chosen).size(), 30u);
+  EXPECT_TRUE(chosen[45]);
+  EXPECT_TRUE(chosen[46]);
+  // A clock offset moves the switch: at +0.2 s on the motion clock (t_motion = t_camera + 0.2),
+  // the switch falls at camera time 2.31 s (frame 39.3), in the spans of pairs (38, 39) and (39, 40).
+  const std::vector<bool> offset = choose_frame_pairs(c.frame_t, std::vector<bool>(101, true), c.gyro, 0.2, 30);
+  EXPECT_TRUE(offset[39]);
+  EXPECT_TRUE(offset[40]);
+}

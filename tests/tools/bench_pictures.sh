@@ -1,0 +1,31 @@
+#!/bin/bash
+# Issue 34's speed goal from pictures (a benchmark, not a test; docs/diagnosis.md, "Speed"): a
+# recording of 1920x1080 frames at 30 fps, rendered by rsd-sim from the matches-kind end-to-end
+# scenario (config/scenarios/extract-matches-rolling-shutter.yaml at 1080p, a 2e-5 s line delay),
+# extracted (features tracked on at most --track-pairs frame pairs) and diagnosed; prints the
+# CPU time of each step. A minute's log is 3.7 GB and takes about 9 minutes to render.
+# Usage: tests/tools/bench_pictures.sh BUILD_DIR [SECONDS=60] [WORK_DIR=a new temporary directory]
+set -euo pipefail
+build=${1:?usage: bench_pictures.sh BUILD_DIR [SECONDS] [WORK_DIR]}
+seconds=${2:-60}
+work=${3:-$(mktemp -d)}
+here=$(cd "$(dirname "$0")/../.." && pwd)
+mkdir -p "$work"
+sed -e "s/^duration_s: .*/duration_s: $seconds/" \
+    -e "s/^camera: .*/camera: {width: 1920, height: 1080, fx: 1500, fy: 1500, cx: 959.5, cy: 539.5, distortion: [0, 0, 0, 0]}/" \
+    -e "s/line_delay_s: 5.0e-5/line_delay_s: 2.0e-5/" \
+    "$here/config/scenarios/extract-matches-rolling-shutter.yaml" > "$work/scenario.yaml"
+grep '^camera:' "$work/scenario.yaml" > "$work/nominal.yaml"
+TIMEFORMAT="%U s user + %S s system (%R s wall)"
+if [ ! -s "$work/run.lcmlog" ]; then
+  echo "rendering ${seconds} s of 1080p into $work/run.lcmlog ..."
+  "$build/tools/rsd-sim" lcm "$work/scenario.yaml" "$work/run.lcmlog" > "$work/render.log" 2>&1
+fi
+rm -rf "$work/rec"
+echo -n "rsd-extract: "
+{ time "$build/tools/rsd-extract" "$work/run.lcmlog" "$work/rec" --nominal "$work/nominal.yaml" --kind matches \
+    > "$work/extract.log" 2>&1; } 2>&1
+grep -a "tracking\|matches over" "$work/extract.log" | tr '\r' '\n' | grep -v "\[#" || true
+echo -n "rsd-diagnose: "
+{ time "$build/tools/rsd-diagnose" "$work/rec" --json "$work/diagnosis.json" > "$work/diagnose.log" 2>&1; } 2>&1
+grep -a "baseline RMS" "$work/diagnose.log" || tail -3 "$work/diagnose.log"
