@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "daemon/log.hpp"
+#include "dsp/geometry/rotation_check.hpp"
 #include "drivers/driver_registry.hpp"
 #include "formats/config_section.hpp"
 #include "formats/yaml_map.hpp"
@@ -73,9 +74,9 @@ void visit_velocity(formats::ConfigSection& c, Config& cfg) {
   c.value("pose_channel", in.pose_channel, "also read bot_core.pose_t here (rotation_rate, vel: body frame); \"\": off");
   c.check(in.pose_channel.empty() || in.pose_channel != cfg.velocity_channel, "pose_channel", "must differ from velocity.channel");
   c.value("imu_to_camera", in.imu_to_camera, "rsd.velocity_t FRAME_IMU: w_camera = R w_imu (row-major)");
-  c.check(is_rotation(in.imu_to_camera, 1e-6), "imu_to_camera", "must be a rotation matrix (row-major, orthonormal, determinant +1)");
+  c.check(dsp::is_rotation(in.imu_to_camera), "imu_to_camera", "must be a rotation matrix (row-major, orthonormal, determinant +1)");
   c.value("body_to_camera", in.body_to_camera, "bot_core.pose_t: w_camera = R w_body (row-major)");
-  c.check(is_rotation(in.body_to_camera, 1e-6), "body_to_camera", "must be a rotation matrix (row-major, orthonormal, determinant +1)");
+  c.check(dsp::is_rotation(in.body_to_camera), "body_to_camera", "must be a rotation matrix (row-major, orthonormal, determinant +1)");
   c.value("gyro_only", in.gyro_only, "drop linear velocity at input (every sample has_linear: false)");
   c.value("max_clock_offset_s", in.max_clock_offset_s,
           "with a live camera, refuse messages stamped further than this from the camera clock (0: no check)");

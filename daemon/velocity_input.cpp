@@ -14,11 +14,6 @@
 
 namespace rsd::daemon {
 
-bool is_rotation(const Eigen::Matrix3d& m, double tol) {
-  return m.allFinite() && (m.transpose() * m - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= tol &&
-         std::abs(m.determinant() - 1.0) <= tol;
-}
-
 VelocityInput::VelocityInput(lcm_t* lcm, const std::string& channel, VelocityBuffer& buffer, VelocityInputConfig cfg,
                              std::string lcm_url)
     : lcm_(lcm), lcm_url_(std::move(lcm_url)), channel_(channel), buffer_(buffer), cfg_(std::move(cfg)) {

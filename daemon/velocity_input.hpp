@@ -66,9 +66,6 @@ struct VelocityInputConfig {
   double max_clock_offset_s = 5;
 };
 
-// Whether m is a proper rotation (orthonormal, determinant +1) to within tol.
-bool is_rotation(const Eigen::Matrix3d& m, double tol = 1e-6);
-
 class VelocityInput {
  public:
   // lcm_url: the URL `lcm` was made from; an instance that lost its tcpq hub is not unsubscribed

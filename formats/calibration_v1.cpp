@@ -15,6 +15,7 @@
 #include "formats/intrinsics_file.hpp"
 #include "formats/yaml_map.hpp"
 #include "dsp/core/input_limits.hpp"
+#include "dsp/geometry/rotation_check.hpp"
 
 namespace rsd::formats {
 
@@ -37,7 +38,7 @@ void read_t_cam_imu(YamlMap& cam, Calibration& c) {
   const std::vector<double> t = cam.matrix("T_cam_imu", 4, 4);
   const Eigen::Matrix<double, 4, 4, Eigen::RowMajor> T(t.data());
   const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
-  if ((R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 || std::abs(R.determinant() - 1) > 1e-6)
+  if (!dsp::is_rotation(R))
     cam.fail("T_cam_imu", "has a rotation part that is not a rotation (orthonormal, determinant +1, within 1e-6)");
   if (T(3, 0) != 0 || T(3, 1) != 0 || T(3, 2) != 0 || T(3, 3) != 1) cam.fail("T_cam_imu", "must end with the row [0, 0, 0, 1]");
   c.imu_to_camera = R;

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "dsp/core/input_limits.hpp"
+#include "dsp/geometry/rotation_check.hpp"
 
 namespace rsd::formats {
 
@@ -34,7 +35,7 @@ void read_motion_extrinsics(YamlMap& m, dsp::NominalModel& n) {
   if (m.has("imu_to_camera")) {
     const auto r = m.numbers("imu_to_camera", 9);
     const Eigen::Matrix3d R = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(r.data());
-    if ((R * R.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-6 || R.determinant() < 0)
+    if (!dsp::is_rotation(R))
       m.fail("imu_to_camera", "is not a rotation matrix (row-major, orthonormal, determinant +1)");
     n.imu_to_camera = R;
   }

@@ -348,17 +348,6 @@ TEST_F(VelocityInputTest, ThreadReceivesUntilStopped) {
   EXPECT_EQ(buffer_.count(), 1u);
 }
 
-TEST(VelocityInputRotation, Validation) {
-  EXPECT_TRUE(is_rotation(Eigen::Matrix3d::Identity()));
-  EXPECT_TRUE(is_rotation(rot_z90()));
-  Eigen::Matrix3d reflection = Eigen::Matrix3d::Identity();
-  reflection(2, 2) = -1;
-  EXPECT_FALSE(is_rotation(reflection));
-  EXPECT_FALSE(is_rotation(2.0 * Eigen::Matrix3d::Identity()));
-  Eigen::Matrix3d nan = Eigen::Matrix3d::Identity();
-  nan(0, 1) = std::nan("");
-  EXPECT_FALSE(is_rotation(nan));
-}
 
 namespace {
 Config load_text(const std::string& yaml) {

@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "dsp/core/statistics.hpp"
+#include "dsp/geometry/rotation_check.hpp"
 #include "formats/intrinsics_file.hpp"
 #include "formats/nominal_sections.hpp"
 #include "formats/yaml_map.hpp"
@@ -17,7 +18,7 @@ namespace {
 
 Eigen::Matrix3d rotation(const std::vector<double>& r, const std::string& what) {
   const Eigen::Matrix3d R = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(r.data());
-  if ((R * R.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-6 || R.determinant() < 0)
+  if (!dsp::is_rotation(R))
     throw UsageError(what + ": not a rotation matrix (row-major, orthonormal, determinant +1)");
   return R;
 }
