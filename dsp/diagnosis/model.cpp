@@ -37,9 +37,14 @@ ModelParams nominal_params(const NominalModel& n) {
   return p;  // gyro bias and mount rotation: the nominal model has none
 }
 
+std::optional<Follows> follows(Param q, const NominalModel& n) {
+  if (q == Param::Fy) return Follows{Param::Fx, n.cam.fy / n.cam.fx};
+  return std::nullopt;
+}
+
 void set_param(ModelParams& p, Param q, double v, const NominalModel& n) {
   p[q] = v;
-  if (q == Param::Fx) p[Param::Fy] = v * n.cam.fy / n.cam.fx;
+  if (const std::optional<Follows> f = follows(Param::Fy, n); q == f->leader) p[Param::Fy] = v * f->factor;
 }
 
 double param_scale(Param p, const NominalModel& n) {

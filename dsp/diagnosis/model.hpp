@@ -65,6 +65,14 @@ double param_scale(Param p, const NominalModel& n);
 // apart, fy stood in for the vertical stretch a rolling shutter gives a pan (a 13% focal error
 // under parallax came out as fx and fy 5% apart, and was refused). Fy is never free on its own.
 void set_param(ModelParams& p, Param q, double v, const NominalModel& n);
+// A parameter that is never free on its own follows another as set_param sets it (fy follows fx
+// at the nominal's aspect): the one it follows and the factor, so that its uncertainty is that
+// factor times the other's. nullopt for a parameter that is free on its own.
+struct Follows {
+  Param leader;
+  double factor;
+};
+std::optional<Follows> follows(Param q, const NominalModel& n);
 
 // Landmarks recordings with a trajectory, matches recordings with a gyro. Not thread-safe:
 // the gyro track of the last few bias values is cached inside.

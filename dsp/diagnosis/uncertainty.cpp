@@ -95,22 +95,23 @@ std::optional<Eigen::VectorXd> parameter_variances(const DiagnosisModel& m, cons
 
 std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, const std::vector<NamedEffect>& effects,
                                                    const ModelParams& fitted, const std::vector<int>& fit) {
-  // Every continuous parameter of every named effect is free at once; fy follows fx (set_param).
+  // Every continuous parameter of every named effect is free at once, but for those that follow
+  // another (set_param: fy follows fx), whose sigma follows too.
+  const NominalModel& n = m.recording().nominal;
   std::vector<Param> free;
   for (const NamedEffect& e : effects)
     for (const EffectParam& p : e.params)
-      if (const auto k = param_by_name(p.name); k && *k != Param::Fy && p.text.empty() &&
+      if (const auto k = param_by_name(p.name); k && !follows(*k, n) && p.text.empty() &&
                                                  std::find(free.begin(), free.end(), *k) == free.end())
         free.push_back(*k);
-  const NominalModel& n = m.recording().nominal;
   const std::optional<Eigen::VectorXd> var = parameter_variances(m, fitted, free, fit);
   auto sigma_of = [&](Param p) -> std::optional<double> {
-    const double follows = p == Param::Fy ? n.cam.fy / n.cam.fx : 1.0;
-    if (p == Param::Fy) p = Param::Fx;
+    double factor = 1.0;
+    if (const std::optional<Follows> f = follows(p, n)) p = f->leader, factor = f->factor;
     const auto it = std::find(free.begin(), free.end(), p);
     if (!var || it == free.end()) return std::nullopt;
     const double v = (*var)[it - free.begin()];
-    return v >= 0 ? std::optional<double>(follows * std::sqrt(v)) : std::nullopt;
+    return v >= 0 ? std::optional<double>(factor * std::sqrt(v)) : std::nullopt;
   };
 
   std::vector<ParamUncertainty> out;
