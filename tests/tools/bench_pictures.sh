@@ -4,21 +4,27 @@
 # scenario (config/scenarios/extract-matches-rolling-shutter.yaml at 1080p, a 2e-5 s line delay),
 # extracted (features tracked on at most --track-pairs frame pairs) and diagnosed; prints the
 # CPU time of each step. A minute's log is 3.7 GB and takes about 9 minutes to render.
-# Usage: tests/tools/bench_pictures.sh BUILD_DIR [SECONDS=60] [WORK_DIR=a new temporary directory]
+# A frame size other than 1080p (SIZE, e.g. 1280x720) keeps the field of view and the readout time.
+# Usage: tests/tools/bench_pictures.sh BUILD_DIR [SECONDS=60] [WORK_DIR=a new temporary directory] [SIZE=1920x1080]
 set -euo pipefail
-build=${1:?usage: bench_pictures.sh BUILD_DIR [SECONDS] [WORK_DIR]}
+build=${1:?usage: bench_pictures.sh BUILD_DIR [SECONDS] [WORK_DIR] [SIZE]}
 seconds=${2:-60}
 work=${3:-$(mktemp -d)}
+size=${4:-1920x1080}
+width=${size%x*} height=${size#*x}
+f=$(awk "BEGIN{print 1500 * $width / 1920}")
+cx=$(awk "BEGIN{print ($width - 1) / 2}") cy=$(awk "BEGIN{print ($height - 1) / 2}")
+line_delay=$(awk "BEGIN{print 2.0e-5 * 1080 / $height}")
 here=$(cd "$(dirname "$0")/../.." && pwd)
 mkdir -p "$work"
 sed -e "s/^duration_s: .*/duration_s: $seconds/" \
-    -e "s/^camera: .*/camera: {width: 1920, height: 1080, fx: 1500, fy: 1500, cx: 959.5, cy: 539.5, distortion: [0, 0, 0, 0]}/" \
-    -e "s/line_delay_s: 5.0e-5/line_delay_s: 2.0e-5/" \
+    -e "s/^camera: .*/camera: {width: $width, height: $height, fx: $f, fy: $f, cx: $cx, cy: $cy, distortion: [0, 0, 0, 0]}/" \
+    -e "s/line_delay_s: 5.0e-5/line_delay_s: $line_delay/" \
     "$here/config/scenarios/extract-matches-rolling-shutter.yaml" > "$work/scenario.yaml"
 grep '^camera:' "$work/scenario.yaml" > "$work/nominal.yaml"
 TIMEFORMAT="%U s user + %S s system (%R s wall)"
 if [ ! -s "$work/run.lcmlog" ]; then
-  echo "rendering ${seconds} s of 1080p into $work/run.lcmlog ..."
+  echo "rendering ${seconds} s of ${size} into $work/run.lcmlog ..."
   "$build/tools/rsd-sim" lcm "$work/scenario.yaml" "$work/run.lcmlog" > "$work/render.log" 2>&1
 fi
 rm -rf "$work/rec"
