@@ -197,6 +197,14 @@ std::vector<int> usable(const DiagnosisModel& m, const ModelParams& p, const std
   return out;
 }
 
+// The translation nuisance's knot spacing (translation_knot_spacing), judged on the richest
+// rotation fit from `gross` under the nuisance, every applicable effect free: what an effect
+// explains is not left for a finer spline to take.
+double knot_spacing(const DiagnosisModel& m, const std::vector<int>& screen, ModelParams gross, double sigma) {
+  gross.translation_nuisance = true;
+  return translation_knot_spacing(m, screen, fit_params(m, screen, gross, applicable_params(m), sigma, 20));
+}
+
 // The selection; for matches with parallax the rotation-only model cannot express, chosen again
 // on what a translation per frame pair cannot explain, so that no effect stands in for it. The
 // parameters keep the translation nuisance on when it was used.
@@ -215,9 +223,15 @@ Selection select_with_parallax(const DiagnosisModel& m, const std::vector<int>& 
     d.parallax = parallax_signal(m, sel.params, use_fit);
     if (!d.parallax.clear()) return hold_on_blocked_halves(m, use_fit, use_held, screen, nominal, g, d.sigma_px, so, sel);
   }
-  if (so.progress) so.progress("parallax in the matches: selecting again with the camera's translation (a smooth velocity over the depth) taken out");
   ModelParams n = nominal, g = d.gross;
   n.translation_nuisance = g.translation_nuisance = true;
+  n.translation_knot_s = g.translation_knot_s = knot_spacing(m, screen, g, d.sigma_px);
+  if (so.progress) {
+    std::ostringstream what;
+    what << "parallax in the matches: selecting again with the camera's translation (a smooth velocity over the depth, knots every "
+         << g.translation_knot_s << " s) taken out";
+    so.progress(what.str());
+  }
   return select_effects(m, use_fit, use_held, screen, n, g, d.sigma_px, so);
 }
 

@@ -342,7 +342,7 @@ std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, con
   const GyroTrack& tr = track(bias_of(p), scale_of(p));
   const MatchSetup ms = match_setup(p);
   for (int i : idx) out.push_back(match_residual(ms, tr, i).value_or(nan));
-  if (p.translation_nuisance) remove_translation(*this, idx, out, tr, ms.tm, ms.mount_t);
+  if (p.translation_nuisance) remove_translation(*this, idx, out, tr, ms.tm, ms.mount_t, p.translation_knot_s);
   return out;
 }
 

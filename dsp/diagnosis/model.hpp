@@ -24,6 +24,7 @@
 #include "dsp/geometry/camera_motion.hpp"
 #include "dsp/diagnosis/gyro.hpp"
 #include "dsp/diagnosis/pose_track.hpp"
+#include "dsp/diagnosis/translation.hpp"
 #include "dsp/observation/recording.hpp"
 
 namespace rsd::dsp {
@@ -51,6 +52,8 @@ struct ModelParams {
   // Matches: each frame pair's translation flow is taken out of its residuals (parallax.hpp),
   // when the recording shows parallax that the rotation-only model cannot express.
   bool translation_nuisance = false;
+  // The knot spacing of its velocity spline (s; translation.hpp).
+  double translation_knot_s = kTranslationKnotS;
   double& operator[](Param p) { return v[static_cast<int>(p)]; }
   double operator[](Param p) const { return v[static_cast<int>(p)]; }
 };

@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <tuple>
 
 #include "dsp/core/statistics.hpp"
 #include "dsp/diagnosis/model.hpp"
 #include "dsp/diagnosis/parallax.hpp"
+#include "dsp/diagnosis/robust_stats.hpp"
 
 namespace rsd::dsp {
 
@@ -171,6 +173,27 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
     }
   }
   for (size_t k = 0; k < by_pair.size(); ++k) r[by_pair[k].second] = left(k);
+}
+
+double translation_knot_spacing(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p) {
+  std::vector<int> ranks;
+  double t_lo = std::numeric_limits<double>::infinity(), t_hi = -t_lo;
+  for (int i : idx) ranks.push_back(m.frame_rank(i)), t_lo = std::min(t_lo, m.frame_time(i)), t_hi = std::max(t_hi, m.frame_time(i));
+  std::sort(ranks.begin(), ranks.end());
+  const double pairs = static_cast<double>(std::unique(ranks.begin(), ranks.end()) - ranks.begin());
+  ModelParams q = p;
+  q.translation_nuisance = true;
+  q.translation_knot_s = kTranslationKnotsS[0];
+  double scale = robust_stats(m.residuals(q, idx)).scale_px;
+  for (size_t k = 1; k < kTranslationKnotsS.size(); ++k) {
+    if (pairs < 2 * (t_hi - t_lo) / kTranslationKnotsS[k]) break;
+    ModelParams finer = q;
+    finer.translation_knot_s = kTranslationKnotsS[k];
+    const double s = robust_stats(m.residuals(finer, idx)).scale_px;
+    if (!(s < (1 - kFinerKnotsGain) * scale)) break;
+    q = finer, scale = s;
+  }
+  return q.translation_knot_s;
 }
 
 }  // namespace rsd::dsp

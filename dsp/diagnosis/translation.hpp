@@ -12,6 +12,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <vector>
 
 #include "dsp/diagnosis/gyro.hpp"
@@ -19,10 +20,21 @@
 namespace rsd::dsp {
 
 class DiagnosisModel;
+struct ModelParams;
 
 // The knot spacing of the velocity's cubic B-spline (s): it follows changes of velocity over
-// depth slower than about 1 / (2 x spacing) Hz.
+// depth slower than about 1 / (2 x spacing) Hz. A vehicle's velocity changes over seconds; a
+// hand-held camera's shakes at 1-2 Hz, and a spline that cannot follow it leaves the shake for
+// rotation effects to stand in for (a mount rotation of 2 degrees, from none, in the suite's
+// `parallax + focal_length` on two seeds): translation_knot_spacing chooses among these,
+// coarsest first.
 constexpr double kTranslationKnotS = 0.5;
+inline constexpr std::array<double, 3> kTranslationKnotsS = {kTranslationKnotS, 0.25, 0.125};
+// A finer spline is taken when it lowers the robust scale of the residual by more than this
+// share: fitting noise with the extra control points lowers it by about the ratio of their
+// number to the observations' (a percent), a shake the coarser spline cannot follow by tens of
+// percent.
+inline constexpr double kFinerKnotsGain = 0.10;
 
 // Removes from `r` (residuals of the observations `idx`, NaN for failed predictions) the flow of
 // the camera's translation: per frame pair, the flow over one plane (translation_flow,
@@ -37,5 +49,13 @@ constexpr double kTranslationKnotS = 0.5;
 void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
                         const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t,
                         double knot_s = kTranslationKnotS);
+
+// The knot spacing for the translation nuisance of `p` (its translation_nuisance on; the richest
+// rotation fit, every applicable effect free, so that a finer spline is not asked to take what an
+// effect explains) on the observations idx: kTranslationKnotsS in turn while the finer spline
+// lowers the robust scale of the residuals by more than kFinerKnotsGain, and while the frame
+// pairs hold it, two pairs per interval on average (a spline finer than its pairs is a free
+// translation per pair, which takes up what a rotation error leaves: a clock offset, a focal length).
+double translation_knot_spacing(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p);
 
 }  // namespace rsd::dsp
