@@ -44,7 +44,8 @@ std::optional<Follows> follows(Param q, const NominalModel& n) {
 
 void set_param(ModelParams& p, Param q, double v, const NominalModel& n) {
   p[q] = v;
-  if (const std::optional<Follows> f = follows(Param::Fy, n); q == f->leader) p[Param::Fy] = v * f->factor;
+  for (int k = 0; k < kParamCount; ++k)  // the parameters that follow q (fy follows fx)
+    if (const std::optional<Follows> f = follows(static_cast<Param>(k), n); f && f->leader == q) p.v[k] = v * f->factor;
 }
 
 double param_scale(Param p, const NominalModel& n) {
