@@ -276,15 +276,18 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
     out.held_drop = sel.heldout_drop(s, *best->refitted);
     std::string unnameable = unnameable_because(best->refitted->params, best->added, sel.m_);
     if (unnameable.empty()) unnameable = sel.fits_the_tail_because(s, *best->refitted);
-    if ((sel.held_.empty() || out.held_drop > 0) && unnameable.empty()) {
+    const bool heldout_worse = !sel.held_.empty() && out.held_drop <= 0;
+    if (!heldout_worse && unnameable.empty()) {
       s = std::move(*best->refitted);
       return true;
     }
+    // Every reason that holds is said: a user reading only one would look in the wrong place.
+    std::string why = name + " not named: " + unnameable;
+    if (heldout_worse)
+      why += (unnameable.empty() ? "" : "; and ") + std::string("it fits the fitting frames (BIC drop ") +
+             std::to_string(std::lround(out.drop)) + ") and predicts the held-out frames worse than without it";
     const bool first = out.refused.empty();
-    out.refused.emplace_back(best->added, !unnameable.empty() ? name + " not named: " + unnameable
-                                                             : name + " not named: it fits the fitting frames (BIC drop " +
-                                                                   std::to_string(std::lround(out.drop)) +
-                                                                   ") and predicts the held-out frames worse than without it");
+    out.refused.emplace_back(best->added, why);
     if (!beyond.empty() && first) {
       if (sel.opt_.progress) sel.opt_.progress(out.refused.back().second + "; no weaker effect is named in its stead");
       return false;
