@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <map>
 
 #include "dsp/core/statistics.hpp"
 
@@ -45,6 +47,28 @@ std::vector<bool> inliers(const std::vector<Eigen::Vector2d>& r) {
   std::vector<bool> in(r.size());
   for (size_t k = 0; k < r.size(); ++k) in[k] = r[k].allFinite() && r[k].norm() <= kOutlierSigmas * s.scale_px;
   return in;
+}
+
+PairedChange paired_change(const std::vector<Eigen::Vector2d>& before, const std::vector<Eigen::Vector2d>& after,
+                           const std::vector<int>& group) {
+  const double limit = kOutlierSigmas * robust_stats(before).scale_px;
+  std::map<int, double> sum_of;
+  for (size_t k = 0; k < before.size(); ++k)
+    if (before[k].allFinite() && after[k].allFinite() && before[k].norm() <= limit && after[k].norm() <= limit)
+      sum_of[group[k]] += after[k].squaredNorm() - before[k].squaredNorm();
+  PairedChange c;
+  c.groups = static_cast<int>(sum_of.size());
+  if (c.groups < 3) return c;
+  double sum = 0, sum2 = 0;
+  for (const auto& [g, d] : sum_of) sum += d, sum2 += d * d;
+  const double n = c.groups;
+  c.mean = sum / n;
+  const double se = std::sqrt(std::max(sum2 / n - c.mean * c.mean, 0.0) / (n - 1));
+  // A spread below rounding is none: every group changed alike.
+  const bool alike = se <= 1e-12 * std::max(std::abs(c.mean), 1e-300);
+  c.t = !alike ? c.mean / se : c.mean > 0 ? std::numeric_limits<double>::infinity()
+                             : c.mean < 0 ? -std::numeric_limits<double>::infinity() : 0.0;
+  return c;
 }
 
 }  // namespace rsd::dsp

@@ -22,4 +22,18 @@ RobustStats robust_stats(const std::vector<Eigen::Vector2d>& residuals);
 // The inlier rule every layer uses: finite and within kOutlierSigmas robust scales.
 std::vector<bool> inliers(const std::vector<Eigen::Vector2d>& residuals);
 
+// The change from residuals `before` to `after` (the same observations, in the same order),
+// paired by group: observations that move together (a frame pair's, with the camera's
+// translation left in) are one sample, not many. Per group, the sum of |after|^2 - |before|^2
+// over the observations both put within kOutlierSigmas robust scales of `before`; `t` is the
+// mean over the groups over its standard error (+-infinity when every group changes alike, 0
+// with fewer than 3 groups). Positive: `after` is worse.
+struct PairedChange {
+  int groups = 0;
+  double mean = 0;  // px^2 per group
+  double t = 0;
+};
+PairedChange paired_change(const std::vector<Eigen::Vector2d>& before, const std::vector<Eigen::Vector2d>& after,
+                           const std::vector<int>& group);
+
 }  // namespace rsd::dsp

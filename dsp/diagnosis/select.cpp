@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <optional>
 #include <sstream>
 
@@ -18,10 +17,8 @@ namespace rsd::dsp {
 
 namespace {
 
-// How many standard errors worse, over the frame pairs, a winner may predict the held-out frames
-// with the camera's translation left in (Selector::worse_with_parallax_because). Measured in the
-// suite: a gyro scale and a lens standing in for a focal length under a hand-held shake came out
-// 7.8 and 6.6 worse, the drone's true rolling shutter 0.9.
+// Selector::worse_with_parallax_because's limit. In the suite a gyro scale and a lens standing in
+// for a focal length under a hand-held shake came out 7.8 and 6.6 worse; the drone's shutter 0.9.
 constexpr double kWorseSigmas = 3.0;
 
 // The largest angle off the axis (radians) that the image's corners see through the camera's lens.
@@ -177,33 +174,22 @@ class Selector {
   }
 
   // Under the translation nuisance, whether `richer` predicts the held-out observations worse
-  // than `poorer` with the nuisance off, parallax and all, as the final model is judged
-  // (diagnosis.cpp, the first invariant), beyond what chance moves: the change of each frame
-  // pair's squared residuals (observations within kOutlierSigmas robust scales of `poorer`),
-  // paired, its mean over the pairs more than kWorseSigmas standard errors above zero. The
-  // parallax left in moves all of a pair's residuals together, so the pairs, not the matches,
-  // are the independent samples. "" when not worse, or when there is no nuisance.
+  // than `poorer` with the nuisance off, as the final model is judged (diagnosis.cpp, the first
+  // invariant), by over kWorseSigmas standard errors paired over the frame pairs (the parallax
+  // left in moves a pair's residuals together). "" when not, or when there is no nuisance.
   std::string worse_with_parallax_because(const State& poorer, const State& richer) const {
     if (held_.empty() || !richer.params.translation_nuisance) return "";
     ModelParams a = poorer.params, b = richer.params;
     a.translation_nuisance = b.translation_nuisance = false;
     const std::vector<Eigen::Vector2d> ra = m_.residuals(a, held_), rb = m_.residuals(b, held_);
-    const double limit = kOutlierSigmas * robust_stats(ra).scale_px;
-    std::map<int, double> per_pair;
-    for (size_t k = 0; k < held_.size(); ++k)
-      if (ra[k].allFinite() && rb[k].allFinite() && ra[k].norm() <= limit && rb[k].norm() <= limit)
-        per_pair[m_.frame_rank(held_[k])] += rb[k].squaredNorm() - ra[k].squaredNorm();
-    if (per_pair.size() < 3) return "";
-    double sum = 0, sum2 = 0;
-    for (const auto& [rank, dd] : per_pair) sum += dd, sum2 += dd * dd;
-    const double n = static_cast<double>(per_pair.size()), mean = sum / n;
-    const double se = std::sqrt(std::max(sum2 / n - mean * mean, 0.0) / (n - 1));
-    const double t = se > 0 ? mean / se : 0;
-    if (!(t > kWorseSigmas)) return "";
+    std::vector<int> pair(held_.size());
+    for (size_t k = 0; k < held_.size(); ++k) pair[k] = m_.frame_rank(held_[k]);
+    const PairedChange c = paired_change(ra, rb, pair);
+    if (!(c.t > kWorseSigmas)) return "";
     std::ostringstream why;
     why << "with the camera's translation left in, it predicts the held-out frames worse than without it ("
-        << robust_stats(ra).rms_px << " -> " << robust_stats(rb).rms_px << " px RMS; " << t << " standard errors over "
-        << per_pair.size() << " frame pairs)";
+        << robust_stats(ra).rms_px << " -> " << robust_stats(rb).rms_px << " px RMS; " << c.t
+        << " standard errors over " << c.groups << " frame pairs)";
     return why.str();
   }
 
