@@ -16,16 +16,25 @@ using dsp::paired_change;
 using dsp::PairedChange;
 
 // Unit residuals before; after, one observation per group whose squared length grows by
-// 1, 2, 3, 4, 5 px^2: the mean change 3, the sample deviation sqrt(2.5), the standard error
-// sqrt(2.5 / 5) = sqrt(0.5), t = 3 / sqrt(0.5).
-TEST(PairedChange, OneObservationPerGroupGivesTheTextbookPairedT) {
+// 1, 2, 3, 4, 5 px^2.
+struct Residuals {
   std::vector<Eigen::Vector2d> before, after;
   std::vector<int> group;
+};
+Residuals one_per_group() {
+  Residuals r;
   for (int k = 0; k < 5; ++k) {
-    before.emplace_back(1, 0);
-    after.emplace_back(std::sqrt(1.0 + (k + 1)), 0);
-    group.push_back(k);
+    r.before.emplace_back(1, 0);
+    r.after.emplace_back(std::sqrt(1.0 + (k + 1)), 0);
+    r.group.push_back(k);
   }
+  return r;
+}
+
+// one_per_group: the mean change 3, the sample deviation sqrt(2.5), the standard error
+// sqrt(2.5 / 5) = sqrt(0.5), t = 3 / sqrt(0.5).
+TEST(PairedChange, OneObservationPerGroupGivesTheTextbookPairedT) {
+  auto [before, after, group] = one_per_group();
   const PairedChange c = paired_change(before, after, group);
   EXPECT_EQ(c.groups, 5);
   EXPECT_NEAR(c.mean, 3.0, 1e-12);
@@ -56,13 +65,7 @@ TEST(PairedChange, ObservationsOfAGroupAreOneSample) {
 // An observation either model puts beyond kOutlierSigmas robust scales of `before` (here 100 px
 // where the rest lie within 2.5 px), or fails to predict (NaN), has no say.
 TEST(PairedChange, OutliersAndFailedPredictionsHaveNoSay) {
-  std::vector<Eigen::Vector2d> before, after;
-  std::vector<int> group;
-  for (int k = 0; k < 5; ++k) {
-    before.emplace_back(1, 0);
-    after.emplace_back(std::sqrt(1.0 + (k + 1)), 0);
-    group.push_back(k);
-  }
+  auto [before, after, group] = one_per_group();
   before.emplace_back(1, 0), after.emplace_back(100, 0), group.push_back(0);
   before.emplace_back(std::numeric_limits<double>::quiet_NaN(), 0), after.emplace_back(1, 0), group.push_back(1);
   const PairedChange c = paired_change(before, after, group);
