@@ -170,6 +170,7 @@ TEST(DiagnosisInvariants, ARefusedWinnerDoesNotHideAnEffectTheDataHold) {
 // refused); it must be kept, since it does not degrade that half, with the line delay the
 // moving half measures.
 TEST(DiagnosisInvariants, AnEffectOneHalfShowsWeaklyIsKept) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisInvariants.AnEffectThatAddsNothingHeldOutGivenTheOthersIsWithheld");
   SimConfig c = shaken(34);
   c.duration_s = 6.0;
   c.effects.line_delay_s = 2.5e-5;
@@ -206,6 +207,7 @@ TEST(DiagnosisInvariants, AnEffectOneHalfShowsWeaklyIsKept) {
 // while every other residual grows. It is refused for fitting the outliers at the bulk's cost;
 // the rolling shutter, whose structure runs through every residual, is named.
 TEST(DiagnosisInvariants, AnEffectThatFitsOnlyTheOutliersIsNotNamed) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisInvariants.AnEffectThatAddsNothingHeldOutGivenTheOthersIsWithheld");
   SimConfig c = shaken(34);
   c.effects.line_delay_s = 3e-5;
   SimulatedRecording sim = simulate_recording(c);

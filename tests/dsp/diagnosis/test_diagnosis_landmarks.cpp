@@ -173,6 +173,7 @@ TEST(DiagnosisLandmarks, RollingShutterAndDistortionConcealedTogether) {
 }
 
 TEST(DiagnosisLandmarks, RollingShutterAndTimeOffsetConcealedTogether) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisLandmarks.ConcealedClockDrift");
   SimConfig c = target(16);
   c.effects.line_delay_s = 1.2e-5;
   c.effects.time_offset_s = -0.003;

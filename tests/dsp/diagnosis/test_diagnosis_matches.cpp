@@ -112,6 +112,7 @@ TEST(DiagnosisMatches, ConcealedRollingShutter) {
 }
 
 TEST(DiagnosisMatches, ConcealedTimeOffset) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisMatches.NoEffectNamesNothingDespiteOutliersAndIrregularGyro");
   SimConfig c = phone(3);
   c.effects.time_offset_s = 0.0035;
   expect_concealed(c);
@@ -242,6 +243,9 @@ TEST(DiagnosisMatches, RepeatedStampsAndGapsNeverGiveNaN) {
   int finite = 0;
   for (const auto& r : m.residuals(p, all)) finite += r.allFinite();
   EXPECT_EQ(finite, m.size());
+  // The whole diagnosis of two seconds takes minutes under ASan; the residuals above read the
+  // repeated stamps and the gaps there.
+  RSD_SKIP_LONG_IN_SLOW_BUILD("the residuals above and DiagnosisMatches.NoEffectNamesNothingDespiteOutliersAndIrregularGyro");
   const Diagnosis d = diagnose(sim.rec);
   EXPECT_TRUE(std::isfinite(d.final_rms_px) && std::isfinite(d.heldout_final_rms_px));
   EXPECT_GT(d.unusable, 0);  // matches across the gaps are left out

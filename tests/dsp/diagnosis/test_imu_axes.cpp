@@ -9,6 +9,7 @@
 #include "dsp/diagnosis/imu_axes.hpp"
 #include "dsp/sim/recording_simulation.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
+#include "tests/support/sanitizer.hpp"
 
 namespace rsd::dsp {
 namespace {
@@ -34,6 +35,7 @@ TEST(ImuAxes, TheTwentyFourRotationsThatTakeAxesOntoAxes) {
 }
 
 TEST(ImuAxes, APhonesGyroAxesFoundFromItsMatches) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("ImuAxes.TheTwentyFourRotationsThatTakeAxesOntoAxes and DiagnosisMatches.*");
   SimConfig c = rsd::test::simulation(ObservationKind::Matches, 3, 4.0, 0.5);
   c.start_time_s = 1000;
   c.outlier_fraction = 0.1;

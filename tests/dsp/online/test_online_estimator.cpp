@@ -91,6 +91,7 @@ void show(double t, const OnlineEstimate& est) {
 }  // namespace
 
 TEST(OnlineEstimator, ConvergesWithinTenSecondsToTheIssueTolerances) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.AGlobalShutterLearnsTheOffsetAndTheBias");
   const SimConfig c = hand_held(7, 12);
   const SimulatedRecording sim = simulate_recording(c);
   OnlineEstimator e(c.nominal, nominal_start());
