@@ -214,6 +214,7 @@ Selection select_with_parallax(const DiagnosisModel& m, const std::vector<int>& 
   // The blocked-halves check waits for the parallax test: with parallax the selection is
   // made again, and checking the stand-ins it will not keep would be wasted.
   // A restart (at another sigma) after parallax was found goes straight to the second selection.
+  const bool seen_before_any_effect = d.parallax.clear();
   if (!d.parallax.clear()) {
     SelectionOptions first = so;
     first.blocked_halves = false;
@@ -232,7 +233,25 @@ Selection select_with_parallax(const DiagnosisModel& m, const std::vector<int>& 
          << g.translation_knot_s << " s) taken out";
     so.progress(what.str());
   }
-  return select_effects(m, use_fit, use_held, screen, n, g, d.sigma_px, so);
+  Selection with = select_effects(m, use_fit, use_held, screen, n, g, d.sigma_px, so);
+  if (!with.effects.empty() || !with.dropped_on_halves || !seen_before_any_effect) return with;
+  // Nothing named under the nuisance, because the blocked halves dropped the stand-ins it chose,
+  // and the parallax was seen with no effect in: what the rotation-only model lacked (a rolling
+  // shutter's shear, beside matches displaced in a part of the image) may have looked like
+  // parallax, and under the nuisance a translation over a tilted scene takes up part of a
+  // shutter's shear. The selection without the nuisance is kept if its residuals show no
+  // parallax. (Where nothing was chosen at all, nothing hints that the nuisance hid an effect:
+  // the real recordings' parallax, whose second selection cost twice the first's.)
+  if (so.progress) so.progress("nothing named with the translation taken out: selecting again without it");
+  SelectionOptions first = so;
+  first.blocked_halves = false;
+  ModelParams plain = d.gross;
+  plain.translation_nuisance = false;
+  Selection without = select_effects(m, use_fit, use_held, screen, nominal, plain, d.sigma_px, first);
+  const Parallax after = parallax_signal(m, without.params, use_fit);
+  if (after.clear()) return with;
+  d.parallax = after;
+  return hold_on_blocked_halves(m, use_fit, use_held, screen, nominal, plain, d.sigma_px, so, without);
 }
 
 // The held-out observations split at their median frame time (the blocked halves' split in

@@ -476,10 +476,14 @@ Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, c
   backward(sel, s, steps);
   if (!opt.blocked_halves) return {steps, s.params, withheld};
   if (opt.progress && !steps.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
+  const size_t chosen = steps.size();
   consistency(sel, s, steps);
+  const bool dropped = steps.size() < chosen;
   plausible_only(sel, s, steps, withheld);
   each_improves_held_out(sel, s, steps, withheld);
-  return {steps, s.params, withheld};
+  Selection out{steps, s.params, withheld};
+  out.dropped_on_halves = dropped;
+  return out;
 }
 
 Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
@@ -490,7 +494,9 @@ Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>
   for (const SelectedEffect& st : chosen.effects) s.effects.push_back(st.effect);  // one step per effect
   s.bic = sel.bic(s.params, s.effects, fit);
   if (opt.progress && !chosen.effects.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
+  const size_t before = chosen.effects.size();
   consistency(sel, s, chosen.effects);
+  chosen.dropped_on_halves = chosen.effects.size() < before;
   plausible_only(sel, s, chosen.effects, chosen.withheld);
   each_improves_held_out(sel, s, chosen.effects, chosen.withheld);
   chosen.params = s.params;

@@ -49,6 +49,8 @@ struct Selection {
   ModelParams params;                   // fitted; nominal values for the effects not selected
   // Effects the selection chose and did not name, each with why (unnameable_because).
   std::vector<std::string> withheld;
+  // Whether the blocked halves dropped an effect the rounds had chosen (a stand-in).
+  bool dropped_on_halves = false;
 };
 
 // `start` holds the gross estimates (gross_start) the candidates start from; `nominal` the

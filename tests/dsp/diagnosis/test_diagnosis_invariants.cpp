@@ -200,30 +200,59 @@ TEST(DiagnosisInvariants, AnEffectOneHalfShowsWeaklyIsKept) {
   EXPECT_NEAR(h[1].final_rms_px, h[1].baseline_rms_px, 0.01 * h[1].baseline_rms_px);
 }
 
-// Structure in the tail only: a rolling shutter throughout, and the matches of the image's
-// left quarter (a near object's parallax, cars passing under a drone) displaced by 6 px, far
-// beyond the noise, in every frame pair, held out or not. A gyro bias bends the model towards
-// that tail: it lowers the whole robust chi-square and the held-out one (the tail is there too)
-// while every other residual grows. It is refused for fitting the outliers at the bulk's cost;
-// the rolling shutter, whose structure runs through every residual, is named.
-TEST(DiagnosisInvariants, AnEffectThatFitsOnlyTheOutliersIsNotNamed) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisInvariants.AnEffectThatAddsNothingHeldOutGivenTheOthersIsWithheld");
+// A rolling shutter throughout, and the matches of the image's left `width` (a near object's
+// parallax, cars passing under a drone) displaced by 6 px, far beyond the noise, in every frame
+// pair, held out or not: the diagnosis and its progress lines.
+struct DisplacedPart {
+  Diagnosis d;
+  std::vector<std::string> progress;
+  bool said(const std::string& what) const {
+    return std::any_of(progress.begin(), progress.end(), [&](const std::string& p) { return p.find(what) != std::string::npos; });
+  }
+};
+DisplacedPart shutter_with_left_part_displaced(double width) {
   SimConfig c = shaken(34);
   c.effects.line_delay_s = 3e-5;
   SimulatedRecording sim = simulate_recording(c);
-  int moved = 0;
+  size_t moved = 0;
   for (Match& mt : sim.rec.matches)
-    if (mt.a.x() < 0.15 * sim.rec.nominal.cam.width) mt.b.x() += 6.0, ++moved;
-  ASSERT_GT(moved, static_cast<int>(sim.rec.matches.size() / 10));
-  std::vector<std::string> progress;
+    if (mt.a.x() < width * sim.rec.nominal.cam.width) mt.b.x() += 6.0, ++moved;
+  EXPECT_GT(moved, static_cast<size_t>(0.8 * width * static_cast<double>(sim.rec.matches.size())));
+  DisplacedPart out;
   DiagnosisOptions opt;
-  opt.progress = [&](const std::string& p) { progress.push_back(p); };
-  const Diagnosis d = diagnose(sim.rec, opt);
-  show(d);
-  for (const std::string& p : progress)
+  opt.progress = [&](const std::string& p) { out.progress.push_back(p); };
+  out.d = diagnose(sim.rec, opt);
+  show(out.d);
+  for (const std::string& p : out.progress)
     if (p.find("not named") != std::string::npos) std::printf("  %s\n", p.c_str());
-  EXPECT_EQ(names(d), "rolling_shutter ");
-  EXPECT_NEAR(d.fitted[Param::LineDelay], 3e-5, 0.1 * 3e-5);
-  EXPECT_TRUE(std::any_of(progress.begin(), progress.end(),
-                          [](const std::string& p) { return p.find("not named: it fits the outliers") != std::string::npos; }));
+  return out;
+}
+
+// Structure in the tail only, the image's left 15% displaced. A gyro bias bends the model
+// towards that tail: it lowers the whole robust chi-square and the held-out one (the tail is
+// there too) while every other residual grows. It is refused for fitting the outliers at the
+// bulk's cost; the rolling shutter, whose structure runs through every residual, is named.
+TEST(DiagnosisInvariants, AnEffectThatFitsOnlyTheOutliersIsNotNamed) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisInvariants.AnEffectThatAddsNothingHeldOutGivenTheOthersIsWithheld");
+  const DisplacedPart r = shutter_with_left_part_displaced(0.15);
+  EXPECT_EQ(names(r.d), "rolling_shutter ");
+  EXPECT_NEAR(r.d.fitted[Param::LineDelay], 3e-5, 0.1 * 3e-5);
+  EXPECT_TRUE(r.said("not named: it fits the outliers"));
+}
+
+// The same with the image's left quarter displaced (issue 34, point 2): before any effect is in,
+// the shutter's shear beside the displaced quarter looks like parallax; under the translation
+// nuisance a translation over a tilted scene takes up part of the shear, a clock drift and a
+// gyro bias stand in for it and fail the blocked halves, and nothing was named. Nothing named
+// there, the selection without the nuisance is made again and kept, its residuals showing no
+// parallax: the shutter is named, the gyro bias refused for fitting the outliers.
+TEST(DiagnosisInvariants, AQuarterDisplacedIsNotTakenForParallaxOnceTheShutterIsIn) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisInvariants.AnEffectThatAddsNothingHeldOutGivenTheOthersIsWithheld");
+  const DisplacedPart r = shutter_with_left_part_displaced(0.25);
+  EXPECT_TRUE(r.said("parallax in the matches"));
+  EXPECT_TRUE(r.said("nothing named with the translation taken out: selecting again without it"));
+  EXPECT_EQ(names(r.d), "rolling_shutter ");
+  EXPECT_NEAR(r.d.fitted[Param::LineDelay], 3e-5, 0.1 * 3e-5);
+  EXPECT_TRUE(r.said("gyro_bias not named: it fits the outliers"));
+  EXPECT_LT(r.d.heldout_final_rms_px, 0.5 * r.d.heldout_baseline_rms_px);
 }
