@@ -53,8 +53,7 @@ class Selector {
   // kHalvesAgreeSigmas. The drops (the worse direction of each split; NaN where a split does
   // not apply) go to `time_drop` and `rate_drop`, the larger disagreement to `apart`.
   bool consistent(const State& poorer, const State& richer, double& time_drop, double& rate_drop, double& apart) const {
-    time_drop = rate_drop = std::numeric_limits<double>::quiet_NaN();
-    apart = 0;
+    time_drop = rate_drop = std::numeric_limits<double>::quiet_NaN(), apart = 0;
     const Hypothesis p{poorer.params, mask_of(poorer.effects, lens_)}, r{richer.params, mask_of(richer.effects, lens_)};
     for (auto [h, drop] : {std::pair{&time_halves_, &time_drop}, std::pair{&rate_halves_, &rate_drop}}) {
       if (!h->usable()) continue;
@@ -127,8 +126,7 @@ class Selector {
   // shrunk by the richer model's design effect (design_effect).
   double drop(const State& poorer, const State& richer) const {
     const double D = design_effect(m_, richer.params, fit_, sigma_);
-    const double pen = std::log(2.0 * fit_.size());
-    const double dk = (k_of(richer) - k_of(poorer));
+    const double pen = std::log(2.0 * fit_.size()), dk = k_of(richer) - k_of(poorer);
     const double prior0 = implausibility(poorer.params, poorer.effects), prior1 = implausibility(richer.params, richer.effects);
     return ((poorer.bic - k_of(poorer) * pen - prior0) - (richer.bic - k_of(richer) * pen - prior1)) / D - dk * pen -
            (prior1 - prior0);
@@ -387,11 +385,12 @@ void backward(const Selector& sel, State& s, std::vector<SelectedEffect>& steps)
   }
 }
 
-// Drops any selected effect that does not hold out of its own half: with the others in, it
-// must predict the blocked half it was not fitted on, both ways (Selector::consistent). A
-// stand-in for physics outside the table (a clock that jumps, a gyro that clips) fits one
-// half's structure and mispredicts the other's. The latest pick is judged first.
-void consistency(const Selector& sel, State& s, std::vector<SelectedEffect>& steps) {
+// Drops any selected effect that does not hold out of its own half (says whether any did):
+// with the others in, it must predict the blocked half it was not fitted on, both ways
+// (Selector::consistent). A stand-in for physics outside the table (a clock that jumps, a gyro
+// that clips) fits one half's structure and mispredicts the other's; the latest pick first.
+bool consistency(const Selector& sel, State& s, std::vector<SelectedEffect>& steps) {
+  const size_t chosen = steps.size();
   for (bool changed = true; changed && !s.effects.empty();) {
     changed = false;
     for (auto it = s.effects.rbegin(); it != s.effects.rend(); ++it) {
@@ -411,6 +410,7 @@ void consistency(const Selector& sel, State& s, std::vector<SelectedEffect>& ste
       break;
     }
   }
+  return steps.size() < chosen;
 }
 
 // Drops any selected effect whose value real hardware does not have, or that sits on its fit's
@@ -476,14 +476,10 @@ Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, c
   backward(sel, s, steps);
   if (!opt.blocked_halves) return {steps, s.params, withheld};
   if (opt.progress && !steps.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
-  const size_t chosen = steps.size();
-  consistency(sel, s, steps);
-  const bool dropped = steps.size() < chosen;
+  const bool dropped = consistency(sel, s, steps);
   plausible_only(sel, s, steps, withheld);
   each_improves_held_out(sel, s, steps, withheld);
-  Selection out{steps, s.params, withheld};
-  out.dropped_on_halves = dropped;
-  return out;
+  return {steps, s.params, withheld, dropped};
 }
 
 Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
@@ -494,9 +490,7 @@ Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>
   for (const SelectedEffect& st : chosen.effects) s.effects.push_back(st.effect);  // one step per effect
   s.bic = sel.bic(s.params, s.effects, fit);
   if (opt.progress && !chosen.effects.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
-  const size_t before = chosen.effects.size();
-  consistency(sel, s, chosen.effects);
-  chosen.dropped_on_halves = chosen.effects.size() < before;
+  chosen.dropped_on_halves = consistency(sel, s, chosen.effects);
   plausible_only(sel, s, chosen.effects, chosen.withheld);
   each_improves_held_out(sel, s, chosen.effects, chosen.withheld);
   chosen.params = s.params;
