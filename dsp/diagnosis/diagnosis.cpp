@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "dsp/diagnosis/blocked_halves.hpp"
@@ -205,25 +206,35 @@ double knot_spacing(const DiagnosisModel& m, const std::vector<int>& screen, Mod
   return translation_knot_spacing(m, screen, fit_params(m, screen, gross, applicable_params(m), sigma, 20));
 }
 
+// The selection without the translation nuisance, its blocked-halves check held until the
+// parallax test (`seen`) has run on its residuals: checking stand-ins that will not be kept
+// would be wasted. Nothing when the residuals show parallax.
+std::optional<Selection> select_without_parallax(const DiagnosisModel& m, const std::vector<int>& use_fit,
+                                                 const std::vector<int>& use_held, const std::vector<int>& screen,
+                                                 const ModelParams& nominal, const Diagnosis& d, const SelectionOptions& so,
+                                                 Parallax& seen) {
+  SelectionOptions first = so;
+  first.blocked_halves = false;
+  ModelParams g = d.gross;
+  g.translation_nuisance = false;
+  Selection sel = select_effects(m, use_fit, use_held, screen, nominal, g, d.sigma_px, first);
+  seen = parallax_signal(m, sel.params, use_fit);
+  if (seen.clear()) return std::nullopt;
+  return hold_on_blocked_halves(m, use_fit, use_held, screen, nominal, g, d.sigma_px, so, sel);
+}
+
 // The selection; for matches with parallax the rotation-only model cannot express, chosen again
 // on what a translation per frame pair cannot explain, so that no effect stands in for it. The
 // parameters keep the translation nuisance on when it was used.
 Selection select_with_parallax(const DiagnosisModel& m, const std::vector<int>& use_fit, const std::vector<int>& use_held,
                                const std::vector<int>& screen, const ModelParams& nominal, Diagnosis& d,
                                const SelectionOptions& so) {
-  // The blocked-halves check waits for the parallax test: with parallax the selection is
-  // made again, and checking the stand-ins it will not keep would be wasted.
-  // A restart (at another sigma) after parallax was found goes straight to the second selection.
+  // The gross search's parallax did not hold at the noise scale: the selection without the
+  // nuisance, unless its residuals show parallax. A restart (at another sigma) after parallax
+  // was found goes straight to the selection under the nuisance.
   const bool seen_before_any_effect = d.parallax.clear();
-  if (!d.parallax.clear()) {
-    SelectionOptions first = so;
-    first.blocked_halves = false;
-    ModelParams g = d.gross;
-    g.translation_nuisance = false;  // the gross search's parallax did not hold at the noise scale
-    Selection sel = select_effects(m, use_fit, use_held, screen, nominal, g, d.sigma_px, first);
-    d.parallax = parallax_signal(m, sel.params, use_fit);
-    if (!d.parallax.clear()) return hold_on_blocked_halves(m, use_fit, use_held, screen, nominal, g, d.sigma_px, so, sel);
-  }
+  if (!seen_before_any_effect)
+    if (auto plain = select_without_parallax(m, use_fit, use_held, screen, nominal, d, so, d.parallax)) return *plain;
   ModelParams n = nominal, g = d.gross;
   n.translation_nuisance = g.translation_nuisance = true;
   n.translation_knot_s = g.translation_knot_s = knot_spacing(m, screen, g, d.sigma_px);
@@ -243,15 +254,11 @@ Selection select_with_parallax(const DiagnosisModel& m, const std::vector<int>& 
   // parallax. (Where nothing was chosen at all, nothing hints that the nuisance hid an effect:
   // the real recordings' parallax, whose second selection cost twice the first's.)
   if (so.progress) so.progress("nothing named with the translation taken out: selecting again without it");
-  SelectionOptions first = so;
-  first.blocked_halves = false;
-  ModelParams plain = d.gross;
-  plain.translation_nuisance = false;
-  Selection without = select_effects(m, use_fit, use_held, screen, nominal, plain, d.sigma_px, first);
-  const Parallax after = parallax_signal(m, without.params, use_fit);
-  if (after.clear()) return with;
+  Parallax after;
+  auto plain = select_without_parallax(m, use_fit, use_held, screen, nominal, d, so, after);
+  if (!plain) return with;
   d.parallax = after;
-  return hold_on_blocked_halves(m, use_fit, use_held, screen, nominal, plain, d.sigma_px, so, without);
+  return *plain;
 }
 
 // The held-out observations split at their median frame time (the blocked halves' split in
