@@ -141,24 +141,28 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   std::string scenario, out;
   FrameOptions fo;
+  // What every rendering subcommand takes: how many frames, and how each is rendered.
+  auto add_picture_options = [&fo](CLI::App* sub) {
+    sub->add_option("--count", fo.count, "frames to render (default: all)")->check(CLI::NonNegativeNumber);
+    sub->add_flag("--rgb", fo.rgb, "RGB frames instead of mono8");
+    sub->add_option("--noise", fo.noise, "pixel noise sigma in grey levels")->check(CLI::NonNegativeNumber);
+    sub->add_option("--supersample", fo.supersample, "n x n samples per pixel (anti-aliasing; 1 renders four times faster than the default)")
+        ->check(CLI::Range(1, 8))
+        ->capture_default_str();
+  };
   auto* rec = app.add_subcommand("recording", "write an observation recording (docs/formats/recording-v1.md)");
   rec->add_option("scenario", scenario, "scenario YAML")->required()->check(CLI::ExistingFile);
   rec->add_option("outdir", out, "output directory (created)")->required();
   auto* frames = app.add_subcommand("frames", "render the scenario's target as PNG frames, each row at its read time");
   frames->add_option("scenario", scenario, "scenario YAML (landmarks kind)")->required()->check(CLI::ExistingFile);
   frames->add_option("outdir", out, "output directory (created)")->required();
-  frames->add_option("--count", fo.count, "frames to render (default: all)")->check(CLI::NonNegativeNumber);
-  frames->add_flag("--rgb", fo.rgb, "write RGB instead of mono8");
-  frames->add_option("--noise", fo.noise, "pixel noise sigma in grey levels")->check(CLI::NonNegativeNumber);
-  frames->add_option("--supersample", fo.supersample, "n x n samples per pixel")->check(CLI::Range(1, 8));
+  add_picture_options(frames);
   frames->add_option("--exposure", fo.exposure_s, "row exposure in s (motion blur)")->check(CLI::NonNegativeNumber);
   frames->add_option("--blur-samples", fo.blur_samples, "time samples over the exposure")->check(CLI::Range(1, 64));
   auto* lcmlog = app.add_subcommand("lcm", "write raw frames and the true velocity as an LCM log (rsd's replay input)");
   lcmlog->add_option("scenario", scenario, "scenario YAML (landmarks kind)")->required()->check(CLI::ExistingFile);
   lcmlog->add_option("log", out, "output .lcmlog file")->required();
-  lcmlog->add_option("--count", fo.count, "frames to render (default: all)")->check(CLI::NonNegativeNumber);
-  lcmlog->add_flag("--rgb", fo.rgb, "RGB frames instead of mono8");
-  lcmlog->add_option("--noise", fo.noise, "pixel noise sigma in grey levels")->check(CLI::NonNegativeNumber);
+  add_picture_options(lcmlog);
   lcmlog->add_option("--exposure", fo.exposure_s, "row exposure in s (motion blur)")->check(CLI::NonNegativeNumber);
   lcmlog->add_option("--blur-samples", fo.blur_samples, "time samples over the exposure")->check(CLI::Range(1, 64));
   lcmlog->add_flag("--pose", fo.pose,
@@ -168,10 +172,7 @@ int main(int argc, char** argv) {
                                                "target and its points (what rsd --replay DIR and rsd-diagnose DIR read)");
   images->add_option("scenario", scenario, "scenario YAML (landmarks kind, checkerboard or aprilgrid)")->required()->check(CLI::ExistingFile);
   images->add_option("outdir", out, "output directory (created)")->required();
-  images->add_option("--count", fo.count, "frames to render (default: all)")->check(CLI::NonNegativeNumber);
-  images->add_flag("--rgb", fo.rgb, "write RGB instead of mono8");
-  images->add_option("--noise", fo.noise, "pixel noise sigma in grey levels")->check(CLI::NonNegativeNumber);
-  images->add_option("--supersample", fo.supersample, "n x n samples per pixel")->check(CLI::Range(1, 8));
+  add_picture_options(images);
   auto* fig = app.add_subcommand("figure1", "render the paper's Figure 1 (four PNGs)");
   fig->add_option("outdir", out, "output directory (created)")->required();
   if (const auto rc = tools::parse_command_line(app, argc, argv)) return *rc;
