@@ -5,8 +5,9 @@
 # extracted (features tracked on at most --track-pairs frame pairs) and diagnosed; prints the
 # CPU time of each step. A minute's log is 3.7 GB and takes about 9 minutes to render.
 # A frame size other than 1080p (SIZE, e.g. 1280x720) keeps the field of view and the readout time.
-# SUPERSAMPLE 1 renders four times faster than rsd-sim's default 2 (ten minutes of 1080p: a 37 GB
-# log), at the price of aliased texture, which the tracker sees as a little more noise.
+# SUPERSAMPLE 1 renders about twice as fast as rsd-sim's default 2 (0.17 s a 1080p frame of one
+# core; ten minutes of 1080p are a 37 GB log), at the price of aliased texture, which the tracker
+# sees as more noise (0.33 px against 0.10).
 # Usage: tests/tools/bench_pictures.sh BUILD_DIR [SECONDS=60] [WORK_DIR=a new temporary directory] [SIZE=1920x1080]
 #                                      [SUPERSAMPLE=2]
 set -euo pipefail
