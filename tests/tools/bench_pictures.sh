@@ -11,7 +11,7 @@
 # Usage: tests/tools/bench_pictures.sh BUILD_DIR [SECONDS=60] [WORK_DIR=a new temporary directory] [SIZE=1920x1080]
 #                                      [SUPERSAMPLE=2]
 set -euo pipefail
-build=${1:?usage: bench_pictures.sh BUILD_DIR [SECONDS] [WORK_DIR] [SIZE]}
+build=${1:?usage: bench_pictures.sh BUILD_DIR [SECONDS] [WORK_DIR] [SIZE] [SUPERSAMPLE]}
 seconds=${2:-60}
 work=${3:-$(mktemp -d)}
 size=${4:-1920x1080}
