@@ -243,7 +243,7 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
     State state;
     std::optional<State> refitted;  // on all fitting observations, once asked for
   };
-  std::vector<Candidate> screened;
+  std::vector<Candidate> screened;  // never moved once built: `order` ranks pointers to them
   std::vector<Effect> open;
   for (Effect e : candidates)
     // lens_model replaces lens_distortion (with the other family's terms): never the reverse.
@@ -256,16 +256,18 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
     screened.push_back({d, open[k], std::move(c), std::nullopt});
     if (sel.opt_.step) sel.opt_.step(stage, static_cast<int>(k + 1), static_cast<int>(open.size()));
   }
-  std::sort(screened.begin(), screened.end(), [](const auto& a, const auto& b) { return a.projected > b.projected; });
-  while (!screened.empty()) {
-    const double best_projected = screened.front().projected;
+  std::vector<Candidate*> order;
+  for (Candidate& c : screened) order.push_back(&c);
+  std::sort(order.begin(), order.end(), [](const Candidate* a, const Candidate* b) { return a->projected > b->projected; });
+  while (!order.empty()) {
+    const double best_projected = order.front()->projected;
     if (best_projected < sel.opt_.min_bic_drop) return false;
     const double margin = 30 + 0.05 * best_projected;
     std::vector<Candidate*> near;
-    for (Candidate& c : screened) {
-      if (c.projected < best_projected - margin) break;
-      if (!c.refitted) c.refitted = sel.refit_all(c.state);
-      near.push_back(&c);
+    for (Candidate* c : order) {
+      if (c->projected < best_projected - margin) break;
+      if (!c->refitted) c->refitted = sel.refit_all(c->state);
+      near.push_back(c);
     }
     // Among hypotheses the data hardly tell apart, one with a value no real hardware has is
     // the stand-in: the lowest BIC of the plausible ones wins (a gyro scale 8% off came within
@@ -316,7 +318,7 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
       return false;
     }
     if (sel.opt_.progress) sel.opt_.progress(out.refused.back().second);
-    screened.erase(screened.begin() + (best - screened.data()));
+    order.erase(std::find(order.begin(), order.end(), best));
   }
   return false;
 }
@@ -385,52 +387,57 @@ void backward(const Selector& sel, State& s, std::vector<SelectedEffect>& steps)
   }
 }
 
+// The selected effects judged latest first, again after each that goes, until all stay:
+// `judge(e)` returns the state without e (the rest refitted) when e must go, else nothing.
+// Says whether any went.
+template <class Judge>
+bool drop_latest_first(State& s, std::vector<SelectedEffect>& steps, Judge judge) {
+  bool any = false;
+  for (bool changed = true; changed && !s.effects.empty();) {
+    changed = false;
+    for (auto it = s.effects.rbegin(); it != s.effects.rend(); ++it) {
+      const Effect e = *it;
+      std::optional<State> without = judge(e);
+      if (!without) continue;
+      s = std::move(*without);  // invalidates `it`
+      forget(steps, e);
+      changed = any = true;
+      break;
+    }
+  }
+  return any;
+}
+
 // Drops any selected effect that does not hold out of its own half (says whether any did):
 // with the others in, it must predict the blocked half it was not fitted on, both ways
 // (Selector::consistent). A stand-in for physics outside the table (a clock that jumps, a gyro
 // that clips) fits one half's structure and mispredicts the other's; the latest pick first.
 bool consistency(const Selector& sel, State& s, std::vector<SelectedEffect>& steps) {
-  const size_t chosen = steps.size();
-  for (bool changed = true; changed && !s.effects.empty();) {
-    changed = false;
-    for (auto it = s.effects.rbegin(); it != s.effects.rend(); ++it) {
-      const Effect e = *it;
-      const State without = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
-      double time_drop = 0, rate_drop = 0, apart = 0;
-      const bool holds = sel.consistent(without, s, time_drop, rate_drop, apart);
-      for (SelectedEffect& st : steps)
-        if (st.effect == e) st.blocked_time_drop = time_drop, st.blocked_rate_drop = rate_drop;
-      if (holds) continue;
-      if (sel.opt_.progress)
-        sel.opt_.progress(std::string("dropped ") + effect_name(e) + ": it does not hold on the blocked halves" +
-                          (apart > kHalvesAgreeSigmas ? " (they put its value " + std::to_string(std::lround(apart)) + " sigmas apart)" : ""));
-      s = without;
-      forget(steps, e);
-      changed = true;
-      break;
-    }
-  }
-  return steps.size() < chosen;
+  return drop_latest_first(s, steps, [&](Effect e) -> std::optional<State> {
+    State without = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
+    double time_drop = 0, rate_drop = 0, apart = 0;
+    const bool holds = sel.consistent(without, s, time_drop, rate_drop, apart);
+    for (SelectedEffect& st : steps)
+      if (st.effect == e) st.blocked_time_drop = time_drop, st.blocked_rate_drop = rate_drop;
+    if (holds) return std::nullopt;
+    if (sel.opt_.progress)
+      sel.opt_.progress(std::string("dropped ") + effect_name(e) + ": it does not hold on the blocked halves" +
+                        (apart > kHalvesAgreeSigmas ? " (they put its value " + std::to_string(std::lround(apart)) + " sigmas apart)" : ""));
+    return without;
+  });
 }
 
 // Drops any selected effect whose value real hardware does not have, or that sits on its fit's
 // bound (plausibility.hpp, unnameable_because), refitting the rest; the latest pick is judged
 // first. What was dropped, and why, goes to `withheld`.
 void plausible_only(const Selector& sel, State& s, std::vector<SelectedEffect>& steps, std::vector<std::string>& withheld) {
-  for (bool changed = true; changed && !s.effects.empty();) {
-    changed = false;
-    for (auto it = s.effects.rbegin(); it != s.effects.rend(); ++it) {
-      const Effect e = *it;
-      const std::string why = unnameable_because(s.params, e, sel.m_);
-      if (why.empty()) continue;
-      withheld.push_back(std::string(effect_name(e)) + " not named: " + why);
-      if (sel.opt_.progress) sel.opt_.progress(withheld.back());
-      s = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
-      forget(steps, e);
-      changed = true;
-      break;
-    }
-  }
+  drop_latest_first(s, steps, [&](Effect e) -> std::optional<State> {
+    const std::string why = unnameable_because(s.params, e, sel.m_);
+    if (why.empty()) return std::nullopt;
+    withheld.push_back(std::string(effect_name(e)) + " not named: " + why);
+    if (sel.opt_.progress) sel.opt_.progress(withheld.back());
+    return sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
+  });
 }
 
 // Drops any selected effect that, given the others, does not improve the prediction of the
@@ -442,26 +449,19 @@ void plausible_only(const Selector& sel, State& s, std::vector<SelectedEffect>& 
 void each_improves_held_out(const Selector& sel, State& s, std::vector<SelectedEffect>& steps,
                             std::vector<std::string>& withheld) {
   if (sel.held_.empty()) return;
-  for (bool changed = true; changed && !s.effects.empty();) {
-    changed = false;
-    for (auto it = s.effects.rbegin(); it != s.effects.rend(); ++it) {
-      const Effect e = *it;
-      State without = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
-      const double drop = sel.heldout_drop(without, s);
-      for (SelectedEffect& st : steps)
-        if (st.effect == e) st.heldout_given_others = drop;
-      if (drop > 0) continue;
-      std::ostringstream why;
-      why << effect_name(e) << " not named: given the others it does not improve the held-out prediction (their robust "
-          << "chi-square is " << std::lround(-drop) << " higher with it)";
-      withheld.push_back(why.str());
-      if (sel.opt_.progress) sel.opt_.progress(withheld.back());
-      s = std::move(without);
-      forget(steps, e);
-      changed = true;
-      break;
-    }
-  }
+  drop_latest_first(s, steps, [&](Effect e) -> std::optional<State> {
+    State without = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
+    const double drop = sel.heldout_drop(without, s);
+    for (SelectedEffect& st : steps)
+      if (st.effect == e) st.heldout_given_others = drop;
+    if (drop > 0) return std::nullopt;
+    std::ostringstream why;
+    why << effect_name(e) << " not named: given the others it does not improve the held-out prediction (their robust "
+        << "chi-square is " << std::lround(-drop) << " higher with it)";
+    withheld.push_back(why.str());
+    if (sel.opt_.progress) sel.opt_.progress(withheld.back());
+    return without;
+  });
 }
 
 }  // namespace
