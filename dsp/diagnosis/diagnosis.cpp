@@ -363,6 +363,9 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
       split_usable();
     }
   }
+  // The uncertainties are the fit's: with the translation taken out as the effects were fitted
+  // (left in, the parallax widened a drone's readout sigma tenfold over its seeds' scatter).
+  const ModelParams as_fitted = sel.params;
   sel.params.translation_nuisance = false;  // what the named effects predict, parallax and all
   d.gross.translation_nuisance = false;  // the report's global search: what it moved, parallax and all
   d.located = locate_with_gross(m, nominal, d.gross, fit);
@@ -378,7 +381,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   never_worse_than_nominal(m, nominal, use_all, d);
   heldout_halves(m, nominal, use_held, d);
   progress("uncertainties and the remainder");
-  d.uncertainties = effect_uncertainties(m, d.effects, d.fitted, fit_set);
+  d.uncertainties = effect_uncertainties(m, d.effects, as_fitted, fit_set);
   d.fit_observations = static_cast<int>(fit_set.size());
   d.remainder = assess_remainder(m, d.fitted, use_all, d.noise_floor_px, robust_stats(m.residuals(nominal, use_all)).rms_px);
   for (const std::string& w : d.withheld) d.remainder.summary += (d.remainder.summary.empty() ? "" : "\n") + w + ".";
