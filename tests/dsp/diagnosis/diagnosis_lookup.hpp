@@ -27,6 +27,13 @@ inline double param(const dsp::NamedEffect* e, const std::string& name) {
   return NAN;
 }
 
+// The 1-sigma uncertainty the diagnosis reports for an effect's parameter; NaN if it has none.
+inline double sigma(const dsp::Diagnosis& d, const std::string& effect, const std::string& name) {
+  for (const auto& u : d.uncertainties)
+    if (u.effect == effect && u.param == name && u.sigma) return *u.sigma;
+  return NAN;
+}
+
 // The named effects, sorted, each followed by a space: "rolling_shutter time_offset ".
 inline std::string names(const dsp::Diagnosis& d) {
   std::vector<std::string> n;
