@@ -33,7 +33,8 @@ bool held_out(const DiagnosisModel& m, int i, int heldout_every);
 // the larger of the classic s^2 (J^T J)^-1 (s the per-coordinate RMS of those residuals) and
 // the sandwich estimate with residuals clustered by frame (errors a frame shares: gyro noise,
 // stamp jitter). Derived parameters (frame_readout_s = line_delay_s x height) are propagated.
-// `fit`: the observations the fit saw.
+// `fit`: the observations the fit saw; `fitted` as it was fitted (its translation nuisance on if
+// it was: the spline is refitted at every step, and parallax left in would widen every sigma).
 std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, const std::vector<NamedEffect>& effects,
                                                    const ModelParams& fitted, const std::vector<int>& fit);
 
