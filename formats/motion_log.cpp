@@ -55,7 +55,8 @@ void add_pose(const LogEvent& ev, MotionLog& s) {
 
 }  // namespace
 
-MotionLog read_motion_log(const std::string& path, const MotionLogChannels& ch) {
+MotionLog read_motion_log(const std::string& path, const MotionLogChannels& ch,
+                          const std::function<void(uint64_t, uint64_t)>& progress) {
   LcmLogReader log(path);
   LogEvent ev;
   bot_core::image_t img;
@@ -71,12 +72,14 @@ MotionLog read_motion_log(const std::string& path, const MotionLogChannels& ch) 
       if (f.width != s.frames.front().width || f.height != s.frames.front().height)
         throw std::runtime_error(where + ": frame is " + std::to_string(f.width) + "x" + std::to_string(f.height) + ", the first was " +
                                  std::to_string(s.frames.front().width) + "x" + std::to_string(s.frames.front().height));
+      if (progress) progress(log.position(), log.size());
     } else if (ev.channel == ch.velocity) {
       add_velocity(ev, s, speeds, where);
     } else if (ev.channel == ch.pose) {
       add_pose(ev, s);
     }
   }
+  if (progress) progress(log.size(), log.size());
   s.with_translation = static_cast<int>(speeds.size());
   if (!speeds.empty()) {
     std::nth_element(speeds.begin(), speeds.begin() + speeds.size() / 2, speeds.end());

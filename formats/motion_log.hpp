@@ -4,6 +4,8 @@
 // turns a log into an observation recording starts here.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -42,7 +44,10 @@ struct MotionLogChannels {
 
 // Throws std::runtime_error naming the log, the event and its channel for a frame that does
 // not decode, a frame size that changes, or velocity axes that change within the log.
-MotionLog read_motion_log(const std::string& path, const MotionLogChannels& channels);
+// `progress(read, size)`, if given, after every frame and at the end: the bytes read so far and
+// the log's size (ten minutes of 1080p are 37 GB, a minute's reading).
+MotionLog read_motion_log(const std::string& path, const MotionLogChannels& channels,
+                          const std::function<void(uint64_t read, uint64_t size)>& progress = {});
 
 // "RSD_RAW (20), RSD_VELOCITY (400)", for messages.
 std::string channel_list(const MotionLog& log);

@@ -8,6 +8,8 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,6 +24,7 @@
 #include "tools/common/cli_util.hpp"
 #include "tools/common/frame_sources.hpp"
 #include "tools/common/picture_observations.hpp"
+#include "tools/common/progress_line.hpp"
 #include "tools/extract/extract_options.hpp"
 #include "tools/extract/nominal_model.hpp"
 #include "tools/extract/video_inputs.hpp"
@@ -141,6 +144,20 @@ void write_pictures(const Options& o, LogPictures& pictures, const std::optional
               o.out.c_str());
 }
 
+// The first pass's progress: the log read, in MB (it reads every frame's bytes to reach the
+// motion between them; ten minutes of 1080p take a minute), one line rewritten as it goes.
+std::function<void(uint64_t, uint64_t)> read_progress() {
+  auto line = std::make_shared<ProgressLine>("rsd-extract: ");
+  auto last = std::make_shared<long>(-1);
+  return [line, last](uint64_t read, uint64_t size) {
+    const long total = std::max(static_cast<long>(size >> 20), 1L), mb = std::min(static_cast<long>(read >> 20), total);
+    const long done = read < size ? mb : total;
+    if (done == *last) return;  // the end is said once
+    *last = done;
+    line->step("reading the motion (MB of the log)", done, total);
+  };
+}
+
 // rsd-extract DIR OUT: an images recording's observations, made from its pictures.
 int run_on_recording(const Options& o) {
   if (!o.nominal.empty() || !o.intrinsics.empty() || o.global_shutter || o.line_delay_s || o.frame_rate_hz || o.time_offset_s ||
@@ -172,7 +189,7 @@ int run(const Options& o) {
   }
   std::fprintf(stderr, "rsd-extract: reading %s\n", o.log.c_str());
   if (!formats::looks_like_lcm_log(o.log)) throw UsageError("LOG: '" + o.log + "' is not a readable LCM log");
-  const MotionLog s = formats::read_motion_log(o.log, {o.image_channel, o.velocity_channel, o.pose_channel});
+  const MotionLog s = formats::read_motion_log(o.log, {o.image_channel, o.velocity_channel, o.pose_channel}, read_progress());
   if (s.events == 0) throw UsageError("LOG: '" + o.log + "' holds no LCM events (not an LCM log, or empty)");
   if (s.frames.empty())
     throw UsageError(o.log + ": no bot_core.image_t frames on channel " + o.image_channel + " (see --image-channel; channels in the log: " + channel_list(s) + ")");

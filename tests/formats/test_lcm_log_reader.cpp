@@ -18,6 +18,7 @@
 #include <random>
 
 #include "formats/lcm_log.hpp"
+#include "formats/motion_log.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "formats/image_t_codec.hpp"
 #include "drivers/replay_source.hpp"
@@ -157,6 +158,19 @@ TEST(LcmLog, WriterOutputReadsBackWithLcmsOwnReaderAndOurs) {
   EXPECT_EQ(r.skipped_total(), 0u);
   EXPECT_TRUE(got.messages.empty());
   EXPECT_TRUE(looks_like_lcm_log(w.path));
+}
+
+// rsd-extract's first pass says how far into a long log it is: after each frame, the bytes up to
+// the end of that frame's event (where the writer put the next event), and the end once.
+TEST(MotionLog, ProgressFollowsEveryFrameAndSaysTheEndOnce) {
+  const Written w = write_good_log("progress.lcmlog");
+  std::vector<std::pair<uint64_t, uint64_t>> calls;
+  const MotionLog s = read_motion_log(w.path, {}, [&](uint64_t read, uint64_t size) { calls.emplace_back(read, size); });
+  ASSERT_EQ(s.frames.size(), static_cast<size_t>(kFrames));
+  ASSERT_EQ(calls.size(), static_cast<size_t>(kFrames + 1));
+  for (int k = 0; k + 1 < kFrames; ++k) EXPECT_EQ(calls[k].first, w.velocity_offsets[k + 1]) << "frame " << k;
+  for (int k = kFrames - 1; k <= kFrames; ++k) EXPECT_EQ(calls[k].first, w.bytes.size()) << "call " << k;
+  for (const auto& c : calls) EXPECT_EQ(c.second, w.bytes.size());
 }
 
 TEST(LcmLog, RecordedFrameKeepsExactTimingAndIntrinsics) {
