@@ -71,7 +71,8 @@ struct DiagnosisOptions {
   int max_iterations = 30;        // final fits
   int screen_observations = 5000;  // candidates are fitted on this many fitting observations
   // The fits see at most this many fitting observations (and a quarter as many held out),
-  // chosen by the information they carry (observation_choice.hpp); 0: all of them.
+  // chosen by the information they carry (observation_choice.hpp), three times as many under
+  // the translation nuisance of matches with parallax (diagnosis.cpp); 0: all of them.
   int fit_observations = 30000;
   // Called on the caller's thread as the diagnosis moves on (a stage, an effect named), for
   // progress output on long runs; may be empty.

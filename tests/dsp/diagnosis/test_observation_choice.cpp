@@ -18,6 +18,7 @@
 #include "dsp/diagnosis/uncertainty.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
 #include "tests/dsp/diagnosis/diagnosis_lookup.hpp"
+#include "tests/dsp/diagnosis/translation_cases.hpp"
 #include "tests/support/sanitizer.hpp"
 
 using namespace rsd::dsp;
@@ -164,6 +165,28 @@ TEST(ChooseObservations, ADiagnosisOnAFractionFindsTheTruthWithAnHonestUncertain
     EXPECT_LT(*u.sigma, 0.05 * truth) << u.param;
   }
   EXPECT_LT(d.heldout_final_rms_px, 1.1 * d.noise_floor_px);
+}
+
+// Under the translation nuisance (matches with parallax) the fits see three times the budget:
+// part of what a frame pair's observations carry goes to the velocity spline every pair shares,
+// which the choice by leverage cannot weigh (diagnosis.cpp, kTranslationBudgetFactor). A drone
+// flying past a scene 40 m ahead with a pan and its clock 10 ms off: the offset named from
+// three times the budget, the truth within four of the sigmas it reports.
+TEST(ChooseObservations, UnderTheTranslationNuisanceTheFitsSeeThreeTimesTheBudget) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("Translation.AForwardFlightWithAPanYieldsItsClockOffset (the same flight, every observation)");
+  SimConfig c = rsd::test::forward_flight(31, 40.0);
+  c.effects.time_offset_s = 0.010;
+  const SimulatedRecording sim = simulate_recording(c);
+  DiagnosisOptions opt;
+  opt.fit_observations = 1500;
+  const Diagnosis d = diagnose(sim.rec, opt);
+  ASSERT_TRUE(d.parallax.clear());
+  EXPECT_GT(d.fit_observations, 3000);  // 1500 before: the budget alone
+  EXPECT_LE(d.fit_observations, 4500);
+  EXPECT_EQ(rsd::test::names(d), "time_offset ");
+  ASSERT_EQ(d.uncertainties.size(), 1u);
+  ASSERT_TRUE(d.uncertainties[0].sigma);
+  EXPECT_NEAR(d.uncertainties[0].value, 0.010, 4 * *d.uncertainties[0].sigma);
 }
 
 namespace {
