@@ -173,7 +173,8 @@ TEST(ChooseObservations, ADiagnosisOnAFractionFindsTheTruthWithAnHonestUncertain
 // flying past a scene 40 m ahead with a pan and its clock 10 ms off: the offset named from
 // three times the budget, the truth within four of the sigmas it reports.
 TEST(ChooseObservations, UnderTheTranslationNuisanceTheFitsSeeThreeTimesTheBudget) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("Translation.AForwardFlightWithAPanYieldsItsClockOffset (the same flight, every observation)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("Translation.TheVelocitySplineCannotTakeUpAClockOffset (the nuisance) and "
+                              "ChooseObservations.KeepsMoreInformationThanAnEvenChoiceOfTheSameSize (the choice)");
   SimConfig c = rsd::test::forward_flight(31, 40.0);
   c.effects.time_offset_s = 0.010;
   const SimulatedRecording sim = simulate_recording(c);
