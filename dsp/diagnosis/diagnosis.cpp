@@ -6,6 +6,7 @@
 #include <functional>
 #include <optional>
 #include <sstream>
+#include <utility>
 
 #include "dsp/diagnosis/blocked_halves.hpp"
 #include "dsp/diagnosis/observation_choice.hpp"
@@ -337,18 +338,20 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   std::optional<ObservationSets> wide;  // under the translation nuisance, chosen when first asked
   const ParamMask every = applicable_params(m);
   const size_t budget = static_cast<size_t>(std::max(opt.fit_observations, 0));
+  // At most b fitting observations and a quarter as many held out, with `screen` to screen on.
+  auto choose = [&](size_t b, std::vector<int> screen) {
+    return ObservationSets{choose_observations(m, use_fit, d.gross, every, {b}),
+                           choose_observations(m, use_held, d.gross, every, {b / 4}), std::move(screen)};
+  };
   auto split_usable = [&] {
     use_all = usable(m, d.gross, all), use_fit = usable(m, d.gross, fit), use_held = usable(m, d.gross, held);
-    sets.fit = choose_observations(m, use_fit, d.gross, every, {budget});
-    sets.held = choose_observations(m, use_held, d.gross, every, {budget / 4});
+    sets = choose(budget, {});
     sets.screen = subsample(sets.fit, n_screen);
     wide.reset();
   };
   const std::function<const ObservationSets&()> under_translation = [&]() -> const ObservationSets& {
     if (!wide) {
-      const size_t b = kTranslationBudgetFactor * budget;
-      wide = ObservationSets{choose_observations(m, use_fit, d.gross, every, {b}),
-                             choose_observations(m, use_held, d.gross, every, {b / 4}), sets.screen};
+      wide = choose(kTranslationBudgetFactor * budget, sets.screen);
       if (wide->fit.size() > sets.fit.size())
         progress("with the translation taken out the fits see " + std::to_string(wide->fit.size()) + " of the " +
                  std::to_string(use_fit.size()) + " fitting observations");
