@@ -123,6 +123,9 @@ int main(int argc, char** argv) {
   app.add_flag("--print-default-config", print_default, "print the default configuration and exit");
   app.add_option("--frames", limits.max_frames, "stop after publishing this many frames (0: run until stopped)");
   app.add_option("--duration", limits.max_seconds, "stop after this many seconds (0: run until stopped)");
+  app.add_flag("--until-calibrated", limits.until_online_converged,
+               "stop a second after the online calibration converged (calibration.online observe or apply; its "
+               "state_file keeps the estimate): a calibration session that ends on the event, not on the clock");
   app.add_flag("--realtime", cl.realtime,
                "the capture thread at SCHED_FIFO (realtime.capture_priority) and memory locked after start-up\n"
                "(realtime.lock_memory), when permitted; a warning and normal scheduling when not. The service unit\n"
@@ -173,6 +176,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (log_level.empty()) spdlog::set_level(*rsd::daemon::parse_log_level(cfg.log_level));
+  if (limits.until_online_converged && cfg.online.mode == rsd::daemon::OnlineMode::Off) {
+    rsd::daemon::log_fatal("--until-calibrated: calibration.online.mode is off, so nothing would converge (set it to observe or apply)");
+    return 2;
+  }
   if (check) {
     std::printf("rsd: %s is valid\n", cl.config_file.empty() ? "the default configuration" : cl.config_file.c_str());
     return 0;

@@ -410,6 +410,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   uint64_t last_in = 0, last_out = 0;
   const bool progress = limits.progress && s.playback();
   const bool line = limits.status_line && !progress;
+  bool settled = false;  // until_online_converged: the last health report saw it converged
   while (!flags.stop.load()) {
     if (flags.reload.load() && (!reloader || !handle_reload(s, flags, reloader, sd))) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -449,6 +450,8 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
       report_health(s, nullptr, std::chrono::duration<double>(now - t_health).count(), last_in, last_out, line, sd);
       if (s.online) s.online->publish();
       t_health = now;
+      if (limits.until_online_converged && settled) break;
+      settled = s.online && s.online->latest().converged && (cfg.online.mode != OnlineMode::Apply || s.online_applied);
     }
   }
   // A restart for a changed configuration is a reload to systemd (RELOADING=1 went out, READY=1

@@ -22,6 +22,10 @@ struct RunLimits {
   // Frames arrived in an earlier run of this process (before a restart for a changed
   // configuration): a stop before this run's first frame is then no failure.
   bool frames_before = false;
+  // Stop one health report (a second) after the online calibration first reported a converged
+  // estimate (in apply mode: one the rectifier uses): a calibration session ends on the event,
+  // whatever the machine's speed; `max_seconds` still bounds it.
+  bool until_online_converged = false;
 };
 
 // What a run did, for tests and the exit message.

@@ -3,7 +3,8 @@
 # simulated camera, whose IMU is 2.5 ms off the camera's clock and reads a gyro bias of
 # [4, -3, 2] mrad/s (drivers/sim_config.cpp, embedded_default); the online calibration (observe,
 # the default) learns both, and the live status line says so. The script waits for the
-# convergence (a log line), not for a time: its limit only ends a run that hangs.
+# convergence (a log line), not for a time: its limit only ends a run that hangs. It runs with
+# --until-calibrated, so rsd ends by itself, with status 0, a second after converging.
 #   embedded_default.sh RSD
 set -u
 rsd=$1
@@ -15,7 +16,7 @@ scale=${RSD_TEST_TIME_SCALE:-1}
 work=$(mktemp -d); pid=
 trap '[ -n "$pid" ] && kill -9 "$pid" 2>/dev/null; rm -rf "$work"' EXIT
 fail() { echo "embedded_default: $*"; tr '\r' '\n' <"$work/err" | tail -20; exit 1; }
-"$rsd" --duration $((300 * scale)) 2>"$work/err" &
+"$rsd" --duration $((300 * scale)) --until-calibrated 2>"$work/err" &
 pid=$!
 i=0
 until grep -q "online calibration converged:" "$work/err"; do
@@ -29,8 +30,8 @@ until tr '\r' '\n' <"$work/err" | grep -q "; online converged: offset"; do
   [ $i -ge $((300 * scale)) ] && fail "the status line never said 'online converged'"
   sleep 0.1; i=$((i + 1))
 done
-kill -TERM "$pid"; status=0; wait "$pid" || status=$?; pid=
-[ "$status" -eq 0 ] || fail "rsd exited $status after SIGTERM"
+status=0; wait "$pid" || status=$?; pid=
+[ "$status" -eq 0 ] || fail "rsd exited $status after converging (--until-calibrated)"
 line=$(grep -m1 "online calibration converged:" "$work/err")
 offset=$(echo "$line" | sed -n 's/.*time offset \([-0-9.]*\) +- .*/\1/p')
 bias=$(echo "$line" | sed -n 's/.*gyro bias \[\([-0-9., ]*\)\].*/\1/p')

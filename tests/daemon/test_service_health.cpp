@@ -90,11 +90,13 @@ class CapturedLog {
 
 // For `seconds`, or until `frames` are published when given (then `seconds` only ends a run
 // that hangs: a loaded sanitizer build publishes fewer frames a second than the camera's rate).
-void run(const daemon::Config& cfg, double seconds, const daemon::SourceFactory& factory = {}, uint64_t frames = 0) {
+void run(const daemon::Config& cfg, double seconds, const daemon::SourceFactory& factory = {}, uint64_t frames = 0,
+         bool until_online_converged = false) {
   daemon::StopFlags flags;
   daemon::RunLimits limits;
   limits.max_seconds = seconds;
   limits.max_frames = frames;
+  limits.until_online_converged = until_online_converged;
   limits.status_line = false;
   daemon::run_service(cfg, flags, limits, factory);
 }
@@ -314,10 +316,12 @@ TEST(ServiceHealth, OnlineCalibrationPublishedOnceASecondAndSaidFrameByFrame) {
   drivers::SimSourceConfig s = hand_shaken_hiding_its_imu();
   cfg.source.settings_of<drivers::SimSourceConfig>("sim") = s;
   cfg.online.mode = daemon::OnlineMode::Apply;
-  run(cfg, 4.5);
+  // Until the estimate converged and the rectifier switched to it, a second more for the frames
+  // after the switch (600 s only ends a run that hangs: a loaded sanitizer tree takes longer).
+  run(cfg, 600, {}, 0, true);
   const auto cal = messages<rsd::calibration_t>(cfg.record_file, "RSD_CALIBRATION");
   const auto info = messages<rsd::frame_info_t>(cfg.record_file, "RSD_FRAME_INFO");
-  ASSERT_GE(cal.size(), 3u);
+  ASSERT_GE(cal.size(), 2u);  // the one that saw it converged, and the one a second after
   for (const auto& m : cal) {
     EXPECT_EQ(m.mode, "apply");
     EXPECT_TRUE(m.state == "converging" || m.state == "converged" || m.state == "held" || m.state == "rejected") << m.state;
@@ -333,11 +337,11 @@ TEST(ServiceHealth, OnlineCalibrationPublishedOnceASecondAndSaidFrameByFrame) {
   size_t switched = 0;
   while (switched < info.size() && info[switched].calibration == "configured") ++switched;
   for (size_t i = switched; i < info.size(); ++i) EXPECT_EQ(info[i].calibration, "online") << "frame " << i;
-  // How soon it converges depends on the cores the rest of a parallel test run leaves it (the
-  // serial tests, test_online_calibration and daemon_online_calibration_goal, time that): once
-  // it has, its values are the hidden ones and the frames after the switch say so.
+  // Converged, its values are the hidden ones and the frames after the switch say so (how soon
+  // depends on the cores a parallel test run leaves it; the serial tests, test_online_calibration
+  // and daemon_online_calibration_goal, time that).
   const rsd::calibration_t& last = cal.back();
-  if (!last.converged) return;
+  ASSERT_TRUE(last.converged) << "stopped before the estimate converged: " << last.state;
   EXPECT_TRUE(last.applied);
   EXPECT_LT(switched, info.size());
   EXPECT_EQ(last.time_offset_status, "learned");
@@ -356,19 +360,19 @@ TEST(ServiceHealth, AGlobalShutterCameraLearnsItsClockOffsetAndGyroBias) {
   cfg.source.settings_of<drivers::SimSourceConfig>("sim") = s;
   cfg.source.shutter = dsp::Shutter::Global;
   cfg.online.mode = daemon::OnlineMode::Observe;
-  run(cfg, 4.5);
+  run(cfg, 600, {}, 0, true);  // until converged (600 s only ends a run that hangs)
   const auto cal = messages<rsd::calibration_t>(cfg.record_file, "RSD_CALIBRATION");
-  ASSERT_GE(cal.size(), 3u);
+  ASSERT_GE(cal.size(), 2u);  // the one that saw it converged, and the one a second after
   for (const auto& m : cal) {
     EXPECT_EQ(m.shutter, "global");
     EXPECT_EQ(m.rows, "global");
     EXPECT_EQ(m.line_delay_s, 0.0);
     EXPECT_EQ(m.line_delay_status.rfind("fixed: ", 0), 0u) << m.line_delay_status;
   }
-  // Converged or not depends on the cores a parallel test run leaves it (as above); once it
-  // has, the offset and the bias are the hidden ones.
+  // Converged (however soon the cores a parallel run leave it allow), the offset and the bias
+  // are the hidden ones.
   const rsd::calibration_t& last = cal.back();
-  if (!last.converged) return;
+  ASSERT_TRUE(last.converged) << "stopped before the estimate converged: " << last.state;
   EXPECT_EQ(last.time_offset_status, "learned");
   EXPECT_NEAR(last.time_offset_s, 0.010, 1e-3);
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(last.gyro_bias_rad_s[i], i == 1 ? -0.01 : 0.01, 3e-3) << "axis " << i;
