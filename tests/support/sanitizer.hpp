@@ -39,8 +39,9 @@ inline constexpr const char* kSanitizedNote = "under a sanitizer: time limits wi
 
 // A test whose arithmetic alone takes tens of seconds at full speed (a diagnosis over a whole
 // recording) would take ten to thirty times that under AddressSanitizer or qemu, beyond any
-// budget: it skips itself there, naming the faster tests that run the same code there. Its
-// numbers are checked in the normal tree.
+// budget: it skips itself there, naming the faster tests that run the same code there (as
+// Suite.Test or Suite.*; the CTest skip_messages_name_tests_that_run checks that each exists and
+// does not skip itself too). Its numbers are checked in the normal tree.
 #define RSD_SKIP_LONG_IN_SLOW_BUILD(covered_by)                                                             \
   do {                                                                                                      \
     if (::rsd::test::kSlowBuild)                                                                            \

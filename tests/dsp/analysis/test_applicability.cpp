@@ -210,7 +210,7 @@ TEST(GeneralBound, RotationGivesDepthIndependentFloor) {
 // (e) With fy = H (normalised image height 1) the paper's limit and the exact one agree:
 // exact z = v_y (H - 1 + N) fy / (N r) vs paper v_y fy^2 / (N r), identical for N = 1.
 TEST(PaperBound, AgreesWithExactWhenNormalisedHeightIsOne) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("the other PaperBound and GeneralBound tests (the same bounds)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("PaperBound.*, GeneralBound.* (the same bounds)");
   const CameraModel cam = vga(480);  // fy = H = 480
   for (double fps : {3.75, 7.5, 15.0}) {
     const RowTiming t = RowTiming::full_frame(480, fps);

@@ -69,7 +69,7 @@ void show(const Diagnosis& d) {
 // far off could stand in for it): no MEMS gyro or lens is that wrong, so neither is named, and
 // the remainder says why.
 TEST(DiagnosisInvariants, AnImplausibleScaleIsNeverNamedNorAStandInForIt) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisMountScale.ConcealedGyroScaleInMatches (the same fits)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisMountScale.ConcealedMountRotationInLandmarks (the same mount and scale parameters)");
   SimConfig c = shaken(31);
   c.effects.gyro_scale = Eigen::Vector3d::Constant(0.625);
   const Diagnosis d = diagnose(simulate_recording(c).rec);
@@ -86,7 +86,7 @@ TEST(DiagnosisInvariants, AnImplausibleScaleIsNeverNamedNorAStandInForIt) {
 // nominal model: nothing is named, the fitted model is the nominal one, and the remainder says
 // why. (Each selection round asks the held-out frames; the final model is asked again.)
 TEST(DiagnosisInvariants, EffectsThatPredictTheHeldOutFramesWorseAreWithdrawn) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisMatches.ConcealedTimeOffset (the same fits)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisMatches.NoEffectNamesNothingDespiteOutliersAndIrregularGyro (the same fits)");
   SimConfig a = shaken(32), b = shaken(32);
   a.effects.time_offset_s = 0.008;
   b.effects.time_offset_s = -0.008;

@@ -123,7 +123,7 @@ TEST(DiagnosisLandmarks, ConcealedFocalLength) {
 // alone.
 TEST(DiagnosisLandmarks, ConcealedLeverArmAcrossOrSaidIndistinguishable) {
   // Ten to twenty times slower under AddressSanitizer (a minute or more there).
-  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisLandmarks.RollingShutterAndTimeOffsetConcealedTogether, ConcealedClockDrift, ConcealedLensDistortion (the same fits on landmarks)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisLandmarks.ConcealedClockDrift, ConcealedClockDrift, ConcealedLensDistortion (the same fits on landmarks)");
   SimConfig c = target(14);
   c.effects.lever_arm = Vector3d(0.0014, 0, 0);
   const Diagnosis d = diagnose(simulate_recording(c).rec);
@@ -146,7 +146,7 @@ TEST(DiagnosisLandmarks, ConcealedLeverArmAcrossOrSaidIndistinguishable) {
 
 TEST(DiagnosisLandmarks, ConcealedLeverArmAlongTheAxisNeedsDepthChange) {
   // Ten to twenty times slower under AddressSanitizer (a minute or more there).
-  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisLandmarks.RollingShutterAndTimeOffsetConcealedTogether, ConcealedClockDrift, ConcealedLensDistortion (the same fits on landmarks)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisLandmarks.ConcealedClockDrift, ConcealedClockDrift, ConcealedLensDistortion (the same fits on landmarks)");
   // Along the optical axis a lever arm scales the image as a focal length does, except that
   // the scale follows the target's depth: with the depth changing by +-10% (3 s) the two differ
   // by less than BIC's price of a parameter and focal_length is the simpler explanation; with
@@ -163,7 +163,7 @@ TEST(DiagnosisLandmarks, ConcealedLeverArmAlongTheAxisNeedsDepthChange) {
 
 TEST(DiagnosisLandmarks, RollingShutterAndDistortionConcealedTogether) {
   // Ten to twenty times slower under AddressSanitizer (a minute or more there).
-  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisLandmarks.RollingShutterAndTimeOffsetConcealedTogether, ConcealedClockDrift, ConcealedLensDistortion (the same fits on landmarks)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisLandmarks.ConcealedClockDrift, ConcealedClockDrift, ConcealedLensDistortion (the same fits on landmarks)");
   SimConfig c = target(15, 6.0);
   c.effects.line_delay_s = 1e-5;
   c.effects.k1k2 = Vector2d(0.05, 0);
@@ -184,7 +184,7 @@ TEST(DiagnosisLandmarks, RollingShutterAndTimeOffsetConcealedTogether) {
 
 TEST(DiagnosisLandmarks, GrossFocalAndOffsetFirstThenAConcealedReadout) {
   // Ten to twenty times slower under AddressSanitizer (a minute or more there).
-  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisLandmarks.RollingShutterAndTimeOffsetConcealedTogether, ConcealedClockDrift, ConcealedLensDistortion (the same fits on landmarks)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisLandmarks.ConcealedClockDrift, ConcealedClockDrift, ConcealedLensDistortion (the same fits on landmarks)");
   // The nominal focal length is 20% long and the clocks are half a second apart; behind those
   // the rows are read bottom to top, not top to bottom as the nominal 10 ms readout says.
   SimConfig c = target(17);
@@ -201,7 +201,7 @@ TEST(DiagnosisLandmarks, GrossFocalAndOffsetFirstThenAConcealedReadout) {
 }
 
 TEST(DiagnosisLandmarks, WithoutStatedNoiseTheScaleIsEstimated) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("Remainder.UnderstatedNoiseRestartsTheSelectionAtTheDataScale (the noise scale taken from the data), DiagnosisLandmarks.RollingShutterAndTimeOffsetConcealedTogether (the same fit)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("Remainder.UnderstatedNoiseRestartsTheSelectionAtTheDataScale (the noise scale taken from the data), DiagnosisLandmarks.ConcealedClockDrift (the same fit)");
   SimConfig c = target(18);
   c.effects.line_delay_s = 1.2e-5;
   Recording rec = simulate_recording(c).rec;

@@ -108,7 +108,7 @@ TEST(NearestLens, AcrossFamiliesNearTheAxisItIsTheTaylorSeries) {
 }
 
 TEST(DiagnosisLens, AFisheyeBehindAPinholeNominalIsNamedLensModel) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("NearestLens.* (the start it fits from), DiagnosisMatches.ConcealedTimeOffset (the fit)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("NearestLens.* (the start it fits from), DiagnosisMatches.NoEffectNamesNothingDespiteOutliersAndIrregularGyro (the fit)");
   SimConfig c = wide(21);
   c.nominal.cam.fx = c.nominal.cam.fy = 340;  // the corners 67 degrees off the axis
   const Distortion fisheye = Distortion::equidistant(0.02, -0.01, 0.003, -0.001);
@@ -127,7 +127,7 @@ TEST(DiagnosisLens, AFisheyeBehindAPinholeNominalIsNamedLensModel) {
 }
 
 TEST(DiagnosisLens, APinholeBehindAnEquidistantNominalIsNamedLensModel) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("NearestLens.* (the start it fits from), DiagnosisMatches.ConcealedTimeOffset (the fit)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("NearestLens.* (the start it fits from), DiagnosisMatches.NoEffectNamesNothingDespiteOutliersAndIrregularGyro (the fit)");
   SimConfig c = wide(22);
   c.nominal.cam.dist = Distortion::equidistant(0, 0, 0, 0);  // a fisheye profile for a pinhole camera
   c.effects.lens = Distortion{};                              // the camera: a pinhole without distortion
@@ -140,7 +140,7 @@ TEST(DiagnosisLens, APinholeBehindAnEquidistantNominalIsNamedLensModel) {
 }
 
 TEST(DiagnosisLens, AnEquidistantNominalWithWrongTermsIsNamedLensDistortionK1ToK4) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisMatches.ConcealedLensDistortion (the pinhole-radtan case)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("NearestLens.* (the equidistant terms), DiagnosisMatches.NoEffectNamesNothingDespiteOutliersAndIrregularGyro (the fit)");
   SimConfig c = wide(23);
   c.nominal.cam.dist = Distortion::equidistant(0.02, -0.01, 0, 0);
   c.effects.k1k2 = Eigen::Vector2d(0.06, -0.03);

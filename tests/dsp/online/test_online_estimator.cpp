@@ -129,7 +129,7 @@ TEST(OnlineEstimator, ConvergesWithinTenSecondsToTheIssueTolerances) {
 // offset stays on the truth without a step, and the drift is learned to a few ppm. Without the
 // drift the offset trailed the walk by up to 0.6 ms and restarted in a step every 15 s.
 TEST(OnlineEstimator, LearnsTheClockDriftAsARateAndFollowsIt) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.ConvergesWithinTenSecondsToTheIssueTolerances (the same windows, fits and filter)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.AGlobalShutterLearnsTheOffsetAndTheBias (the same windows, fits and filter)");
   SimConfig c = hand_held(11, 60);
   c.effects.drift_ppm = 100;
   const SimulatedRecording sim = simulate_recording(c);
@@ -163,7 +163,7 @@ TEST(OnlineEstimator, LearnsTheClockDriftAsARateAndFollowsIt) {
 // the estimator's model goes through the lens (issue 35), so it converges to the same
 // tolerances as through the pinhole.
 TEST(OnlineEstimator, ConvergesThroughAFisheyeLens) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.ConvergesWithinTenSecondsToTheIssueTolerances (the same fits through the pinhole)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.AGlobalShutterLearnsTheOffsetAndTheBias (the same fits through the pinhole)");
   SimConfig c = hand_held(17, 12);
   c.nominal.cam.fx = c.nominal.cam.fy = 320;  // 640 px wide: 60 degrees either side of the axis
   c.nominal.cam.dist = Distortion::equidistant(0.03, -0.01, 0.002, -0.0005);
@@ -181,7 +181,7 @@ TEST(OnlineEstimator, ConvergesThroughAFisheyeLens) {
 // The IMU turned by about a degree on its mount beyond the nominal: the hand-held motion turns
 // about every axis, so the mount shows, and is learned with the rest.
 TEST(OnlineEstimator, LearnsTheMountRotationWhenTheMotionShowsIt) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.ConvergesWithinTenSecondsToTheIssueTolerances (the same estimator, fitting the mount there too)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.AGlobalShutterLearnsTheOffsetAndTheBias (the same estimator, fitting the mount there too)");
   SimConfig c = hand_held(11, 12);
   const Vector3d mount(0.012, -0.009, 0.006);
   c.effects.mount_rotation = mount;
@@ -211,7 +211,7 @@ Recording with_step(const SimulatedRecording& first, const SimulatedRecording& s
 }
 
 TEST(OnlineEstimator, FollowsAStepOfFiveMillisecondsWithinTenSeconds) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.ConvergesWithinTenSecondsToTheIssueTolerances (the same windows and fits)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.AGlobalShutterLearnsTheOffsetAndTheBias (the same windows and fits)");
   SimConfig a = hand_held(9, 12), b = hand_held(10, 14);
   b.start_time_s = a.start_time_s + 12 + 1 / a.nominal.frame_rate_hz;
   b.effects.time_offset_s = 0.020;
@@ -239,7 +239,7 @@ TEST(OnlineEstimator, FollowsAStepOfFiveMillisecondsWithinTenSeconds) {
 // different times at all: here they are (the same rolling shutter as above, 60 us a row), so
 // the line delay is learned from 0 to the same tolerance.
 TEST(OnlineEstimator, WithNoLineDelayGivenItFindsTheRowsRollingAndLearnsTheLineDelay) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.ConvergesWithinTenSecondsToTheIssueTolerances (the same fits, the line delay given)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("OnlineEstimator.AGlobalShutterLearnsTheOffsetAndTheBias (the same fits, the line delay given)");
   SimConfig c = hand_held(7, 14);
   c.nominal.time.line_delay_s = 0;
   const SimulatedRecording sim = simulate_recording(c);

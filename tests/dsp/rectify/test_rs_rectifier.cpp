@@ -91,7 +91,7 @@ TEST(RsRectifier, MapMatchesTheExactInverseAtEveryPixel) {
 // image (the exact inverse at every pixel, computed the independent way), to within the spacing
 // of the nodes it is taken over: the edges and corners where it peaks lie within a node spacing.
 TEST(RsRectifier, ReportsTheLargestDisplacementOfTheMap) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("MapMatchesTheExactInverseAtEveryPixel (the same maps, built whole)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("RsRectifier.MapMatchesTheExactInverseAtEveryPixel (the same maps, built whole)");
   for (const Case& c : cases()) {
     Rectifier rect(c.cam, c.timing, PixelFormat::Mono8);
     const RectifyReport rep = rect.build_map(ScrewMotion(c.tw), c.depth, c.t_ref);
