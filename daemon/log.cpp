@@ -128,4 +128,15 @@ void end_status_line() {
   if (s.status_open) std::fputc('\n', stderr), s.status_open = false;
 }
 
+void show_replay_progress(double progress, uint64_t frames, double seconds) {
+  constexpr int kWidth = 30;
+  char bar[kWidth + 1];
+  for (int i = 0; i < kWidth; ++i) bar[i] = i < static_cast<int>(progress * kWidth + 0.5) ? '#' : '.';
+  bar[kWidth] = '\0';
+  char text[128];
+  std::snprintf(text, sizeof text, "replay [%s] %3.0f%%  %llu frames  %.1f fps", bar, 100 * progress,
+                static_cast<unsigned long long>(frames), seconds > 0 ? static_cast<double>(frames) / seconds : 0.0);
+  show_status_line(text);
+}
+
 }  // namespace rsd::daemon

@@ -13,6 +13,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -37,5 +38,8 @@ void log_fatal(const std::string& message);
 // end_status_line() moves past it. Nothing when stderr is the journal.
 void show_status_line(const std::string& text);
 void end_status_line();
+// A replay's status line: "rsd: replay [#######.............]  35%  120 frames  84.2 fps"
+// (`progress` from 0 to 1, `frames` played in `seconds`).
+void show_replay_progress(double progress, uint64_t frames, double seconds);
 
 }  // namespace rsd::daemon

@@ -270,19 +270,6 @@ struct Session {
   }
 };
 
-// "rsd: replay [#######.............]  35%  120 frames  84.2 fps", the status line.
-void print_progress(const drivers::Playback& r, double seconds) {
-  constexpr int kWidth = 30;
-  const double p = r.progress();
-  char bar[kWidth + 1];
-  for (int i = 0; i < kWidth; ++i) bar[i] = i < static_cast<int>(p * kWidth + 0.5) ? '#' : '.';
-  bar[kWidth] = '\0';
-  char text[128];
-  std::snprintf(text, sizeof text, "replay [%s] %3.0f%%  %llu frames  %.1f fps", bar, 100 * p,
-                static_cast<unsigned long long>(r.frames()), seconds > 0 ? static_cast<double>(r.frames()) / seconds : 0.0);
-  show_status_line(text);
-}
-
 // The latency part of the status: "latency p50 1.20 ms p99 3.40 ms", or with frames beyond the
 // histogram "latency p50 1.20 ms p99 >= 100 ms (max 153.2 ms, 4 frames at 100 ms or more)".
 std::string latency_text(const rsd::health_t& h) {
@@ -427,7 +414,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
       throw std::runtime_error(s.pipeline->output_error());
     }
     if (progress && now - t_progress >= std::chrono::milliseconds(200)) {
-      print_progress(*s.playback(), std::chrono::duration<double>(now - t_start).count());
+      show_replay_progress(s.playback()->progress(), s.playback()->frames(), std::chrono::duration<double>(now - t_start).count());
       t_progress = now;
     }
     if (limits.max_seconds > 0 && now - t_start >= std::chrono::duration<double>(limits.max_seconds)) break;
@@ -462,7 +449,7 @@ void run_service(const Config& cfg, StopFlags& flags, const RunLimits& limits, c
   s.velocity_in->stop();
   if (s.online) s.online->stop();
   const double seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
-  if (progress) print_progress(*s.playback(), seconds);
+  if (progress) show_replay_progress(s.playback()->progress(), s.playback()->frames(), seconds);
   report_health(s, "stopping", std::max(1e-3, std::chrono::duration<double>(Clock::now() - t_health).count()), last_in,
                 last_out, line, sd);
   if (line || progress) end_status_line();
