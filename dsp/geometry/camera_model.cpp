@@ -2,6 +2,7 @@
 
 #include "dsp/core/input_limits.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <utility>
@@ -78,6 +79,14 @@ CameraOutOfRange out_of_range(const CameraModel& c) {
   if (c.dist.model == LensModel::PinholeEqui && (c.dist.p1 != 0 || c.dist.p2 != 0))
     return {P::Distortion, c.dist.p1 != 0 ? "p1" : "p2", "the pinhole-equi lens has no tangential terms (p1, p2)"};
   return {};
+}
+
+double widest_ray_angle(const CameraModel& cam) {
+  double angle = 0;
+  for (const Eigen::Vector2d& c : {Eigen::Vector2d(0, 0), Eigen::Vector2d(cam.width, 0), Eigen::Vector2d(0, cam.height),
+                                  Eigen::Vector2d(cam.width, cam.height)})
+    if (const auto ray = cam.ray(c)) angle = std::max(angle, std::acos(std::clamp(ray->normalized().z(), -1.0, 1.0)));
+  return angle > 0 ? angle : 0.5;
 }
 
 }  // namespace rsd::dsp

@@ -55,6 +55,10 @@ struct CameraModel {
 // the lens, on the normalised plane, unchanged.
 CameraModel scaled_camera(const CameraModel& c, int width, int height);
 
+// The largest angle off the axis (radians) that the image's corners see through the lens (0.5
+// when no corner has a ray).
+double widest_ray_angle(const CameraModel& cam);
+
 // Which part of a camera lies outside rsd's input limits (dsp/core/input_limits.hpp), and how:
 // what a boundary reading intrinsics reports under its own key for that part.
 struct CameraOutOfRange {

@@ -2,7 +2,9 @@
 // motion, and its agreement with the nominal model's integrate_gyro at the samples.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
+#include <utility>
 
 #include "dsp/diagnosis/gyro.hpp"
 #include "dsp/sim/smooth_motion.hpp"
@@ -56,6 +58,42 @@ TEST(DiagnosisGyro, IrregularSamplingStaysWithinATenthMilliradianOverAFrame) {
               slerp_worst);
   EXPECT_LT(worst, 1.5e-4);  // 0.2 px at f = 1450, at the worst 50 ms interval
   EXPECT_LT(worst, slerp_worst / 30);
+}
+
+// RMS error of the rotation over one frame interval along a dense grid of start times, and the
+// RMS of that rotation itself.
+template <class At>
+std::pair<double, double> rms_frame_error(const SmoothPose& pose, At at, double t_end) {
+  double e = 0, r = 0;
+  int n = 0;
+  for (double t = 0.1; t < t_end - 0.2; t += 1e-3, ++n) {
+    const Eigen::Quaterniond truth = pose.orientation(t).conjugate() * pose.orientation(t + 1.0 / 30);
+    e += std::pow(truth.angularDistance(at(t).conjugate() * at(t + 1.0 / 30)), 2);
+    r += std::pow(truth.angularDistance(Eigen::Quaterniond::Identity()), 2);
+  }
+  return {std::sqrt(e / n), std::sqrt(r / n)};
+}
+
+TEST(DiagnosisGyro, StampJitterOfAThirdOfThePeriodDoesNotBlowUpTheSlopes) {
+  // A regular 200 Hz gyro whose stamps jitter by 2 ms (a logger that stamps samples as they
+  // arrive): neighbours come stamped almost together or swapped. The parabola's slope divided
+  // by those intervals and the rotation over a frame erred by a quarter of itself; with the
+  // slope's intervals floored at half the median it must stay near what the stamps' error
+  // itself costs: integrate_gyro's first-order slopes, slerped, on the same samples.
+  const SmoothPose pose = test_pose();
+  std::mt19937 rng(7);
+  std::normal_distribution<double> jitter(0, 0.002);
+  std::vector<GyroSample> g;
+  for (double t = 0; t <= 3.0; t += 0.005) g.push_back({t + jitter(rng), pose.body_rate(t)});
+  const std::vector<GyroSample> c = clean_gyro(g);
+  const GyroTrack track(c, Vector3d::Zero(), Eigen::Matrix3d::Identity());
+  const OrientationTrack slerped = integrate_gyro(c, Vector3d::Zero());
+  const auto [err, rot] = rms_frame_error(pose, [&](double t) { return Eigen::Quaterniond(track.camera_at(t)); }, 3.0);
+  const auto [slerp_err, rot2] = rms_frame_error(pose, [&](double t) { return slerped.at(t); }, 3.0);
+  std::printf("RMS rotation over a frame %.3g rad; its error: Hermite track %.3g rad, slerped samples %.3g rad\n", rot, err,
+              slerp_err);
+  EXPECT_LT(err, 0.03 * rot);
+  EXPECT_LT(err, 1.5 * slerp_err);
 }
 
 TEST(DiagnosisGyro, RepeatedStampsKeepTheFirstSampleAndStayFinite) {

@@ -108,3 +108,14 @@ TEST(CameraModel, OutOfRangeNamesThePartAndTheField) {
   edge.fx = 1, edge.fy = 1e7, edge.cx = -4.0 * edge.width, edge.cy = 5.0 * edge.height, edge.dist.k3 = 1000;
   EXPECT_EQ(out_of_range(edge).part, CameraOutOfRange::None) << out_of_range(edge).why;
 }
+
+TEST(CameraModel, WidestRayAngleIsTheFarthestCornersAngleOffTheAxis) {
+  // Pinhole: the corner farthest from the principal point, by its tangent.
+  CameraModel cam;
+  cam.width = 640, cam.height = 480, cam.fx = 500, cam.fy = 400, cam.cx = 300, cam.cy = 200;
+  EXPECT_NEAR(widest_ray_angle(cam), std::atan(std::hypot(340.0 / 500, 280.0 / 400)), 1e-12);
+  // Barrel distortion bends the corner's ray outwards: a wider angle than the pinhole's.
+  CameraModel barrel = cam;
+  barrel.dist.k1 = -0.05;
+  EXPECT_GT(widest_ray_angle(barrel), widest_ray_angle(cam) + 0.01);
+}
