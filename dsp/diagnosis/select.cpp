@@ -91,7 +91,8 @@ class Selector {
     ModelParams p = s.params;
     const ParamMask drop = effect_params(e, lens_);
     for (int k = 0; k < kParamCount; ++k)
-      if (drop[k]) p.v[k] = nominal_.v[k];
+      // With its followers (fy follows fx): a focal length withdrawn left fy 26% off on a real clip.
+      if (drop[k]) set_param(p, static_cast<Param>(k), nominal_.v[k], m_.recording().nominal);
     if (e == Effect::ReadoutDirection) p.flip_readout = false;
     if (e == Effect::LensModel) p.other_lens = false;
     p = fit_params(m_, idx, p, mask_of(effects, lens_), sigma_, iterations);
@@ -222,8 +223,8 @@ struct RoundResult {
 // focal length, which the subsample cannot tell apart) are refitted on all fitting
 // observations and the lowest BIC there wins. A winner the held-out frames refuse leaves the
 // round (`out.refused`) and the next best is asked, from the same screening, so that a stand-in
-// that wins on the fitting frames does not hide an effect the data hold; so does a group
-// whose refitted drop falls below the threshold. Returns false when nothing (left) clears it.
+// that wins on the fitting frames does not hide an effect the data hold. Returns false when
+// nothing (left) clears the threshold.
 bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, State& s, RoundResult& out) {
   out.refused.clear();
   State here = s;
@@ -275,13 +276,7 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
     // The winner by BIC; accepted by the drop with the design effect (which is itself noisy
     // by a few percent, too much to rank near-degenerate candidates by).
     out.drop = sel.drop(s, *best->refitted);
-    // Below the threshold on the full set, the near group leaves the round and the next is
-    // asked: the subsample's projection only ranks (under a translation nuisance a lens of the
-    // other family projected at 735 came out at 6; the focal length, ranked after it, at 50).
-    if (out.drop < sel.opt_.min_bic_drop) {
-      for (Candidate* c : near) std::erase(order, c);
-      continue;
-    }
+    if (out.drop < sel.opt_.min_bic_drop) return false;
     // Its value must be one real hardware has. If not, and it is the strongest structure left
     // (the round's first winner), that structure is physics outside the table (a gyro bias of
     // half a radian per second stands in for parallax, a gyro scale for a gyro that clips): the

@@ -57,6 +57,11 @@ void expect_plausible(const Verdict& v, const Nominal& n, const std::string& jso
 void expect_invariants(const Verdict& v, const Nominal& n, const std::string& json) {
   ASSERT_TRUE(std::isfinite(v.heldout_baseline_rms_px) && std::isfinite(v.heldout_final_rms_px)) << json;
   EXPECT_LE(v.heldout_final_rms_px, v.heldout_baseline_rms_px) << json;
+  // Nothing named, the final model is the nominal one (a focal length withdrawn on the GoPro MAX
+  // clip once left fy 26% off, which predicted the held-out frames 6% better than the nominal).
+  if (v.effects.empty()) {
+    EXPECT_EQ(v.heldout_final_rms_px, v.heldout_baseline_rms_px) << json;
+  }
   // Half by half in time: a named effect must not make either half's prediction worse (by over 2%).
   for (int h = 0; h < 2; ++h) {
     ASSERT_TRUE(std::isfinite(v.half_baseline_rms_px[h]) && std::isfinite(v.half_final_rms_px[h])) << json;
