@@ -49,14 +49,17 @@ Eigen::Vector3d step(const Eigen::Vector3d& w0, const Eigen::Vector3d& s0, const
 // pair erred by 27% RMS; floored, by 1.3%). Irregular sampling keeps its own intervals: at
 // 20-200 Hz the shortest, 5 ms, is over half the median, 9 ms.
 double shortest_slope_interval(const std::vector<GyroSample>& g) {
-  if (g.size() < 2) return 0;
-  std::vector<double> dt(g.size() - 1);
-  for (size_t k = 1; k < g.size(); ++k) dt[k - 1] = g[k].t - g[k - 1].t;
-  std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
-  return 0.5 * dt[dt.size() / 2];
+  return g.size() < 2 ? 0.0 : 0.5 * interval_percentile(g, 50);
 }
 
 }  // namespace
+
+double interval_percentile(const std::vector<GyroSample>& g, int percent) {
+  std::vector<double> dt(g.size() - 1);
+  for (size_t k = 1; k < g.size(); ++k) dt[k - 1] = g[k].t - g[k - 1].t;
+  std::nth_element(dt.begin(), dt.begin() + dt.size() * percent / 100, dt.end());
+  return dt[dt.size() * percent / 100];
+}
 
 GyroTrack::GyroTrack(const std::vector<GyroSample>& g, const Eigen::Vector3d& bias, const Eigen::Matrix3d& imu_to_camera,
                      double max_interval, const Eigen::Vector3d& scale)

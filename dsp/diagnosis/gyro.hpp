@@ -22,6 +22,11 @@ namespace rsd::dsp {
 // in would bend the rate curve. The rate is then a function of time, its slopes defined.
 std::vector<GyroSample> clean_gyro(std::vector<GyroSample> gyro);
 
+// The `percent`-th percentile of the intervals between consecutive samples of `gyro` (sorted,
+// as clean_gyro returns it; at least two samples): the element at index n * percent / 100 of
+// the n intervals in order.
+double interval_percentile(const std::vector<GyroSample>& gyro, int percent);
+
 class GyroTrack {
  public:
   // `gyro` as clean_gyro returns it (at least one sample). w_true = w_measured - bias (spec

@@ -208,10 +208,7 @@ std::optional<Eigen::Vector2d> fixed_point_row(F&& pixel_at, double v_start) {
 // percentile of the intervals, at least 20 ms.
 double gap_limit(const std::vector<GyroSample>& g) {
   if (g.size() < 2) return std::numeric_limits<double>::infinity();
-  std::vector<double> dt;
-  for (size_t k = 1; k < g.size(); ++k) dt.push_back(g[k].t - g[k - 1].t);
-  std::nth_element(dt.begin(), dt.begin() + dt.size() * 95 / 100, dt.end());
-  return std::max(1.5 * dt[dt.size() * 95 / 100], 0.02);
+  return std::max(1.5 * interval_percentile(g, 95), 0.02);
 }
 
 }  // namespace
