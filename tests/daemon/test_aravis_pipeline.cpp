@@ -78,16 +78,22 @@ class RateFeeder {
   std::thread thread_;
 };
 
-// Runs `source` through the pipeline until `frames` are published; returns what LCM carried.
+// What a run carried over LCM, and the pipeline's counters after it stopped.
+struct PipelineRun {
+  Received rx;
+  uint64_t frames_in = 0, frames_out = 0, drops = 0, refused = 0;
+};
+
+// Runs `source` through the pipeline until `frames` are published.
 // Waits for the frames, not for a time: the limit only ends a run that hangs.
-Received run_pipeline(drivers::CameraSource& source, int frames) {
+PipelineRun run_pipeline(drivers::CameraSource& source, int frames) {
   source.open();
   daemon::VelocityBuffer velocity;
   RateFeeder feeder(velocity);
   daemon::LcmPublisher pub("memq://", {}, source.format());
-  Received rx;
-  lcm_subscribe(pub.handle(), "RSD_RECT", on_image, &rx);
-  lcm_subscribe(pub.handle(), "RSD_FRAME_INFO", on_info, &rx);
+  PipelineRun run;
+  lcm_subscribe(pub.handle(), "RSD_RECT", on_image, &run.rx);
+  lcm_subscribe(pub.handle(), "RSD_FRAME_INFO", on_info, &run.rx);
   const dsp::CameraModel cam = dsp::CameraModel::from_hfov(source.format().width, source.format().height, 1.0);
   daemon::FrameRectifier rect({}, cam, source.timing(), source.format());
   daemon::PipelineConfig pc;
@@ -100,37 +106,47 @@ Received run_pipeline(drivers::CameraSource& source, int frames) {
   pipeline.stop();
   source.stop();
   while (lcm_handle_timeout(pub.handle(), 0) > 0) {}
-  return rx;
+  const auto& st = pipeline.stats();
+  run.frames_in = st.frames_in.load(), run.frames_out = st.frames_out.load();
+  run.drops = st.drops.load(), run.refused = st.refused.load();
+  return run;
 }
 
 // The stamps against the camera's grid of frame periods. A fake camera whose frames take longer
-// to fill than a period (the simulator's renderer at sanitizer speed) skips slots of its grid and
-// counts only the frames it delivers, and the pipeline drops frames it cannot keep up with (newest
-// wins); so each frame's slot is found from its step, rounded to whole periods, and the period is
-// the least-squares slope of the stamps against those slots: a late software stamp moves it by its
-// lateness over the run's length, not by a whole step.
+// to fill than a period (the simulator's renderer at sanitizer speed, or a loaded machine) skips
+// slots of its grid and counts only the frames it delivers, and the pipeline drops frames it
+// cannot keep up with (newest wins); so each frame's slot is found from its step, rounded to
+// whole periods. The fakes stamp in software when they wake, so a loaded host puts some stamps
+// late: the period is the median of the slopes between every two frames (Theil-Sen), which late
+// stamps move only when they are the majority, where a least-squares line moved by a late stamp's
+// lateness over the run's length (3.6% on a machine with four heavy jobs on its two cores).
 struct StampGrid {
   std::vector<double> slot, t_s;  // per frame
-  std::vector<int> slot_steps;     // per step
-  double period_s = 0, t0_s = 0;   // the fit
+  double period_s = 0, t0_s = 0;  // the fit
 };
 StampGrid fit_grid(const std::vector<rsd::frame_info_t>& infos, double period_s) {
   StampGrid g;
   for (const auto& m : infos) {
     const double t = (m.utime - infos.front().utime) * 1e-6;
-    if (!g.t_s.empty()) g.slot_steps.push_back(std::max(1, static_cast<int>(std::lround((t - g.t_s.back()) / period_s))));
-    g.slot.push_back(g.slot.empty() ? 0.0 : g.slot.back() + g.slot_steps.back());
+    const double step = g.t_s.empty() ? 0.0 : std::max(1.0, std::round((t - g.t_s.back()) / period_s));
+    g.slot.push_back(g.slot.empty() ? 0.0 : g.slot.back() + step);
     g.t_s.push_back(t);
   }
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  const double n = static_cast<double>(g.slot.size());
-  for (size_t i = 0; i < g.slot.size(); ++i) sx += g.slot[i], sy += g.t_s[i], sxx += g.slot[i] * g.slot[i], sxy += g.slot[i] * g.t_s[i];
-  g.period_s = (n * sxy - sx * sy) / (n * sxx - sx * sx);
-  g.t0_s = (sy - g.period_s * sx) / n;
+  std::vector<double> slopes, offsets;
+  for (size_t i = 0; i < g.slot.size(); ++i)
+    for (size_t j = i + 1; j < g.slot.size(); ++j) slopes.push_back((g.t_s[j] - g.t_s[i]) / (g.slot[j] - g.slot[i]));
+  const auto median = [](std::vector<double>& v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  g.period_s = median(slopes);
+  for (size_t i = 0; i < g.slot.size(); ++i) offsets.push_back(g.t_s[i] - g.period_s * g.slot[i]);
+  g.t0_s = median(offsets);
   return g;
 }
 
-void expect_streamed_stamped_rectified(const Received& rx, int frames, double period_s) {
+void expect_streamed_stamped_rectified(const PipelineRun& run, int frames, double period_s) {
+  const Received& rx = run.rx;
   ASSERT_GE(static_cast<int>(rx.infos.size()), frames);
   EXPECT_EQ(rx.images, static_cast<int>(rx.infos.size()));
   int rectified = 0;
@@ -139,6 +155,7 @@ void expect_streamed_stamped_rectified(const Received& rx, int frames, double pe
     const auto& b = rx.infos[i];
     EXPECT_GT(b.utime, a.utime) << "frame " << i;
     EXPECT_GT(b.source_sequence, a.source_sequence) << "frame " << i;
+    EXPECT_GE(b.drops_total, a.drops_total) << "frame " << i;
     rectified += b.rectified;
     if (b.rectified) {
       EXPECT_NEAR(b.angular_velocity[1], kRate[1], 1e-9);
@@ -146,17 +163,16 @@ void expect_streamed_stamped_rectified(const Received& rx, int frames, double pe
   }
   const StampGrid g = fit_grid(rx.infos, period_s);
   EXPECT_NEAR(g.period_s / period_s, 1.0, 0.02);
-  // The fakes stamp in software when they wake, so on a busy host a late wake-up puts a stamp
-  // off the grid: most stamps (not all) must lie within a quarter period of the fit.
+  // Most stamps (not all: see test_aravis_fake.cpp, software stamps) lie within a quarter period
+  // of the grid.
   int on_grid = 0;
   for (size_t i = 0; i < g.slot.size(); ++i) on_grid += std::abs(g.t_s[i] - g.t0_s - g.period_s * g.slot[i]) < 0.25 * period_s;
-  EXPECT_GE(on_grid, static_cast<int>(g.slot.size()) / 2);  // see test_aravis_fake.cpp: software stamps
-  // At full speed the camera fills every slot and the pipeline keeps up: most steps are one period.
-  if (!test::kSanitized) {
-    std::vector<int> steps = g.slot_steps;
-    std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
-    EXPECT_EQ(steps[steps.size() / 2], 1);
-  }
+  EXPECT_GE(on_grid, static_cast<int>(g.slot.size()) / 2);
+  // Whether the pipeline keeps up at full speed is the latency benchmark's question (a loaded
+  // machine drops frames, newest wins); what holds on any machine is that every frame the camera
+  // delivered is published, dropped or refused, and counted.
+  EXPECT_EQ(run.frames_in, run.frames_out + run.drops + run.refused);
+  EXPECT_EQ(run.frames_out, rx.infos.size());
   EXPECT_GE(rectified, frames - 2);
 }
 
@@ -181,8 +197,8 @@ TEST(AravisPipeline, FakeCameraStreamsStampsRectifiesPublishes) {
     renderer->render(*scene, dsp::ScrewMotion(tw), id / 50.0, v);
   };
   drivers::AravisSource source(c);
-  const Received rx = run_pipeline(source, 30);
-  expect_streamed_stamped_rectified(rx, 30, 1.0 / 50);
+  const PipelineRun run = run_pipeline(source, 30);
+  expect_streamed_stamped_rectified(run, 30, 1.0 / 50);
 }
 
 class AravisPipelineGigE : public ::testing::Test {
@@ -202,6 +218,6 @@ TEST_F(AravisPipelineGigE, FakeGigECameraStreamsStampsRectifiesPublishes) {
   c.exposure_s = 0.01;
   c.line_delay_s = 1.0 / (48 * 50.0);
   drivers::AravisSource source(c);
-  const Received rx = run_pipeline(source, 30);
-  expect_streamed_stamped_rectified(rx, 30, 1.0 / 50);
+  const PipelineRun run = run_pipeline(source, 30);
+  expect_streamed_stamped_rectified(run, 30, 1.0 / 50);
 }
