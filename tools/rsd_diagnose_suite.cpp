@@ -7,6 +7,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <mutex>
 #include <sstream>
@@ -65,7 +66,7 @@ std::string command_line(int argc, char** argv) {
 
 int run(int argc, char** argv) {
   std::string out, kinds = "landmarks,matches", cases;
-  bool reduced = false;
+  bool reduced = false, verbose = false;
   int threads = 2;
   double duration = 0;
   unsigned seed_shift = 0;
@@ -80,6 +81,7 @@ int run(int argc, char** argv) {
                  "Write rsd-diagnose's report of one case (landmarks, rolling_shutter + time_offset if run) here, "
                  "and link it from the table");
   app.add_option("--seed-shift", seed_shift, "Added to every case's seed (the table uses 0)");
+  app.add_flag("--verbose", verbose, "Print each diagnosis's progress (what it names, refuses and why), prefixed by its case");
   app.add_option("--threads", threads, "Cases run in parallel")->check(int_range(1, 64))->capture_default_str();
   if (const auto rc = parse_command_line(app, argc, argv)) return *rc;
   if (!out.empty()) require_writable(out, "--out");
@@ -108,7 +110,13 @@ int run(int argc, char** argv) {
         std::lock_guard<std::mutex> lock(print);
         std::cerr << "rsd-diagnose-suite: start " << dsp::to_string(todo[k].kind) << " / " << todo[k].name() << "\n";
       }
-      results[k] = run_case(todo[k], duration, k == example_index ? example : "");
+      std::function<void(const std::string&)> progress;
+      if (verbose)
+        progress = [&, name = todo[k].name()](const std::string& line) {
+          std::lock_guard<std::mutex> lock(print);
+          std::cerr << "rsd-diagnose-suite: " << name << ": " << line << "\n";
+        };
+      results[k] = run_case(todo[k], duration, k == example_index ? example : "", progress);
       std::lock_guard<std::mutex> lock(print);
       std::cerr << "rsd-diagnose-suite: [" << ++done << "/" << todo.size() << "] " << case_line(results[k]) << "\n";
     }

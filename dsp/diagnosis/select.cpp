@@ -6,194 +6,14 @@
 #include <optional>
 #include <sstream>
 
-#include "dsp/diagnosis/blocked_halves.hpp"
-#include "dsp/diagnosis/robust_stats.hpp"
-#include "dsp/diagnosis/fit.hpp"
-#include "dsp/diagnosis/plausibility.hpp"
-#include "dsp/geometry/lens_model.hpp"
-#include "dsp/observation/observation_model.hpp"
+#include "dsp/diagnosis/selector.hpp"
 
 namespace rsd::dsp {
 
 namespace {
 
-// Selector::worse_with_parallax_because's limit. In the suite a gyro scale and a lens standing in
-// for a focal length under a hand-held shake came out 7.8 and 6.6 worse; the drone's shutter 0.9.
-constexpr double kWorseSigmas = 3.0;
-
-struct State {
-  std::vector<Effect> effects;
-  ModelParams params;
-  double bic = 0;  // on the fitting set
-  bool has(Effect e) const { return std::find(effects.begin(), effects.end(), e) != effects.end(); }
-};
-
-class Selector {
- public:
-  Selector(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
-           const std::vector<int>& screen, const ModelParams& nominal, const ModelParams& start, double sigma,
-           const SelectionOptions& opt)
-      : m_(m), fit_(fit), held_(held), screen_(screen), nominal_(nominal), start_(start), sigma_(sigma), opt_(opt),
-        time_halves_(time_halves(m, screen)), rate_halves_(m.has_gyro() ? rate_halves(m, screen, start) : Halves{}),
-        lens_(m.recording().nominal.cam.dist.model), field_(widest_ray_angle(m.recording().nominal.cam)) {}
-
-  // Whether adding an effect (poorer -> richer) holds on the blocked halves (blocked_halves.hpp)
-  // in time and, in gyro recordings, on the frames of low and of high angular rate (every effect
-  // there shows through the rate: a stand-in for a gyro that clips fits only the fast frames):
-  // it predicts the half it was not fitted on, and the two halves agree on its value within
-  // kHalvesAgreeSigmas. The drops (the worse direction of each split; NaN where a split does
-  // not apply) go to `time_drop` and `rate_drop`, the larger disagreement to `apart`.
-  bool consistent(const State& poorer, const State& richer, double& time_drop, double& rate_drop, double& apart) const {
-    time_drop = rate_drop = std::numeric_limits<double>::quiet_NaN(), apart = 0;
-    const Hypothesis p{poorer.params, mask_of(poorer.effects, lens_)}, r{richer.params, mask_of(richer.effects, lens_)};
-    for (auto [h, drop] : {std::pair{&time_halves_, &time_drop}, std::pair{&rate_halves_, &rate_drop}}) {
-      if (!h->usable()) continue;
-      const HalvesVerdict v = cross_check(m_, *h, p, r, sigma_, opt_.screen_iterations);
-      *drop = v.drop, apart = std::max(apart, v.apart_sigmas);
-    }
-    // A drop of exactly zero is a half that cannot show the effect (no motion there): it holds.
-    return !(time_drop < 0) && !(rate_drop < 0) && apart <= kHalvesAgreeSigmas;
-  }
-
-  // BIC = robust chi-square + k ln(2N) + the implausibility of the values (plausibility.hpp):
-  // each switch (the readout's flip, the other lens family) counts as one parameter.
-  double bic(const ModelParams& p, const std::vector<Effect>& effects, const std::vector<int>& idx) const {
-    return robust_chi2(m_.residuals(p, idx), sigma_) + k_of({effects, p, 0}) * std::log(2.0 * idx.size()) +
-           implausibility(p, effects);
-  }
-
-  State initial() const { return {{}, nominal_, bic(nominal_, {}, fit_)}; }
-
-  // The hypothesis "s plus e", fitted on the screening subsample.
-  State screen_add(const State& s, Effect e) const {
-    std::vector<Effect> effects = s.effects;
-    effects.push_back(e);
-    ModelParams p = s.params;
-    for (int k = 0; k < kParamCount; ++k)
-      if (effect_params(e, lens_)[k]) p.v[k] = start_.v[k];
-    if (e == Effect::LensModel) switch_lens(effects, p);
-    if (e == Effect::ReadoutDirection) {
-      p.flip_readout = true;
-      // The order of rows read means nothing without a readout time: a nominal global
-      // shutter brings rolling_shutter along.
-      if (!s.has(Effect::RollingShutter) && nominal_[Param::LineDelay] == 0) effects.push_back(Effect::RollingShutter);
-    }
-    if (e == Effect::TimeOffset) p[Param::TimeOffset] = refine_time_offset(m_, screen_, p, sigma_);
-    p = fit_params(m_, screen_, p, mask_of(effects, lens_), sigma_, opt_.screen_iterations);
-    return {effects, p, bic(p, effects, screen_)};
-  }
-
-  // s without e, fitted on idx from s's values.
-  State remove(const State& s, Effect e, const std::vector<int>& idx, int iterations) const {
-    std::vector<Effect> effects;
-    for (Effect f : s.effects)
-      if (f != e) effects.push_back(f);
-    ModelParams p = s.params;
-    const ParamMask drop = effect_params(e, lens_);
-    for (int k = 0; k < kParamCount; ++k)
-      // With its followers (fy follows fx): a focal length withdrawn left fy 26% off on a real clip.
-      if (drop[k]) set_param(p, static_cast<Param>(k), nominal_.v[k], m_.recording().nominal);
-    if (e == Effect::ReadoutDirection) p.flip_readout = false;
-    if (e == Effect::LensModel) p.other_lens = false;
-    p = fit_params(m_, idx, p, mask_of(effects, lens_), sigma_, iterations);
-    return {effects, p, bic(p, effects, idx)};
-  }
-
-  // lens_model: the other family's lens, starting from its nearest stand-in for the lens the
-  // state has (over the image's field); it takes lens_distortion's place, whose terms it frees.
-  void switch_lens(std::vector<Effect>& effects, ModelParams& p) const {
-    const NominalModel& n = m_.recording().nominal;
-    const Distortion now = lens_of(n, p);
-    p.other_lens = true;
-    set_lens_terms(p, nearest_lens(now, lens_family(n, p), field_));
-    effects.erase(std::remove(effects.begin(), effects.end(), Effect::LensDistortion), effects.end());
-  }
-
-  State refit_all(const State& screened) const {
-    const ModelParams p = fit_params(m_, fit_, screened.params, mask_of(screened.effects, lens_), sigma_, opt_.max_iterations);
-    return {screened.effects, p, bic(p, screened.effects, fit_)};
-  }
-
-  // BIC drop from `poorer` to `richer` (both on the fitting set), with the chi-square drop
-  // shrunk by the richer model's design effect (design_effect).
-  double drop(const State& poorer, const State& richer) const {
-    const double D = design_effect(m_, richer.params, fit_, sigma_);
-    const double pen = std::log(2.0 * fit_.size()), dk = k_of(richer) - k_of(poorer);
-    const double prior0 = implausibility(poorer.params, poorer.effects), prior1 = implausibility(richer.params, richer.effects);
-    return ((poorer.bic - k_of(poorer) * pen - prior0) - (richer.bic - k_of(richer) * pen - prior1)) / D - dk * pen -
-           (prior1 - prior0);
-  }
-  double k_of(const State& s) const {
-    return static_cast<double>(mask_of(s.effects, lens_).count()) + (s.params.flip_readout ? 1 : 0) + (s.params.other_lens ? 1 : 0);
-  }
-
-  double rms(const ModelParams& p) const { return robust_stats(m_.residuals(p, fit_)).rms_px; }
-
-  // Whether `richer` explains the bulk of what `poorer` leaves, not only its tail: its robust
-  // chi-square on `poorer`'s inliers (the fitting observations within kOutlierSigmas robust
-  // scales) must not rise. A real effect's structure runs through the bulk. A hypothesis that
-  // bends the model towards the outliers (a near bus's parallax seen from a car, cars moving
-  // under a drone) lowers the whole chi-square, and the held-out one, since the same outliers
-  // are there too, while every other residual grows: the phone on a dashboard wanted a gyro
-  // bias of 0.63 rad/s that raised the robust scale from 0.69 to 1.20 px. "" when it does;
-  // else why not.
-  std::string fits_the_tail_because(const State& poorer, const State& richer) const {
-    const std::vector<Eigen::Vector2d> r = m_.residuals(poorer.params, fit_);
-    const std::vector<bool> in = inliers(r);
-    std::vector<int> bulk;
-    for (size_t k = 0; k < fit_.size(); ++k)
-      if (in[k]) bulk.push_back(fit_[k]);
-    // Both models on the bulk alone, `poorer` again too: under the translation nuisance the
-    // residuals depend on the set they are taken over (its velocity is fitted to that set).
-    const double before = robust_chi2(m_.residuals(poorer.params, bulk), sigma_);
-    const double after = robust_chi2(m_.residuals(richer.params, bulk), sigma_);
-    if (after <= before) return "";
-    std::ostringstream why;
-    why << "it fits the outliers (" << (fit_.size() - bulk.size()) << " of " << fit_.size()
-        << " fitting observations beyond " << kOutlierSigmas << " robust scales) at the cost of the rest: its chi-square on the "
-        << bulk.size() << " others rises by " << std::lround(after - before)
-        << " (structure outside the table in the tail, such as a near object's parallax or moving things)";
-    return why.str();
-  }
-
-  // Robust chi-square drop on the held-out observations from `poorer` to `richer` (0 when
-  // nothing is held out).
-  double heldout_drop(const State& poorer, const State& richer) const {
-    if (held_.empty()) return 0;
-    return robust_chi2(m_.residuals(poorer.params, held_), sigma_) - robust_chi2(m_.residuals(richer.params, held_), sigma_);
-  }
-
-  // Under the translation nuisance, whether `richer` predicts the held-out observations worse
-  // than `poorer` with the nuisance off, as the final model is judged (diagnosis.cpp, the first
-  // invariant), by over kWorseSigmas standard errors paired over the frame pairs (the parallax
-  // left in moves a pair's residuals together). "" when not, or when there is no nuisance.
-  std::string worse_with_parallax_because(const State& poorer, const State& richer) const {
-    if (held_.empty() || !richer.params.translation_nuisance) return "";
-    ModelParams a = poorer.params, b = richer.params;
-    a.translation_nuisance = b.translation_nuisance = false;
-    const std::vector<Eigen::Vector2d> ra = m_.residuals(a, held_), rb = m_.residuals(b, held_);
-    std::vector<int> pair(held_.size());
-    for (size_t k = 0; k < held_.size(); ++k) pair[k] = m_.frame_rank(held_[k]);
-    const PairedChange c = paired_change(ra, rb, pair);
-    if (!(c.t > kWorseSigmas)) return "";
-    std::ostringstream why;
-    why << "with the camera's translation left in, it predicts the held-out frames worse than without it ("
-        << robust_stats(ra).rms_px << " -> " << robust_stats(rb).rms_px << " px RMS; " << c.t
-        << " standard errors over " << c.groups << " frame pairs)";
-    return why.str();
-  }
-
-  const DiagnosisModel& m_;
-  const std::vector<int>& fit_;
-  const std::vector<int>& held_;
-  const std::vector<int>& screen_;
-  ModelParams nominal_, start_;
-  double sigma_;
-  const SelectionOptions& opt_;
-  Halves time_halves_, rate_halves_;
-  LensModel lens_;  // the nominal lens's family
-  double field_;    // the largest angle off the axis the image sees (radians), through the nominal lens
-};
+using selection::Selector;
+using selection::State;
 
 // The screening subsample's BIC drop projected onto the fitting set: the chi-square drop grows
 // with the number of observations, the penalty with its logarithm.
@@ -217,6 +37,23 @@ struct RoundResult {
   // Winners the held-out frames refused in this round, in order, each with why.
   std::vector<std::pair<Effect, std::string>> refused;
 };
+
+// Why `richer` (s with `added`, refitted on the fitting set, BIC drop `drop`, held-out drop
+// `held_drop`) is not named; "" when it is. The held-out observations must agree: the effect
+// predicts frames the fit never saw better; and a parameter on its bound is not measured (a
+// lens's k4 pushed to 1). Every reason that holds is said: a user reading only one would look
+// in the wrong place.
+std::string refusal(const Selector& sel, const State& s, const State& richer, const std::vector<Effect>& added,
+                    double drop, double held_drop) {
+  std::string why;
+  for (Effect e : added)
+    if (why.empty()) why = unnameable_because(richer.params, e, sel.m_);
+  if (why.empty()) why = sel.fits_the_tail_because(s, richer);
+  if (why.empty()) why = sel.worse_with_parallax_because(s, richer);
+  if (sel.held_.empty() || held_drop > 0) return why;
+  return why + (why.empty() ? "" : "; and ") + "it fits the fitting frames (BIC drop " + std::to_string(std::lround(drop)) +
+         ") and predicts the held-out frames worse than without it";
+}
 
 // One forward round: every candidate screened on the subsample; those whose projected drop is
 // near the best (near-degenerate hypotheses, e.g. a lever arm along the optical axis and a
@@ -276,7 +113,18 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
     // The winner by BIC; accepted by the drop with the design effect (which is itself noisy
     // by a few percent, too much to rank near-degenerate candidates by).
     out.drop = sel.drop(s, *best->refitted);
-    if (out.drop < sel.opt_.min_bic_drop) return false;
+    if (out.drop < sel.opt_.min_bic_drop) {
+      // The strongest group falling short on the full set ends the round: the data hold
+      // nothing stronger. After a refusal, though, the group is what is left of the refused
+      // winner's structure (a lens of the other family, projected at 735 and refitted at 6,
+      // once the held-out frames refused the lens under parallax): the ranking that put it
+      // first is the refused stand-in's, and the next group is asked (a focal length at 50).
+      // Without a refusal the round ends as before (a stabilised clip's next group was a focal
+      // length 25% short).
+      if (out.refused.empty()) return false;
+      for (Candidate* c : near) std::erase(order, c);
+      continue;
+    }
     // Its value must be one real hardware has. If not, and it is the strongest structure left
     // (the round's first winner), that structure is physics outside the table (a gyro bias of
     // half a radian per second stands in for parallax, a gyro scale for a gyro that clips): the
@@ -287,22 +135,13 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
     // lens the held-out frames do not have), and the round goes on to the next best.
     const std::string name = effect_name(best->added);
     const std::string beyond = beyond_hardware_because(best->refitted->params, best->added, sel.m_);
-    // The held-out observations must agree: the effect predicts frames the fit never saw better;
-    // and a parameter on its bound is not measured (a lens's k4 pushed to 1).
     out.held_drop = sel.heldout_drop(s, *best->refitted);
-    std::string unnameable = unnameable_because(best->refitted->params, best->added, sel.m_);
-    if (unnameable.empty()) unnameable = sel.fits_the_tail_because(s, *best->refitted);
-    if (unnameable.empty()) unnameable = sel.worse_with_parallax_because(s, *best->refitted);
-    const bool heldout_worse = !sel.held_.empty() && out.held_drop <= 0;
-    if (!heldout_worse && unnameable.empty()) {
+    const std::string refused = refusal(sel, s, *best->refitted, {best->added}, out.drop, out.held_drop);
+    if (refused.empty()) {
       s = std::move(*best->refitted);
       return true;
     }
-    // Every reason that holds is said: a user reading only one would look in the wrong place.
-    std::string why = name + " not named: " + unnameable;
-    if (heldout_worse)
-      why += (unnameable.empty() ? "" : "; and ") + std::string("it fits the fitting frames (BIC drop ") +
-             std::to_string(std::lround(out.drop)) + ") and predicts the held-out frames worse than without it";
+    const std::string why = name + " not named: " + refused;
     const bool first = out.refused.empty();
     out.refused.emplace_back(best->added, why);
     if (!beyond.empty() && first) {
@@ -313,6 +152,45 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
     std::erase(order, best);
   }
   return false;
+}
+
+// Two effects the round refused one by one, together: alone, each may stand in for the other's
+// part (under a hand-held shake's parallax a focal length 15% long came out 32% off without the
+// lens's distortion, and the lens without the focal length predicted the held-out frames worse;
+// fitted together they land within 0.5% and 0.001 of the truth). Every pair screened on the
+// subsample, the best refitted on the fitting set and judged as a round's winner is (refusal).
+// Says whether the pair was named.
+bool forward_pair(const Selector& sel, const std::vector<std::pair<Effect, std::string>>& refused, State& s,
+                  RoundResult& out) {
+  State here = s;
+  here.bic = sel.bic(s.params, s.effects, sel.screen_);
+  std::optional<State> best;
+  double best_projected = -std::numeric_limits<double>::infinity();
+  std::vector<Effect> pair;
+  for (size_t i = 0; i < refused.size(); ++i)
+    for (size_t j = i + 1; j < refused.size(); ++j) {
+      const Effect a = refused[i].first, b = refused[j].first;
+      const auto lens = [](Effect e) { return e == Effect::LensDistortion || e == Effect::LensModel; };
+      if (lens(a) && lens(b)) continue;  // one lens or the other
+      State c = sel.screen_add(sel.screen_add(s, a), b);
+      const double d = projected_drop(sel, here, c);
+      if (d > best_projected) best_projected = d, best = std::move(c), pair = {a, b};
+    }
+  if (!best || best_projected < sel.opt_.min_bic_drop) return false;
+  State richer = sel.refit_all(*best);
+  out.drop = sel.drop(s, richer);
+  if (out.drop < sel.opt_.min_bic_drop) return false;
+  out.held_drop = sel.heldout_drop(s, richer);
+  const std::string refused_because = refusal(sel, s, richer, pair, out.drop, out.held_drop);
+  const std::string names = std::string(effect_name(pair[0])) + " and " + effect_name(pair[1]);
+  if (!refused_because.empty()) {
+    if (sel.opt_.progress) sel.opt_.progress(names + " together not named: " + refused_because);
+    return false;
+  }
+  if (sel.opt_.progress) sel.opt_.progress(names + ", each refused alone, hold together");
+  out.rivals.clear();
+  s = std::move(richer);
+  return true;
 }
 
 // Forward rounds until no candidate clears the threshold. What the held-out frames refused and
@@ -332,8 +210,9 @@ std::vector<SelectedEffect> forward(const Selector& sel, const std::vector<Effec
   };
   while (true) {
     const State before = s;
-    const bool named = forward_round(sel, candidates, s, r);
+    bool named = forward_round(sel, candidates, s, r);
     remember();
+    if (!named && r.refused.size() >= 2) named = forward_pair(sel, r.refused, s, r);
     if (!named) {
       for (const auto& f : refused)
         if (!s.has(f.first)) withheld.push_back(f.second);

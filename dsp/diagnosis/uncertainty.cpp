@@ -61,9 +61,16 @@ std::optional<Eigen::VectorXd> variances(const DiagnosisModel& m, const Eigen::M
                                          int cluster_frames) {
   const Eigen::Index n = J.cols();
   if (n == 0 || J.rows() <= n) return std::nullopt;
-  const Eigen::FullPivLU<Eigen::MatrixXd> lu(J.transpose() * J);
+  // Columns scaled to unit norm before the inverse: the parameters' units differ by ten orders
+  // (a line delay in seconds, a focal length in pixels), and the unscaled normal matrix's
+  // smallest pivot fell under the rank test's relative threshold with five effects named at once.
+  const Eigen::VectorXd norm = J.colwise().norm().transpose();
+  if (!(norm.array() > 0).all()) return std::nullopt;
+  const Eigen::VectorXd inv_norm = norm.cwiseInverse();
+  const Eigen::MatrixXd Jn = J * inv_norm.asDiagonal();
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(Jn.transpose() * Jn);
   if (!lu.isInvertible()) return std::nullopt;
-  const Eigen::MatrixXd B = lu.inverse();
+  const Eigen::MatrixXd B = inv_norm.asDiagonal() * lu.inverse() * inv_norm.asDiagonal();
   double sum2 = 0;
   for (const auto& r : f.r) sum2 += r.squaredNorm();
   const double s2 = sum2 / (2.0 * f.r.size());  // per-coordinate residual variance

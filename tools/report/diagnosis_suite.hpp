@@ -6,6 +6,7 @@
 // Markdown table of docs/diagnosis-benchmark.md.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -84,7 +85,9 @@ struct CaseResult {
 // Calibrates the case's effects to one noise sigma each, simulates, diagnoses, checks, and
 // with `report_dir` writes rsd-diagnose's report of it there (PLplot: one case at a time).
 // Never throws: failures are in the result.
-CaseResult run_case(const SuiteCase& c, double duration_s, const std::string& report_dir = "");
+// `progress`, when given, receives the diagnosis's progress messages (DiagnosisOptions::progress).
+CaseResult run_case(const SuiteCase& c, double duration_s, const std::string& report_dir = "",
+                    const std::function<void(const std::string&)>& progress = {});
 
 struct SuiteSummary {
   std::string command;

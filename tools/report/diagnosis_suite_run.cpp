@@ -163,7 +163,8 @@ std::pair<double, double> calibrate(const SimConfig& base, const std::string& e)
 
 }  // namespace
 
-CaseResult run_case(const SuiteCase& c, double duration_s, const std::string& report_dir) {
+CaseResult run_case(const SuiteCase& c, double duration_s, const std::string& report_dir,
+                    const std::function<void(const std::string&)>& progress) {
   CaseResult r;
   r.c = c;
   try {
@@ -191,7 +192,9 @@ CaseResult run_case(const SuiteCase& c, double duration_s, const std::string& re
     if (c.preset == "fast") sim.rec.noise_px.reset();  // as rsd-extract's recordings: the data must tell
     const auto t0 = std::chrono::steady_clock::now();
     const DiagnosisModel m(sim.rec);
-    const Diagnosis d = diagnose(m);
+    DiagnosisOptions options;
+    options.progress = progress;
+    const Diagnosis d = diagnose(m, options);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     r.observations = d.baseline.observations;
     run_checks(r, m, sim, d);
