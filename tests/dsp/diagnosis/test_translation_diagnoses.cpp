@@ -99,7 +99,9 @@ TEST(Translation, AHandHeldPhoneUnderParallaxYieldsItsFocalLengthLensAndMount) {
 // set was the mount, the shutter and the offset). The two are judged together (select.cpp,
 // forward_pair).
 TEST(Translation, AFocalLengthAndALensThatStandInForEachOtherAreNamedTogether) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("Translation.AHandHeldPhoneUnderParallaxYieldsItsFocalLengthLensAndMount (the same effects)");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("Translation.AtTheTrueModelTheVelocitySplineLeavesTheNoise (the nuisance) and "
+                              "DiagnosisInvariants.AnEffectThatAddsNothingHeldOutGivenTheOthersIsWithheld (the "
+                              "selection's rounds); the pair step itself runs only here");
   SimConfig c = hand_held_shake(7);
   c.duration_s = 12.0;
   const double f = 1450 * 1.15;
