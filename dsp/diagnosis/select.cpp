@@ -64,8 +64,7 @@ std::string refusal(const Selector& sel, const State& s, const State& richer, co
 // nothing (left) clears the threshold.
 bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, State& s, RoundResult& out) {
   out.refused.clear();
-  State here = s;
-  here.bic = sel.bic(s.params, s.effects, sel.screen_);
+  const State here = sel.on_screen(s);
   struct Candidate {
     double projected;
     Effect added;
@@ -162,8 +161,7 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
 // winner is (refusal). Says whether the pair was named.
 bool forward_pair(const Selector& sel, const std::vector<std::pair<Effect, std::string>>& refused, State& s,
                   RoundResult& out) {
-  State here = s;
-  here.bic = sel.bic(s.params, s.effects, sel.screen_);
+  const State here = sel.on_screen(s);
   std::optional<State> best;
   double best_projected = -std::numeric_limits<double>::infinity();
   std::vector<Effect> pair;
@@ -243,8 +241,7 @@ void backward(const Selector& sel, State& s, std::vector<SelectedEffect>& steps)
   bool changed = true;
   while (changed && s.effects.size() > 1) {
     changed = false;
-    State here = s;
-    here.bic = sel.bic(s.params, s.effects, sel.screen_);
+    const State here = sel.on_screen(s);
     for (Effect e : s.effects) {
       const double projected = projected_drop(sel, sel.remove(s, e, sel.screen_, sel.opt_.screen_iterations), here);
       if (projected >= sel.opt_.min_bic_drop + 30 + 0.05 * std::abs(projected)) continue;

@@ -70,6 +70,9 @@ class Selector {
 
   State initial() const { return {{}, nominal_, bic(nominal_, {}, fit_)}; }
 
+  // s with its BIC on the screening subsample (what screened hypotheses are compared with).
+  State on_screen(const State& s) const { return {s.effects, s.params, bic(s.params, s.effects, screen_)}; }
+
   // The hypothesis "s plus e", fitted on the screening subsample.
   State screen_add(const State& s, Effect e) const {
     std::vector<Effect> effects = s.effects;
