@@ -330,6 +330,11 @@ std::optional<Eigen::Vector2d> DiagnosisModel::residual(const ModelParams& p, in
 }
 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx) const {
+  TranslationFit unused;
+  return residuals(p, idx, unused);
+}
+
+std::vector<Eigen::Vector2d> DiagnosisModel::rotation_residuals(const ModelParams& p, const std::vector<int>& idx) const {
   std::vector<Eigen::Vector2d> out;
   out.reserve(idx.size());
   const Eigen::Vector2d nan = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
@@ -340,7 +345,25 @@ std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, con
   const GyroTrack& tr = track(bias_of(p), scale_of(p));
   const MatchSetup ms = match_setup(p);
   for (int i : idx) out.push_back(match_residual(ms, tr, i).value_or(nan));
-  if (p.translation_nuisance) remove_translation(*this, idx, out, tr, ms.tm, ms.mount_t, p.translation_knot_s);
+  return out;
+}
+
+std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx,
+                                                       TranslationFit& taken) const {
+  taken.state.reset();
+  std::vector<Eigen::Vector2d> out = rotation_residuals(p, idx);
+  if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return out;
+  const MatchSetup ms = match_setup(p);
+  remove_translation(*this, idx, out, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s, &taken);
+  return out;
+}
+
+std::vector<Eigen::Vector2d> DiagnosisModel::residuals_near(const ModelParams& p, const std::vector<int>& idx,
+                                                            const TranslationFit& taken) const {
+  std::vector<Eigen::Vector2d> out = rotation_residuals(p, idx);
+  if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return out;
+  const MatchSetup ms = match_setup(p);
+  remove_fitted_translation(*this, idx, out, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s, taken);
   return out;
 }
 

@@ -94,6 +94,13 @@ class DiagnosisModel {
   std::optional<Eigen::Vector2d> residual(const ModelParams& p, int i) const;
   // Residuals of the observations `idx`; failed predictions are NaN.
   std::vector<Eigen::Vector2d> residuals(const ModelParams& p, const std::vector<int>& idx) const;
+  // As residuals(p, idx); under the translation nuisance what remove_translation settled on
+  // goes to `taken` (translation.hpp), for residuals_near.
+  std::vector<Eigen::Vector2d> residuals(const ModelParams& p, const std::vector<int>& idx, TranslationFit& taken) const;
+  // As residuals(p, idx), with the translation taken out as `taken` (kept by residuals at
+  // nearby parameters on the same idx) settled it: remove_fitted_translation.
+  std::vector<Eigen::Vector2d> residuals_near(const ModelParams& p, const std::vector<int>& idx,
+                                              const TranslationFit& taken) const;
   // Position of observation i's frame (frame_a for a match) in time order (0 = first frame).
   int frame_rank(int i) const { return obs_[i].rank; }
   double frame_time(int i) const { return obs_[i].T; }
@@ -129,6 +136,8 @@ class DiagnosisModel {
   MatchSetup match_setup(const ModelParams& p) const;
   std::optional<Eigen::Vector2d> landmark_residual(const ModelParams& p, const Obs& o) const;
   std::optional<Eigen::Vector2d> match_residual(const MatchSetup& ms, const GyroTrack& track, int i) const;
+  // The residuals of idx as the rotation model leaves them (no translation taken out).
+  std::vector<Eigen::Vector2d> rotation_residuals(const ModelParams& p, const std::vector<int>& idx) const;
   const GyroTrack& track(const Eigen::Vector3d& bias, const Eigen::Vector3d& scale) const;
 
   const Recording& rec_;

@@ -2,8 +2,9 @@
 // judged on one recording's fitting, held-out and screening observations. Internal to the
 // diagnosis; select.cpp runs its rounds.
 //
-// Thread contract: a Selector is immutable once built; its methods may be called from one thread
-// at a time (they evaluate the DiagnosisModel, which is not thread-safe).
+// Thread contract: a Selector's judgements do not change once built (it only remembers the
+// states `remove` fitted); its methods may be called from one thread at a time (they evaluate
+// the DiagnosisModel, which is not thread-safe, and fill that memory).
 #pragma once
 
 #include <algorithm>
@@ -92,8 +93,13 @@ class Selector {
     return {effects, p, bic(p, effects, screen_)};
   }
 
-  // s without e, fitted on idx from s's values.
+  // s without e, fitted on idx from s's values. Remembered: the blocked halves and the held-out
+  // check ask for the same states of the same selection (each a refit on every fitting
+  // observation, a third of a diagnosis under the translation nuisance).
   State remove(const State& s, Effect e, const std::vector<int>& idx, int iterations) const {
+    for (const Removed& r : removed_)
+      if (r.e == e && r.idx == &idx && r.iterations == iterations && r.from.effects == s.effects && same(r.from.params, s.params))
+        return r.to;
     std::vector<Effect> effects;
     for (Effect f : s.effects)
       if (f != e) effects.push_back(f);
@@ -105,7 +111,9 @@ class Selector {
     if (e == Effect::ReadoutDirection) p.flip_readout = false;
     if (e == Effect::LensModel) p.other_lens = false;
     p = fit_params(m_, idx, p, mask_of(effects, lens_), sigma_, iterations);
-    return {effects, p, bic(p, effects, idx)};
+    State to{effects, p, bic(p, effects, idx)};
+    removed_.push_back({s, e, &idx, iterations, to});
+    return to;
   }
 
   // lens_model: the other family's lens, starting from its nearest stand-in for the lens the
@@ -202,6 +210,20 @@ class Selector {
   Halves time_halves_, rate_halves_;
   LensModel lens_;  // the nominal lens's family
   double field_;    // the largest angle off the axis the image sees (radians), through the nominal lens
+
+ private:
+  static bool same(const ModelParams& a, const ModelParams& b) {
+    return a.v == b.v && a.flip_readout == b.flip_readout && a.other_lens == b.other_lens &&
+           a.translation_nuisance == b.translation_nuisance && a.translation_knot_s == b.translation_knot_s;
+  }
+  struct Removed {
+    State from;
+    Effect e;
+    const std::vector<int>* idx;
+    int iterations;
+    State to;
+  };
+  mutable std::vector<Removed> removed_;
 };
 
 }  // namespace rsd::dsp::selection

@@ -6,6 +6,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <stdexcept>
 #include <tuple>
 
 #include "dsp/core/statistics.hpp"
@@ -46,12 +48,24 @@ struct Spline {
   }
 };
 
-// The control points (3 per knot, world axes) minimising the pairs' squared residuals, with a
-// light penalty on the second difference of the control points (it decides only where the data
-// leave a direction free: a stretch without pairs, a component no pair shows).
-Eigen::VectorXd fit_velocity(const Spline& sp, const std::vector<PairSums>& pairs) {
+// The band of the velocity spline's normal matrix: a pair touches four control points of three.
+constexpr int kBand = 3 * 4 - 1;
+
+// Each pair's velocity over depth u (world axes) from the spline's control points minimising
+// the pairs' squared residuals (their N and b; zero where the normal matrix is not positive
+// definite), with a light penalty on the second difference of the control points (it decides
+// only where the data leave a direction free: a stretch without pairs, a component no pair
+// shows). A pair's time touches four consecutive control points and the penalty three, so the
+// normal matrix is banded (kBand scalars either side of the diagonal): it is gathered as a
+// band, handed to the sparse solver column by column in the order it stores them, and
+// factorised in its natural order (a band has no fill outside itself; a fill-reducing ordering
+// cost more than the factorisation).
+std::vector<Eigen::Vector3d> pair_velocities(const Spline& sp, const std::vector<PairSums>& pairs) {
   const int n = 3 * sp.controls();
-  std::vector<Eigen::Triplet<double>> tr;
+  Eigen::MatrixXd band = Eigen::MatrixXd::Zero(kBand + 1, n);  // band(i - j + kBand, j) = A(i, j), i <= j
+  auto add = [&](int i, int j, double v) {
+    if (i <= j) band(i - j + kBand, j) += v;
+  };
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
   double trace = 0;
   for (const PairSums& p : pairs) {
@@ -61,7 +75,7 @@ Eigen::VectorXd fit_velocity(const Spline& sp, const std::vector<PairSums>& pair
       rhs.segment<3>(3 * (j + a)) += w[a] * p.b;
       for (int c = 0; c < 4; ++c)
         for (int x = 0; x < 3; ++x)
-          for (int y = 0; y < 3; ++y) tr.emplace_back(3 * (j + a) + x, 3 * (j + c) + y, w[a] * w[c] * p.N(x, y));
+          for (int y = 0; y < 3; ++y) add(3 * (j + a) + x, 3 * (j + c) + y, w[a] * w[c] * p.N(x, y));
     }
     trace += p.N.trace();
   }
@@ -70,14 +84,42 @@ Eigen::VectorXd fit_velocity(const Spline& sp, const std::vector<PairSums>& pair
     const std::array<double, 3> d = {1, -2, 1};
     for (int a = 0; a < 3; ++a)
       for (int c = 0; c < 3; ++c)
-        for (int x = 0; x < 3; ++x) tr.emplace_back(3 * (k + a) + x, 3 * (k + c) + x, lambda * d[a] * d[c]);
+        for (int x = 0; x < 3; ++x) add(3 * (k + a) + x, 3 * (k + c) + x, lambda * d[a] * d[c]);
   }
-  for (int i = 0; i < n; ++i) tr.emplace_back(i, i, ridge);
+  band.row(kBand).array() += ridge;
   Eigen::SparseMatrix<double> A(n, n);
-  A.setFromTriplets(tr.begin(), tr.end());
-  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
-  if (ldlt.info() != Eigen::Success) return Eigen::VectorXd::Zero(n);
-  return ldlt.solve(rhs);
+  A.reserve(Eigen::VectorXi::Constant(n, kBand + 1));
+  for (int j = 0; j < n; ++j)
+    for (int i = std::max(0, j - kBand); i <= j; ++i) A.insert(i, j) = band(i - j + kBand, j);
+  std::vector<Eigen::Vector3d> u(pairs.size(), Eigen::Vector3d::Zero());
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt(A);
+  if (ldlt.info() != Eigen::Success) return u;
+  const Eigen::VectorXd c = ldlt.solve(rhs);
+  for (size_t q = 0; q < pairs.size(); ++q) {
+    std::array<double, 4> w;
+    const int j = sp.first(pairs[q].t, w);
+    for (int a = 0; a < 4; ++a) u[q] += w[a] * c.segment<3>(3 * (j + a));
+  }
+  return u;
+}
+
+// The pairs' normal equations over the inliers `in` (observations in pair order, flow(k) the
+// 2 x 3 flow of observation k per unit velocity, rk(k) its residual), summed in registers over
+// each pair's run of observations and stored once.
+template <class Flow, class Residual>
+void pair_sums(std::vector<PairSums>& pairs, const std::vector<int>& pair_of, const std::vector<bool>& in, const Flow& flow,
+               const Residual& rk) {
+  for (size_t k = 0; k < pair_of.size();) {
+    const int q = pair_of[k];
+    Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    for (; k < pair_of.size() && pair_of[k] == q; ++k) {
+      if (!in[k]) continue;
+      const Eigen::Matrix<double, 2, 3> Jk = flow(k);
+      N += Jk.transpose() * Jk, b += Jk.transpose() * rk(k);
+    }
+    pairs[q].N = N, pairs[q].b = b;
+  }
 }
 
 // The scene's slope g (inverse depth 1 + g . xn over the depth at the optical axis) that best
@@ -101,11 +143,24 @@ Eigen::Vector2d scene_slope(const std::vector<Eigen::Matrix<double, 2, 3>>& J, c
 
 }  // namespace
 
-void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
-                        const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s) {
-  const CameraModel& cam = m.recording().nominal.cam;
-  // The pairs (frame_a's rank and frame_b's time: a frame may be matched to more than one other)
-  // and each observation's pair and flow per unit translation.
+// The observations of one set of residuals, grouped by frame pair (frame_a's rank and frame_b's
+// time: a frame may be matched to more than one other), with what their translation flow needs.
+struct TranslationFit::State {
+  size_t size = 0;               // the residuals it was fitted to
+  std::vector<size_t> position;  // per observation taken, in pair order: its place in them
+  std::vector<int> pair_of;      // its pair
+  std::vector<Eigen::Matrix<double, 2, 3>> unit;  // its flow per unit translation, camera axes
+  std::vector<Eigen::Vector2d> xn;  // its normalised image coordinates
+  std::vector<size_t> pair_first;   // each pair's first observation (position in the residuals)
+  std::vector<bool> in;             // after the passes: whether it was an inlier of the last
+  Eigen::Vector2d slope = Eigen::Vector2d::Zero();  // after the passes: the scene's slope
+};
+
+namespace {
+
+// The observations of `r` that have a residual, by pair.
+std::shared_ptr<TranslationFit::State> group_by_pair(const DiagnosisModel& m, const std::vector<int>& idx,
+                                                     const std::vector<Eigen::Vector2d>& r) {
   struct Member {
     int rank;
     double t_b;
@@ -117,28 +172,57 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   by_pair.reserve(idx.size());
   for (size_t k = 0; k < idx.size(); ++k)
     if (r[k].allFinite()) by_pair.push_back({m.frame_rank(idx[k]), m.frame_time_b(idx[k]), k});
-  if (by_pair.empty()) return;
   std::sort(by_pair.begin(), by_pair.end());
-  std::vector<PairSums> pairs;
-  std::vector<int> pair_of(by_pair.size());
-  std::vector<Eigen::Matrix<double, 2, 3>> J(by_pair.size());
-  std::vector<Eigen::Vector2d> xn(by_pair.size());  // normalised image coordinates
+  auto s = std::make_shared<TranslationFit::State>();
+  const CameraModel& cam = m.recording().nominal.cam;
+  s->size = r.size();
   for (size_t k = 0; k < by_pair.size(); ++k) {
-    const int i = idx[by_pair[k].second];
-    if (k == 0 || !by_pair[k].same_pair(by_pair[k - 1])) {
-      PairSums s;
-      s.t = 0.5 * (m.frame_time(i) + m.frame_time_b(i));
-      const Eigen::Matrix3d world_from_camera = track.camera_at(tm.motion_time(m.frame_time(i))) * mount_t;
-      s.turn = (m.frame_time_b(i) - m.frame_time(i)) * world_from_camera.transpose();
-      pairs.push_back(s);
-    }
-    pair_of[k] = static_cast<int>(pairs.size()) - 1;
-    J[k] = translation_flow(cam, m.observed(i)) * pairs.back().turn;  // per unit u, world axes
-    xn[k] = Eigen::Vector2d((m.observed(i).x() - cam.cx) / cam.fx, (m.observed(i).y() - cam.cy) / cam.fy);
+    const size_t at = by_pair[k].second;
+    const Eigen::Vector2d px = m.observed(idx[at]);
+    if (k == 0 || !by_pair[k].same_pair(by_pair[k - 1])) s->pair_first.push_back(at);
+    s->position.push_back(at);
+    s->pair_of.push_back(static_cast<int>(s->pair_first.size()) - 1);
+    s->unit.push_back(translation_flow(cam, px));
+    s->xn.emplace_back((px.x() - cam.cx) / cam.fx, (px.y() - cam.cy) / cam.fy);
   }
+  return s;
+}
+
+// Each pair's time on the spline and how a velocity (world axes) turns into its translation
+// over depth (camera axes), at the parameters of `track`, `tm`, `mount_t`.
+std::vector<PairSums> pairs_at(const DiagnosisModel& m, const std::vector<int>& idx, const TranslationFit::State& s,
+                               const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t) {
+  std::vector<PairSums> pairs(s.pair_first.size());
+  for (size_t q = 0; q < pairs.size(); ++q) {
+    const int i = idx[s.pair_first[q]];
+    pairs[q].t = 0.5 * (m.frame_time(i) + m.frame_time_b(i));
+    const Eigen::Matrix3d world_from_camera = track.camera_at(tm.motion_time(m.frame_time(i))) * mount_t;
+    pairs[q].turn = (m.frame_time_b(i) - m.frame_time(i)) * world_from_camera.transpose();
+  }
+  return pairs;
+}
+
+Spline spline_over(const std::vector<PairSums>& pairs, double knot_s) {
   double t_lo = pairs.front().t, t_hi = t_lo;
   for (const PairSums& p : pairs) t_lo = std::min(t_lo, p.t), t_hi = std::max(t_hi, p.t);
-  const Spline sp{t_lo, knot_s, std::max(1, static_cast<int>(std::ceil((t_hi - t_lo) / knot_s)))};
+  return {t_lo, knot_s, std::max(1, static_cast<int>(std::ceil((t_hi - t_lo) / knot_s)))};
+}
+
+}  // namespace
+
+void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
+                        const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s,
+                        TranslationFit* keep) {
+  if (keep) keep->state.reset();
+  const std::shared_ptr<TranslationFit::State> st = group_by_pair(m, idx, r);
+  TranslationFit::State& s = *st;
+  if (s.position.empty()) return;
+  std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
+  const Spline sp = spline_over(pairs, knot_s);
+  const size_t n = s.position.size();
+  std::vector<Eigen::Matrix<double, 2, 3>> J(n);  // per unit u, world axes
+  std::vector<Eigen::Vector2d> rk(n);             // the residuals in pair order
+  for (size_t k = 0; k < n; ++k) J[k] = s.unit[k] * pairs[s.pair_of[k]].turn, rk[k] = r[s.position[k]];
   // Four passes from no translation over a flat scene: the inliers are the residuals within 4
   // robust scales of the current fit (one scale for the whole set: the noise does not depend on
   // the pair, and a pair with a handful of observations is judged as well as one with
@@ -146,33 +230,42 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   // depth is affine in the normalised image coordinates, and a ground ahead of a forward-flying
   // drone or a car leaves, at one depth, pixels of parallax growing towards the image's bottom.
   std::vector<Eigen::Vector3d> u(pairs.size(), Eigen::Vector3d::Zero());
-  std::vector<double> len(by_pair.size());
-  std::vector<bool> in(by_pair.size());
-  Eigen::Vector2d slope = Eigen::Vector2d::Zero();
-  auto depth_factor = [&](size_t k) { return 1.0 + slope.dot(xn[k]); };
-  auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * (J[k] * u[pair_of[k]])); };
-  auto left = [&](size_t k) { return Eigen::Vector2d(r[by_pair[k].second] - flow(k)); };
+  std::vector<double> len(n);
+  s.in.assign(n, false);
+  auto depth_factor = [&](size_t k) { return 1.0 + s.slope.dot(s.xn[k]); };
+  auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * (J[k] * u[s.pair_of[k]])); };
+  auto left = [&](size_t k) { return Eigen::Vector2d(rk[k] - flow(k)); };
   for (int pass = 0; pass < 4; ++pass) {
-    for (size_t k = 0; k < len.size(); ++k) len[k] = left(k).norm();
+    for (size_t k = 0; k < n; ++k) len[k] = left(k).norm();
     const double limit = 4 * std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6);
-    for (size_t k = 0; k < len.size(); ++k) in[k] = len[k] <= limit;
-    if (pass >= 1) slope = scene_slope(J, xn, pair_of, u, in, [&](size_t k) { return r[by_pair[k].second]; });
-    for (PairSums& p : pairs) p.N.setZero(), p.b.setZero();
-    for (size_t k = 0; k < len.size(); ++k) {
-      if (!in[k]) continue;
-      PairSums& p = pairs[pair_of[k]];
-      const Eigen::Matrix<double, 2, 3> Jk = depth_factor(k) * J[k];
-      p.N += Jk.transpose() * Jk, p.b += Jk.transpose() * r[by_pair[k].second];
-    }
-    const Eigen::VectorXd c = fit_velocity(sp, pairs);
-    for (size_t q = 0; q < pairs.size(); ++q) {
-      std::array<double, 4> w;
-      const int j = sp.first(pairs[q].t, w);
-      u[q].setZero();
-      for (int a = 0; a < 4; ++a) u[q] += w[a] * c.segment<3>(3 * (j + a));
-    }
+    for (size_t k = 0; k < n; ++k) s.in[k] = len[k] <= limit;
+    if (pass >= 1) s.slope = scene_slope(J, s.xn, s.pair_of, u, s.in, [&](size_t k) { return rk[k]; });
+    pair_sums(pairs, s.pair_of, s.in, [&](size_t k) { return Eigen::Matrix<double, 2, 3>(depth_factor(k) * J[k]); },
+              [&](size_t k) { return rk[k]; });
+    u = pair_velocities(sp, pairs);
   }
-  for (size_t k = 0; k < by_pair.size(); ++k) r[by_pair[k].second] = left(k);
+  for (size_t k = 0; k < n; ++k) r[s.position[k]] = left(k);
+  if (keep) keep->state = st;
+}
+
+void remove_fitted_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
+                               const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s,
+                               const TranslationFit& fit) {
+  if (!fit.state) return remove_translation(m, idx, r, track, tm, mount_t, knot_s);
+  const TranslationFit::State& s = *fit.state;
+  if (r.size() != s.size || idx.size() != s.size)
+    throw std::invalid_argument("remove_fitted_translation: residuals of other observations than the fit's");
+  std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
+  const Spline sp = spline_over(pairs, knot_s);
+  // An observation the fit had whose prediction fails here is left out of it (and stays NaN).
+  std::vector<bool> in = s.in;
+  for (size_t k = 0; k < in.size(); ++k) in[k] = in[k] && r[s.position[k]].allFinite();
+  auto flow = [&](size_t k) {
+    return Eigen::Matrix<double, 2, 3>((1.0 + s.slope.dot(s.xn[k])) * (s.unit[k] * pairs[s.pair_of[k]].turn));
+  };
+  pair_sums(pairs, s.pair_of, in, flow, [&](size_t k) { return r[s.position[k]]; });
+  const std::vector<Eigen::Vector3d> u = pair_velocities(sp, pairs);
+  for (size_t k = 0; k < s.position.size(); ++k) r[s.position[k]] -= flow(k) * u[s.pair_of[k]];
 }
 
 double translation_knot_spacing(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p) {

@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <memory>
 #include <vector>
 
 #include "dsp/diagnosis/gyro.hpp"
@@ -46,9 +47,34 @@ inline constexpr double kFinerKnotsGain = 0.10;
 // neighbours. The camera's orientation at frame time T is
 // track.camera_at(tm.motion_time(T)) mount_t, mount_t the transpose of the mount rotation
 // (model.cpp, "Matches").
+//
+// What it took out goes to `keep` when given (see TranslationFit).
+struct TranslationFit;
 void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
                         const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t,
-                        double knot_s = kTranslationKnotS);
+                        double knot_s = kTranslationKnotS, TranslationFit* keep = nullptr);
+
+// What remove_translation settled on for one set of residuals: its observations by frame pair,
+// the last pass's inliers and the scene's slope. remove_fitted_translation fits the velocity
+// spline again in one pass with those held (at the parameters it is given: the pairs' turns
+// follow the gyro, the mount and the clock), for the residuals of the same observations at
+// nearby parameters, without the passes that chose them. The fits' finite-difference Jacobian
+// (fit.cpp) is taken so: a Jacobian column then costs the rotation model's residuals and one
+// pass, not four passes with their medians. What it leaves out is how the inliers (a step
+// function) and the slope move with the parameters: a percent or two of a clock offset's or a
+// line delay's column; a rotation over a tilted ground (a gyro bias, a mount) moves the image as
+// the translation does, and the held slope misses up to a fifth of its change. The fits' trial
+// steps use the exact residuals, so that costs iterations (a tenth more), not accuracy.
+struct TranslationFit {
+  struct State;
+  std::shared_ptr<const State> state;  // empty: nothing was taken out
+};
+// As remove_translation, with `fit`'s inliers and slope (fitted on the same observations idx);
+// without a fit, remove_translation itself. Throws std::invalid_argument when idx or `r` is not
+// of the size `fit` was fitted to.
+void remove_fitted_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
+                               const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s,
+                               const TranslationFit& fit);
 
 // The knot spacing for the translation nuisance of `p` (its translation_nuisance on; the richest
 // rotation fit, every applicable effect free, so that a finer spline is not asked to take what an

@@ -2,15 +2,19 @@
 // its parts: it takes out the parallax a near scene gives, facing the camera or tilted as a
 // ground ahead is (at the true model the noise is left); it cannot take up what a clock offset
 // leaves (a free translation per frame pair took up most of it); a hand-held shake faster than
-// the default knots gets finer ones, a flight keeps the default. Whole diagnoses under it:
-// test_translation_diagnoses.cpp.
+// the default knots gets finer ones, a flight keeps the default; a Jacobian step with the
+// translation's inliers and slope held agrees with the translation fitted again. Whole
+// diagnoses under it: test_translation_diagnoses.cpp.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "dsp/diagnosis/diagnosis.hpp"
+#include "dsp/diagnosis/gyro.hpp"
+#include "dsp/diagnosis/translation.hpp"
 #include "dsp/diagnosis/parallax.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
 #include "tests/dsp/diagnosis/diagnosis_lookup.hpp"
@@ -86,6 +90,65 @@ TEST(Translation, TheVelocitySplineCannotTakeUpAClockOffset) {
   ASSERT_GT(before / pan.size(), 0.01);  // the offset moves the pan's matches by over 0.1 px
   EXPECT_GT(share_a_free_translation_takes(m, pan, change), 0.8);
   EXPECT_GT(after / before, 0.6);
+}
+
+// A fit's finite-difference Jacobian under the nuisance steps with the translation's inliers and
+// slope held as they settled at the point (DiagnosisModel::residuals_near): at the point itself
+// that is the same residual, and a step's change agrees with the one the translation fitted
+// again from scratch gives (four passes: a different code path) to within what the held slope
+// leaves out. For a clock offset and a line delay that is a percent or two of the column; a
+// rotation (a gyro bias, a mount) moves the image as a translation over the tilted ground does,
+// the refitted slope takes up part of it, and the held one misses up to a fifth of the rotation
+// model's whole change (the fit's trial steps use the exact residuals: that costs iterations,
+// not accuracy).
+TEST(Translation, AJacobianStepWithTheInliersHeldMatchesTheTranslationFittedAgain) {
+  SimConfig c = forward_flight(8, 15.0);
+  c.unmodelled.scene_slope = kGround;
+  c.effects.time_offset_s = 0.01;
+  const SimulatedRecording sim = simulate_recording(c);
+  const DiagnosisModel m(sim.rec);
+  const auto all = every_observation(m);
+  const ModelParams p = with_offset(sim, 0.01, true);
+  TranslationFit taken;
+  const auto base = m.residuals(p, all, taken);
+  ASSERT_TRUE(taken.state);
+  const auto again = m.residuals_near(p, all, taken);
+  double worst = 0;
+  for (size_t k = 0; k < all.size(); ++k)
+    if (base[k].allFinite()) worst = std::max(worst, (again[k] - base[k]).norm());
+  EXPECT_LT(worst, 1e-9);
+  struct Step {
+    Param q;
+    double h;
+    double of_column, of_rotation;  // limits on the difference over the refitted and the rotation-only change
+  };
+  ModelParams p_plain = p;
+  p_plain.translation_nuisance = false;
+  const auto raw_p = m.residuals(p_plain, all);
+  for (const Step st : {Step{Param::TimeOffset, 1e-4, 0.05, 0.05}, Step{Param::LineDelay, 1e-8, 0.05, 0.05},
+                        Step{Param::BiasY, 1e-4, 1.0, 0.25}, Step{Param::MountZ, 1e-4, 0.25, 0.1}}) {
+    ModelParams q = p;
+    q[st.q] += st.h;
+    ModelParams q_plain = q;
+    q_plain.translation_nuisance = false;
+    const auto held = m.residuals_near(q, all, taken), fitted = m.residuals(q, all), raw_q = m.residuals(q_plain, all);
+    double diff = 0, column = 0, rotation = 0;
+    for (size_t k = 0; k < all.size(); ++k) {
+      if (!base[k].allFinite() || !held[k].allFinite() || !fitted[k].allFinite() || base[k].norm() > 5) continue;
+      diff += (held[k] - fitted[k]).squaredNorm(), column += (fitted[k] - base[k]).squaredNorm();
+      rotation += (raw_q[k] - raw_p[k]).squaredNorm();
+    }
+    ASSERT_GT(rotation, 0) << static_cast<int>(st.q);
+    EXPECT_GT(std::sqrt(column / rotation), 0.2) << static_cast<int>(st.q);  // the translation leaves some of it
+    EXPECT_LT(std::sqrt(diff / column), st.of_column) << static_cast<int>(st.q);
+    EXPECT_LT(std::sqrt(diff / rotation), st.of_rotation) << static_cast<int>(st.q);
+  }
+  // Residuals of other observations than the fit's are refused, not misread.
+  std::vector<Eigen::Vector2d> fewer(base.begin(), base.end() - 1);
+  const std::vector<int> idx(all.begin(), all.end() - 1);
+  const GyroTrack track(m.recording().gyro, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), 1.0);
+  EXPECT_THROW(remove_fitted_translation(m, idx, fewer, track, TimeModel{}, Eigen::Matrix3d::Identity(), kTranslationKnotS, taken),
+               std::invalid_argument);
 }
 
 TEST(Translation, AShakeFasterThanTheKnotsGetsFinerKnotsAndAFlightKeepsItsOwn) {
