@@ -206,16 +206,32 @@ std::vector<SelectedEffect> forward(const Selector& sel, const std::vector<Effec
       else it->second = f.second;
     }
   };
+  // What a round refused, when it named another effect, sits out the next round: refused, a
+  // stand-in is refused again (each time a refit on every fitting observation: under a hand-held
+  // shake's parallax four of them, a sixth of the diagnosis). It is asked again the round after,
+  // and the rounds end only after one that asked every candidate, so an effect that another's
+  // naming makes acceptable is named a round later, not lost.
+  std::vector<Effect> sitting_out;
   while (true) {
     const State before = s;
-    bool named = forward_round(sel, candidates, s, r);
+    std::vector<Effect> asked;
+    for (Effect e : candidates)
+      if (std::find(sitting_out.begin(), sitting_out.end(), e) == sitting_out.end()) asked.push_back(e);
+    bool named = forward_round(sel, asked, s, r);
     remember();
+    if (!named && !sitting_out.empty()) {
+      sitting_out.clear();
+      continue;
+    }
     if (!named && r.refused.size() >= 2) named = forward_pair(sel, r.refused, s, r);
     if (!named) {
       for (const auto& f : refused)
         if (!s.has(f.first)) withheld.push_back(f.second);
       return steps;
     }
+    sitting_out.clear();
+    for (const auto& f : r.refused)
+      if (!s.has(f.first)) sitting_out.push_back(f.first);
     const double rms = sel.rms(s.params);
     // An effect the round replaced (lens_model takes lens_distortion's place) leaves the list.
     steps.erase(std::remove_if(steps.begin(), steps.end(), [&](const SelectedEffect& st) { return !s.has(st.effect); }),
