@@ -343,7 +343,8 @@ TEST_F(VelocityInputTest, ThreadReceivesUntilStopped) {
   VelocityInput in(lcm_, "RSD_VELOCITY", buffer_);
   in.start();
   publish("RSD_VELOCITY", velocity(1000, rsd::velocity_t::FRAME_CAMERA, 0, 0, 1, 0, 0, 0));
-  for (int i = 0; i < 200 && buffer_.count() == 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  // Waits for the sample, not for a time: the limit only ends a run that hangs.
+  for (int i = 0; i < 12000 && buffer_.count() == 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   in.stop();
   EXPECT_EQ(buffer_.count(), 1u);
 }
