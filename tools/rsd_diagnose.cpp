@@ -165,7 +165,8 @@ int run(int argc, char** argv) {
       ->check(int_range(0, 1000))->capture_default_str();
   app.add_option("--fit-observations", o.fit_observations,
                  "The fits see at most this many of the fitting observations, chosen by the information they carry "
-                 "(three times as many with a parallax's translation taken out; 0: all of them; more is slower, rarely better)")
+                 "(with a parallax's translation taken out, the named effects' values come from three times as many; 0: all of "
+                 "them; more is slower, rarely better)")
       ->check(int_range(0, 100000000))->capture_default_str();
   app.add_option("--track-pairs", o.track_pairs, std::string("An images recording's ") + kTrackPairsHelp)
       ->check(int_range(0, 100000000))->capture_default_str();

@@ -230,20 +230,35 @@ struct ObservationSets {
   std::vector<int> fit, held, screen;
 };
 
-// Under the translation nuisance the fits see up to this many times DiagnosisOptions::
-// fit_observations. The choice by leverage weighs a frame pair's observations for the effects
-// alone; under the nuisance part of what they carry goes to the velocity spline, which every
-// pair shares, and which part the choice cannot tell. A drone flying past a scene 40 m ahead
-// (the suite's, 71 542 observations) had its 20 ms readout -5.1% to +1.0% over seven seeds from
-// the 30 000 chosen, -2.0% to +0.7% from all of them, in the same time (docs/diagnosis.md).
+// Under the translation nuisance the named effects' values come from a final fit on up to this
+// many times DiagnosisOptions::fit_observations. The choice by leverage weighs a frame pair's
+// observations for the effects alone; under the nuisance part of what they carry goes to the
+// velocity spline, which every pair shares, and which part the choice cannot tell. A drone
+// flying past a scene 40 m ahead (the suite's, 71 542 observations) had its 20 ms readout -5.1%
+// to +1.0% over seven seeds from the 30 000 chosen, -2.0% to +0.7% from all of them
+// (docs/diagnosis.md). Which effects are named is decided on the budget alone: each decision
+// refits on every fitting observation, and a minute's walk has 200 000.
 constexpr size_t kTranslationBudgetFactor = 3;
 
+// The named effects' values fitted again on `wide` (under the translation nuisance more fitting
+// observations than the selection decided on), from the selection's.
+Selection refit_on(const DiagnosisModel& m, const std::vector<int>& wide, double sigma_px, const SelectionOptions& so,
+                   Selection chosen) {
+  if (chosen.effects.empty()) return chosen;
+  std::vector<Effect> named;
+  for (const SelectedEffect& st : chosen.effects) named.push_back(st.effect);
+  if (so.progress) so.progress("the named effects' values fitted on " + std::to_string(wide.size()) + " observations");
+  chosen.params = fit_params(m, wide, chosen.params, mask_of(named, m.recording().nominal.cam.dist.model), sigma_px,
+                             so.max_iterations);
+  return chosen;
+}
+
 // The selection; for matches with parallax the rotation-only model cannot express, chosen again
-// on what a translation per frame pair cannot explain, so that no effect stands in for it, on
-// the observations `under_translation` gives (the same screening subset). The parameters keep
-// the translation nuisance on when it was used.
+// on what a translation per frame pair cannot explain, so that no effect stands in for it, and
+// the named effects' values fitted again on the fitting observations `under_translation` gives.
+// The parameters keep the translation nuisance on when it was used.
 Selection select_with_parallax(const DiagnosisModel& m, const ObservationSets& sets,
-                               const std::function<const ObservationSets&()>& under_translation, const ModelParams& nominal,
+                               const std::function<const std::vector<int>&()>& under_translation, const ModelParams& nominal,
                                Diagnosis& d, const SelectionOptions& so) {
   const std::vector<int>&use_fit = sets.fit, &use_held = sets.held, &screen = sets.screen;
   // The gross search's parallax did not hold at the noise scale: the selection without the
@@ -261,9 +276,9 @@ Selection select_with_parallax(const DiagnosisModel& m, const ObservationSets& s
          << g.translation_knot_s << " s) taken out";
     so.progress(what.str());
   }
-  const ObservationSets& wide = under_translation();
-  Selection with = select_effects(m, wide.fit, wide.held, screen, n, g, d.sigma_px, so);
-  if (!with.effects.empty() || !with.dropped_on_halves || !seen_before_any_effect) return with;
+  Selection with = select_effects(m, use_fit, use_held, screen, n, g, d.sigma_px, so);
+  if (!with.effects.empty() || !with.dropped_on_halves || !seen_before_any_effect)
+    return refit_on(m, under_translation(), d.sigma_px, so, std::move(with));
   // Nothing named under the nuisance, because the blocked halves dropped the stand-ins it chose,
   // and the parallax was seen with no effect in: what the rotation-only model lacked (a rolling
   // shutter's shear, beside matches displaced in a part of the image) may have looked like
@@ -335,27 +350,18 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   // quarter as many held out), chosen by the information they carry at the gross start.
   std::vector<int> use_all, use_fit, use_held;
   ObservationSets sets;
-  std::optional<ObservationSets> wide;  // under the translation nuisance, chosen when first asked
+  std::optional<std::vector<int>> wide;  // under the translation nuisance, chosen when first asked
   const ParamMask every = applicable_params(m);
   const size_t budget = static_cast<size_t>(std::max(opt.fit_observations, 0));
-  // At most b fitting observations and a quarter as many held out, with `screen` to screen on.
-  auto choose = [&](size_t b, std::vector<int> screen) {
-    return ObservationSets{choose_observations(m, use_fit, d.gross, every, {b}),
-                           choose_observations(m, use_held, d.gross, every, {b / 4}), std::move(screen)};
-  };
   auto split_usable = [&] {
     use_all = usable(m, d.gross, all), use_fit = usable(m, d.gross, fit), use_held = usable(m, d.gross, held);
-    sets = choose(budget, {});
+    sets.fit = choose_observations(m, use_fit, d.gross, every, {budget});
+    sets.held = choose_observations(m, use_held, d.gross, every, {budget / 4});
     sets.screen = subsample(sets.fit, n_screen);
     wide.reset();
   };
-  const std::function<const ObservationSets&()> under_translation = [&]() -> const ObservationSets& {
-    if (!wide) {
-      wide = choose(kTranslationBudgetFactor * budget, sets.screen);
-      if (wide->fit.size() > sets.fit.size())
-        progress("with the translation taken out the fits see " + std::to_string(wide->fit.size()) + " of the " +
-                 std::to_string(use_fit.size()) + " fitting observations");
-    }
+  const std::function<const std::vector<int>&()> under_translation = [&]() -> const std::vector<int>& {
+    if (!wide) wide = choose_observations(m, use_fit, d.gross, every, {kTranslationBudgetFactor * budget});
     return *wide;
   };
   const std::vector<int>&fit_set = sets.fit, &screen = sets.screen;
@@ -416,7 +422,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   never_worse_than_nominal(m, nominal, use_all, d);
   heldout_halves(m, nominal, use_held, d);
   progress("uncertainties and the remainder");
-  const std::vector<int>& fitted_on = as_fitted.translation_nuisance ? under_translation().fit : fit_set;
+  const std::vector<int>& fitted_on = as_fitted.translation_nuisance ? under_translation() : fit_set;
   d.uncertainties = effect_uncertainties(m, d.effects, as_fitted, fitted_on);
   d.fit_observations = static_cast<int>(fitted_on.size());
   d.remainder = assess_remainder(m, d.fitted, use_all, d.noise_floor_px, robust_stats(m.residuals(nominal, use_all)).rms_px);

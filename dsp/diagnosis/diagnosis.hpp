@@ -42,7 +42,7 @@ struct Diagnosis {
     int observations = 0;
   };
   std::array<HeldoutHalf, 2> heldout_halves{};
-  int fit_observations = 30000;  // how many fitting observations the fits saw (observation_choice.hpp)
+  int fit_observations = 30000;  // how many fitting observations the named values were fitted on (observation_choice.hpp)
   // The per-coordinate residual RMS that noise alone gives: noise_px for landmarks,
   // sqrt(2) noise_px for matches (the transfer carries frame_a's noise); 0 when the recording
   // states no noise.
@@ -71,8 +71,9 @@ struct DiagnosisOptions {
   int max_iterations = 30;        // final fits
   int screen_observations = 5000;  // candidates are fitted on this many fitting observations
   // The fits see at most this many fitting observations (and a quarter as many held out),
-  // chosen by the information they carry (observation_choice.hpp), three times as many under
-  // the translation nuisance of matches with parallax (diagnosis.cpp); 0: all of them.
+  // chosen by the information they carry (observation_choice.hpp); under the translation
+  // nuisance of matches with parallax the named effects' values come from a final fit on three
+  // times as many (diagnosis.cpp); 0: all of them.
   int fit_observations = 30000;
   // Called on the caller's thread as the diagnosis moves on (a stage, an effect named), for
   // progress output on long runs; may be empty.

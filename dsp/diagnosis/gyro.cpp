@@ -103,14 +103,14 @@ const GyroTrack::Knot& GyroTrack::interval(double t, Eigen::Vector3d& phi, size_
   phi.setZero();
   if (t < knots_.front().t) return knots_.front();
   if (t >= knots_.back().t) return knots_.back();
-  // knots_[hint].t <= t < knots_[hint + 1].t, from the hint or its neighbour, else searched.
-  if (hint + 1 >= knots_.size() || !(knots_[hint].t <= t && t < knots_[hint + 1].t)) {
-    if (hint + 2 < knots_.size() && knots_[hint + 1].t <= t && t < knots_[hint + 2].t) {
-      ++hint;
-    } else {
-      auto hi = std::upper_bound(knots_.begin(), knots_.end(), t, [](double tt, const Knot& k) { return tt < k.t; });
-      hint = static_cast<size_t>(hi - knots_.begin()) - 1;
-    }
+  // knots_[hint].t <= t < knots_[hint + 1].t: walked to from the hint when it is a few
+  // intervals off (the next observation's frame, mostly the same or the next), else searched.
+  if (hint + 1 >= knots_.size()) hint = 0;
+  for (int walk = 0; walk < kWalk && !(knots_[hint].t <= t && t < knots_[hint + 1].t); ++walk)
+    hint = t < knots_[hint].t ? hint - 1 : hint + 1;  // stays inside: front().t <= t < back().t
+  if (!(knots_[hint].t <= t && t < knots_[hint + 1].t)) {
+    auto hi = std::upper_bound(knots_.begin(), knots_.end(), t, [](double tt, const Knot& k) { return tt < k.t; });
+    hint = static_cast<size_t>(hi - knots_.begin()) - 1;
   }
   const Knot &a = knots_[hint], &b = knots_[hint + 1];
   const double h = b.t - a.t;

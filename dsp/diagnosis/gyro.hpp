@@ -43,7 +43,8 @@ class GyroTrack {
   // and three matrix products (the interval's rotation, its exponential, the axes) cost more
   // than Rodrigues' formula on the vector itself. Equal to camera_at to rounding.
   // `hint`: the interval the caller's previous time fell in (any value at first): the fixed
-  // point's iterations stay in one or two intervals, so the search starts there.
+  // point's iterations stay in one or two intervals, and the next observation's frame is mostly
+  // the same or near, so the search starts there.
   Eigen::Vector3d to_world(double t, const Eigen::Vector3d& v, size_t& hint) const;
   Eigen::Vector3d to_camera(double t, const Eigen::Vector3d& d, size_t& hint) const;
   const Eigen::Vector3d& bias() const { return bias_; }
@@ -60,6 +61,7 @@ class GyroTrack {
   // The knot whose interval holds t (knots_.front() before, knots_.back() after the data) and
   // the rotation vector from it to t (zero outside the data).
   const Knot& interval(double t, Eigen::Vector3d& phi, size_t& hint) const;
+  static constexpr int kWalk = 8;  // intervals walked from the hint before a search
   std::vector<Knot> knots_;
   Eigen::Vector3d bias_, scale_;
   Eigen::Matrix3d imu_to_camera_t_;  // R_ic^T: R_c = R_imu R_ic^T

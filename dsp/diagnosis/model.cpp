@@ -308,15 +308,15 @@ DiagnosisModel::MatchSetup DiagnosisModel::match_setup(const ModelParams& p) con
   return {s, tm, row_timing(tm, s.cam.height), s.mount.transpose(), &rays_->slot(s.cam)};
 }
 
-std::optional<Eigen::Vector2d> DiagnosisModel::match_residual(const MatchSetup& ms, const GyroTrack& track,
-                                                              int i) const {
+std::optional<Eigen::Vector2d> DiagnosisModel::match_residual(const MatchSetup& ms, const GyroTrack& track, int i,
+                                                              TrackHints& at) const {
   const Obs& o = obs_[i];
   const Eigen::Vector3d* ray = ms.rays->get(i);
   if (!ray) return std::nullopt;
   // Spec "Matches": the direction seen at frame_a's pixel, in world axes, at its row's time. A
   // mount rotation turns imu_to_camera into E R_nominal (E = Exp(r)): the camera's
   // world-from-camera rotation becomes track.camera_at(t) E^T.
-  size_t at_a = 0, at_b = 0;
+  size_t &at_a = at.a, &at_b = at.b;
   const Eigen::Vector3d d = track.to_world(ms.tm.motion_time(o.T + ms.rt.row_time(o.px_a.y())), ms.mount_t * *ray, at_a);
   auto pixel_at = [&](double v) {
     return ms.s.cam.project(ms.s.mount * track.to_camera(ms.tm.motion_time(o.T_b + ms.rt.row_time(v)), d, at_b));
@@ -328,7 +328,8 @@ std::optional<Eigen::Vector2d> DiagnosisModel::match_residual(const MatchSetup& 
 
 std::optional<Eigen::Vector2d> DiagnosisModel::residual(const ModelParams& p, int i) const {
   if (rec_.kind == ObservationKind::Landmarks) return landmark_residual(p, obs_[i]);
-  return match_residual(match_setup(p), track(bias_of(p), scale_of(p)), i);
+  TrackHints at;
+  return match_residual(match_setup(p), track(bias_of(p), scale_of(p)), i, at);
 }
 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx) const {
@@ -346,7 +347,8 @@ std::vector<Eigen::Vector2d> DiagnosisModel::rotation_residuals(const ModelParam
   }
   const GyroTrack& tr = track(bias_of(p), scale_of(p));
   const MatchSetup ms = match_setup(p);
-  for (int i : idx) out.push_back(match_residual(ms, tr, i).value_or(nan));
+  TrackHints at;  // observations in order: the next one's frames are mostly the same or near
+  for (int i : idx) out.push_back(match_residual(ms, tr, i, at).value_or(nan));
   return out;
 }
 

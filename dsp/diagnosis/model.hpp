@@ -135,7 +135,11 @@ class DiagnosisModel {
   struct MatchSetup;  // what a matches residual needs of the parameters, made once per call
   MatchSetup match_setup(const ModelParams& p) const;
   std::optional<Eigen::Vector2d> landmark_residual(const ModelParams& p, const Obs& o) const;
-  std::optional<Eigen::Vector2d> match_residual(const MatchSetup& ms, const GyroTrack& track, int i) const;
+  // The gyro intervals the last frame_a and frame_b times fell in (GyroTrack's hints).
+  struct TrackHints {
+    size_t a = 0, b = 0;
+  };
+  std::optional<Eigen::Vector2d> match_residual(const MatchSetup& ms, const GyroTrack& track, int i, TrackHints& at) const;
   // The residuals of idx as the rotation model leaves them (no translation taken out).
   std::vector<Eigen::Vector2d> rotation_residuals(const ModelParams& p, const std::vector<int>& idx) const;
   const GyroTrack& track(const Eigen::Vector3d& bias, const Eigen::Vector3d& scale) const;

@@ -157,8 +157,9 @@ std::string index_markdown(const ReportInput& in, const std::vector<ParamUncerta
       << format_number(d.heldout_halves[h].final_rms_px) << " |\n";
   o << "| all " << d.baseline.observations << " observations | " << format_number(d.baseline.rms_px) << " | "
     << format_number(d.final_rms_px) << " |\n\n"
-    << "The fits saw " << d.fit_observations << " fitting observations (chosen by the information they carry when "
-    << "there were more than the fits need).\n\n"
+    << "The named effects' values were fitted on " << d.fit_observations << " fitting observations (chosen by the "
+    << "information they carry when there were more than the fits need; with a parallax's translation taken out, up "
+    << "to three times those the effects were chosen on).\n\n"
     << "Outliers of the nominal model (beyond " << kOutlierSigmas << " robust sigmas, or no prediction): "
     << d.baseline.outliers << ". Diagnosis took " << format_number(in.seconds, 3) << " s.\n\n";
   o << "## Named effects\n\n" << effects_table(d, u, n) << "\n";

@@ -167,23 +167,26 @@ TEST(ChooseObservations, ADiagnosisOnAFractionFindsTheTruthWithAnHonestUncertain
   EXPECT_LT(d.heldout_final_rms_px, 1.1 * d.noise_floor_px);
 }
 
-// Under the translation nuisance (matches with parallax) the fits see three times the budget:
-// part of what a frame pair's observations carry goes to the velocity spline every pair shares,
-// which the choice by leverage cannot weigh (diagnosis.cpp, kTranslationBudgetFactor). A drone
-// flying past a scene 40 m ahead with a pan and its clock 10 ms off: the offset named from
-// three times the budget, the truth within four of the sigmas it reports.
-TEST(ChooseObservations, UnderTheTranslationNuisanceTheFitsSeeThreeTimesTheBudget) {
+// Under the translation nuisance (matches with parallax) the named effects' values come from a
+// final fit on three times the budget: part of what a frame pair's observations carry goes to
+// the velocity spline every pair shares, which the choice by leverage cannot weigh
+// (diagnosis.cpp, kTranslationBudgetFactor). A drone flying past a scene 40 m ahead with a pan
+// and its clock 10 ms off: the offset named, its value from three times the budget, the truth
+// within four of the sigmas it reports. The effects are chosen on the budget itself, which
+// must hold enough of the pan: at 1500 the readout stood in for the offset (named on 4500 before
+// the decisions saw the budget alone; the suite's drone decides on 30 000 of 71 542).
+TEST(ChooseObservations, UnderTheTranslationNuisanceTheValuesComeFromThreeTimesTheBudget) {
   RSD_SKIP_LONG_IN_SLOW_BUILD("Translation.TheVelocitySplineCannotTakeUpAClockOffset (the nuisance) and "
                               "ChooseObservations.KeepsMoreInformationThanAnEvenChoiceOfTheSameSize (the choice)");
   SimConfig c = rsd::test::forward_flight(31, 40.0);
   c.effects.time_offset_s = 0.010;
   const SimulatedRecording sim = simulate_recording(c);
   DiagnosisOptions opt;
-  opt.fit_observations = 1500;
+  opt.fit_observations = 2000;
   const Diagnosis d = diagnose(sim.rec, opt);
   ASSERT_TRUE(d.parallax.clear());
-  EXPECT_GT(d.fit_observations, 3000);  // 1500 before: the budget alone
-  EXPECT_LE(d.fit_observations, 4500);
+  EXPECT_GT(d.fit_observations, 4000);  // the budget alone: 2000
+  EXPECT_LE(d.fit_observations, 6000);
   EXPECT_EQ(rsd::test::names(d), "time_offset ");
   ASSERT_EQ(d.uncertainties.size(), 1u);
   ASSERT_TRUE(d.uncertainties[0].sigma);
