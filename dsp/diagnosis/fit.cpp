@@ -182,7 +182,7 @@ class BulkEvaluator {
     Eigen::VectorXd x;  // the point these values are at (empty: none yet)
     std::vector<Eigen::Vector2d> r;
     std::vector<bool> ok;
-    TranslationFit taken;  // under the translation nuisance: as it settled at x
+    DiagnosisModel::Settled settled;  // the fixed points and the translation as they settled at x
     // with_jacobian only: rows 2i, 2i + 1 are observation i's, laid out as Ceres wants them
     Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J;
   };
@@ -192,11 +192,11 @@ class BulkEvaluator {
   }
 
   // Residuals in sigma units; a failed prediction becomes a constant kFailSigmas residual. With
-  // `near`, under the translation nuisance, its translation held as it settled there
-  // (DiagnosisModel::residuals_near: a Jacobian column's step).
+  // `near`, from what settled there: its fixed points as starts and, under the translation
+  // nuisance, its translation held (DiagnosisModel::residuals_near: a Jacobian column's step).
   void evaluate(const double* x, Values& v, const Values* near = nullptr) const {
     v.x = Eigen::Map<const Eigen::VectorXd>(x, k_);
-    v.r = near ? m_.residuals_near(c_.at(x), idx_, near->taken) : m_.residuals(c_.at(x), idx_, v.taken);
+    v.r = near ? m_.residuals_near(c_.at(x), idx_, near->settled) : m_.residuals(c_.at(x), idx_, v.settled);
     v.ok.assign(v.r.size(), false);
     for (size_t i = 0; i < v.r.size(); ++i) {
       v.ok[i] = v.r[i].allFinite();
@@ -210,14 +210,15 @@ class BulkEvaluator {
   }
 
   // Forward differences, stepping away from the nearer bound; a failed prediction (at x or at
-  // the step) gets a zero Jacobian row, so its constant residual pulls nowhere. Under the
-  // translation nuisance each step keeps the inliers and the scene's slope the translation
-  // settled on at x (translation.hpp, TranslationFit): a column costs the rotation model's
-  // residuals and one pass of the velocity fit, not four passes (a diagnosis under parallax
-  // took a third less time).
+  // the step) gets a zero Jacobian row, so its constant residual pulls nowhere. Each step starts
+  // every match's rolling-shutter fixed point from its solution at x (two projections instead of
+  // three), and under the translation nuisance keeps the inliers and the scene's slope the
+  // translation settled on at x (translation.hpp, TranslationFit): a column costs the rotation
+  // model's residuals and one pass of the velocity fit, not four passes (a diagnosis under
+  // parallax took a third less time).
   const Values& with_jacobian(const double* x) {
     if (same(jac_, x)) return jac_;
-    if (same(res_, x)) jac_.x = res_.x, jac_.r = res_.r, jac_.ok = res_.ok, jac_.taken = res_.taken;
+    if (same(res_, x)) jac_.x = res_.x, jac_.r = res_.r, jac_.ok = res_.ok, jac_.settled = res_.settled;
     else evaluate(x, jac_);
     const size_t n = idx_.size();
     jac_.J.setZero(2 * n, k_);

@@ -185,25 +185,36 @@ SampledTrajectory sampled(const Recording& r) {
 // Starting at the observed row, the map contracts by (image velocity x line delay), a few
 // percent, so three evaluations settle the row to 1e-6 px: the pixel is then within that
 // contraction times 1e-6, under 1e-7 px (settling to 1e-9 took a fourth evaluation on most
-// observations, a sixth of a diagnosis's time). Returns nullopt when it does not settle (the
-// caller then falls back to the bracketing solver of dsp/geometry/rs_projection.hpp).
+// observations, a sixth of a diagnosis's time). Started instead at a nearby point's solution
+// with its slope (of g(v) = pixel_at(v).y - v: a Jacobian step's), the first Newton step lands
+// within the slope's change times the step, and two evaluations settle it. Returns nullopt when
+// it does not settle (the caller then falls back to the bracketing solver of
+// dsp/geometry/rs_projection.hpp).
+struct RowSolution {
+  Eigen::Vector2d px;
+  double row, slope;  // slope: the last secant's (NaN when the start was already the solution)
+};
 template <class F>
-std::optional<Eigen::Vector2d> fixed_point_row(F&& pixel_at, double v_start) {
+std::optional<RowSolution> fixed_point_row(F&& pixel_at, double v_start,
+                                           double slope = std::numeric_limits<double>::quiet_NaN()) {
   double v0 = v_start;
   std::optional<Eigen::Vector2d> p0 = pixel_at(v0);
   if (!p0) return std::nullopt;
   double g0 = p0->y() - v0;
-  double v1 = p0->y();
+  double v1 = std::isfinite(slope) ? v0 - g0 / slope : p0->y();
   for (int it = 0; it < 12; ++it) {
-    if (std::abs(g0) < 1e-6) return p0;
+    if (std::abs(g0) < 1e-6) return RowSolution{*p0, v0, slope};
     const std::optional<Eigen::Vector2d> p1 = pixel_at(v1);
     if (!p1) return std::nullopt;
     const double g1 = p1->y() - v1;
-    const double slope = (g1 - g0) / (v1 - v0);
-    const double v2 = (std::isfinite(slope) && std::abs(slope) > 1e-6) ? v1 - g1 / slope : p1->y();
+    const double secant = (g1 - g0) / (v1 - v0);
+    const bool usable = std::isfinite(secant) && std::abs(secant) > 1e-6;
+    const double v2 = usable ? v1 - g1 / secant : p1->y();
+    if (usable) slope = secant;
     v0 = v1, g0 = g1, p0 = p1, v1 = v2;
   }
-  return std::abs(g0) < 1e-6 ? p0 : std::nullopt;
+  if (std::abs(g0) < 1e-6) return RowSolution{*p0, v0, slope};
+  return std::nullopt;
 }
 
 // The longest interval between gyro samples that is still sampling, not a gap: 1.5 x the 95th
@@ -285,13 +296,13 @@ std::optional<Eigen::Vector2d> DiagnosisModel::landmark_residual(const ModelPara
     body_->at(s.time.motion_time(o.T + rt.row_time(v)), R, p);
     return s.cam.project(s.mount.transpose() * (R.transpose() * (o.X - p) - s.lever_arm));
   };
-  auto px = fixed_point_row(pixel_at, o.px.y());
-  if (!px) {
+  const auto solved = fixed_point_row(pixel_at, o.px.y());
+  if (!solved) {
     const auto slow = predict_landmark(s, *body_slow_, o.T, o.X);
     if (!slow) return std::nullopt;
-    px = slow->pixel;
+    return Eigen::Vector2d(o.px - slow->pixel);
   }
-  return Eigen::Vector2d(o.px - *px);
+  return Eigen::Vector2d(o.px - solved->px);
 }
 
 struct DiagnosisModel::MatchSetup {
@@ -309,7 +320,7 @@ DiagnosisModel::MatchSetup DiagnosisModel::match_setup(const ModelParams& p) con
 }
 
 std::optional<Eigen::Vector2d> DiagnosisModel::match_residual(const MatchSetup& ms, const GyroTrack& track, int i,
-                                                              TrackHints& at) const {
+                                                              TrackHints& at, RowStart& row) const {
   const Obs& o = obs_[i];
   const Eigen::Vector3d* ray = ms.rays->get(i);
   if (!ray) return std::nullopt;
@@ -321,23 +332,28 @@ std::optional<Eigen::Vector2d> DiagnosisModel::match_residual(const MatchSetup& 
   auto pixel_at = [&](double v) {
     return ms.s.cam.project(ms.s.mount * track.to_camera(ms.tm.motion_time(o.T_b + ms.rt.row_time(v)), d, at_b));
   };
-  const auto px = fixed_point_row(pixel_at, o.px.y());
-  if (!px) return std::nullopt;
-  return Eigen::Vector2d(o.px - *px);
+  const bool near = std::isfinite(row.row);  // a nearby point's solution, else the observed row
+  const auto solved = fixed_point_row(pixel_at, near ? row.row : o.px.y(),
+                                      near ? row.slope : std::numeric_limits<double>::quiet_NaN());
+  if (!solved) return std::nullopt;
+  row.row = solved->row, row.slope = solved->slope;
+  return Eigen::Vector2d(o.px - solved->px);
 }
 
 std::optional<Eigen::Vector2d> DiagnosisModel::residual(const ModelParams& p, int i) const {
   if (rec_.kind == ObservationKind::Landmarks) return landmark_residual(p, obs_[i]);
   TrackHints at;
-  return match_residual(match_setup(p), track(bias_of(p), scale_of(p)), i, at);
+  RowStart row;
+  return match_residual(match_setup(p), track(bias_of(p), scale_of(p)), i, at, row);
 }
 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx) const {
-  TranslationFit unused;
+  Settled unused;
   return residuals(p, idx, unused);
 }
 
-std::vector<Eigen::Vector2d> DiagnosisModel::rotation_residuals(const ModelParams& p, const std::vector<int>& idx) const {
+std::vector<Eigen::Vector2d> DiagnosisModel::rotation_residuals(const ModelParams& p, const std::vector<int>& idx,
+                                                                Settled* settled, const Settled* near) const {
   std::vector<Eigen::Vector2d> out;
   out.reserve(idx.size());
   const Eigen::Vector2d nan = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
@@ -345,29 +361,38 @@ std::vector<Eigen::Vector2d> DiagnosisModel::rotation_residuals(const ModelParam
     for (int i : idx) out.push_back(landmark_residual(p, obs_[i]).value_or(nan));
     return out;
   }
+  if (near && near->rows.size() != idx.size())
+    throw std::invalid_argument("diagnosis: residuals_near on other observations than it settled on");
   const GyroTrack& tr = track(bias_of(p), scale_of(p));
   const MatchSetup ms = match_setup(p);
+  if (settled) settled->rows.assign(idx.size(), RowStart{});
   TrackHints at;  // observations in order: the next one's frames are mostly the same or near
-  for (int i : idx) out.push_back(match_residual(ms, tr, i, at).value_or(nan));
+  for (size_t k = 0; k < idx.size(); ++k) {
+    RowStart row = near ? near->rows[k] : RowStart{};
+    out.push_back(match_residual(ms, tr, idx[k], at, row).value_or(nan));
+    if (settled) settled->rows[k] = row;
+  }
   return out;
 }
 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx,
-                                                       TranslationFit& taken) const {
-  taken.state.reset();
-  std::vector<Eigen::Vector2d> out = rotation_residuals(p, idx);
+                                                       Settled& settled) const {
+  settled.translation.state.reset();
+  std::vector<Eigen::Vector2d> out = rotation_residuals(p, idx, &settled, nullptr);
   if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return out;
   const MatchSetup ms = match_setup(p);
-  remove_translation(*this, idx, out, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s, &taken);
+  remove_translation(*this, idx, out, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s,
+                     &settled.translation);
   return out;
 }
 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals_near(const ModelParams& p, const std::vector<int>& idx,
-                                                            const TranslationFit& taken) const {
-  std::vector<Eigen::Vector2d> out = rotation_residuals(p, idx);
+                                                            const Settled& near) const {
+  std::vector<Eigen::Vector2d> out = rotation_residuals(p, idx, nullptr, &near);
   if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return out;
   const MatchSetup ms = match_setup(p);
-  remove_fitted_translation(*this, idx, out, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s, taken);
+  remove_fitted_translation(*this, idx, out, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s,
+                            near.translation);
   return out;
 }
 

@@ -94,13 +94,27 @@ class DiagnosisModel {
   std::optional<Eigen::Vector2d> residual(const ModelParams& p, int i) const;
   // Residuals of the observations `idx`; failed predictions are NaN.
   std::vector<Eigen::Vector2d> residuals(const ModelParams& p, const std::vector<int>& idx) const;
-  // As residuals(p, idx); under the translation nuisance what remove_translation settled on
-  // goes to `taken` (translation.hpp), for residuals_near.
-  std::vector<Eigen::Vector2d> residuals(const ModelParams& p, const std::vector<int>& idx, TranslationFit& taken) const;
-  // As residuals(p, idx), with the translation taken out as `taken` (kept by residuals at
-  // nearby parameters on the same idx) settled it: remove_fitted_translation.
-  std::vector<Eigen::Vector2d> residuals_near(const ModelParams& p, const std::vector<int>& idx,
-                                              const TranslationFit& taken) const;
+  // Where a match's rolling-shutter fixed point settled: the row and the slope there of the
+  // predicted row's offset from it (NaN: not yet, or none).
+  struct RowStart {
+    double row = std::numeric_limits<double>::quiet_NaN(), slope = std::numeric_limits<double>::quiet_NaN();
+  };
+  // What residuals settled on at one point, for residuals_near at nearby parameters on the same
+  // observations (the fits' finite-difference Jacobian steps, fit.cpp): each match's fixed
+  // point, and under the translation nuisance what remove_translation settled on
+  // (translation.hpp).
+  struct Settled {
+    TranslationFit translation;
+    std::vector<RowStart> rows;  // matches: per observation of idx
+  };
+  // As residuals(p, idx), and what they settled on goes to `settled`.
+  std::vector<Eigen::Vector2d> residuals(const ModelParams& p, const std::vector<int>& idx, Settled& settled) const;
+  // As residuals(p, idx), at parameters near those `near` was settled at on the same idx: each
+  // match's fixed point starts from its solution there (two projections, not three; the row
+  // settles to the same 1e-6 px), and the translation is taken out as it settled there
+  // (remove_fitted_translation). Throws std::invalid_argument when idx is not the size `near`
+  // was settled on.
+  std::vector<Eigen::Vector2d> residuals_near(const ModelParams& p, const std::vector<int>& idx, const Settled& near) const;
   // Position of observation i's frame (frame_a for a match) in time order (0 = first frame).
   int frame_rank(int i) const { return obs_[i].rank; }
   double frame_time(int i) const { return obs_[i].T; }
@@ -139,9 +153,12 @@ class DiagnosisModel {
   struct TrackHints {
     size_t a = 0, b = 0;
   };
-  std::optional<Eigen::Vector2d> match_residual(const MatchSetup& ms, const GyroTrack& track, int i, TrackHints& at) const;
+  // `row`: where to start the fixed point (its row NaN: the observed row); where it settled.
+  std::optional<Eigen::Vector2d> match_residual(const MatchSetup& ms, const GyroTrack& track, int i, TrackHints& at,
+                                                RowStart& row) const;
   // The residuals of idx as the rotation model leaves them (no translation taken out).
-  std::vector<Eigen::Vector2d> rotation_residuals(const ModelParams& p, const std::vector<int>& idx) const;
+  std::vector<Eigen::Vector2d> rotation_residuals(const ModelParams& p, const std::vector<int>& idx, Settled* settled,
+                                                  const Settled* near) const;
   const GyroTrack& track(const Eigen::Vector3d& bias, const Eigen::Vector3d& scale) const;
 
   const Recording& rec_;

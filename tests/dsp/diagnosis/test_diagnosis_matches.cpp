@@ -252,6 +252,54 @@ TEST(DiagnosisMatches, RepeatedStampsAndGapsNeverGiveNaN) {
   EXPECT_LT(d.unusable, m.size() / 2);
 }
 
+// A fit's Jacobian step starts each match's rolling-shutter fixed point from its solution at the
+// point (DiagnosisModel::residuals_near): at a step in any parameter the residuals are those
+// computed afresh from the observed row (a different start: both settle the row to 1e-6 px, so
+// the pixels agree to well under that), and the step moves them far more than that.
+TEST(DiagnosisMatches, AStepFromTheSettledFixedPointsGivesTheResidualsComputedAfresh) {
+  SimConfig c = phone(7);
+  c.effects.line_delay_s = 6e-5;  // a 29 ms readout: the fixed point has the row to find
+  const SimulatedRecording sim = simulate_recording(c);
+  const DiagnosisModel m(sim.rec);
+  std::vector<int> all(m.size());
+  for (int i = 0; i < m.size(); ++i) all[i] = i;
+  ModelParams p = nominal_params(sim.rec.nominal);
+  p[Param::LineDelay] = 6e-5;
+  DiagnosisModel::Settled settled;
+  const auto base = m.residuals(p, all, settled);
+  // What settled is each prediction's own row, and the slope of its offset from the row there:
+  // -1 plus the contraction (image velocity x line delay: well under a tenth here).
+  ASSERT_EQ(settled.rows.size(), all.size());
+  for (size_t k = 0; k < all.size(); ++k) {
+    if (!base[k].allFinite()) continue;
+    EXPECT_NEAR(settled.rows[k].row, m.observed(all[k]).y() - base[k].y(), 1e-6) << k;
+    if (std::isfinite(settled.rows[k].slope)) {
+      EXPECT_NEAR(settled.rows[k].slope, -1.0, 0.1) << k;
+    }
+  }
+  for (const auto& [q, h] : {std::pair{Param::TimeOffset, 1e-4}, std::pair{Param::LineDelay, 1e-7},
+                             std::pair{Param::BiasX, 1e-3}, std::pair{Param::Fx, 1.0}, std::pair{Param::K1, 1e-3}}) {
+    ModelParams at = p;
+    at[q] += h;
+    const auto near = m.residuals_near(at, all, settled), afresh = m.residuals(at, all);
+    double worst = 0, moved = 0;
+    int compared = 0;
+    for (size_t k = 0; k < all.size(); ++k) {
+      if (!near[k].allFinite() || !afresh[k].allFinite()) {
+        EXPECT_EQ(near[k].allFinite(), afresh[k].allFinite()) << k;
+        continue;
+      }
+      worst = std::max(worst, (near[k] - afresh[k]).norm()), moved = std::max(moved, (afresh[k] - base[k]).norm());
+      ++compared;
+    }
+    EXPECT_GT(compared, m.size() / 2) << param_name(q);
+    EXPECT_LT(worst, 2e-7) << param_name(q);
+    EXPECT_GT(moved, 1e-3) << param_name(q);
+  }
+  const std::vector<int> fewer(all.begin(), all.end() - 1);
+  EXPECT_THROW(m.residuals_near(p, fewer, settled), std::invalid_argument);
+}
+
 TEST(DiagnosisMatches, RejectsRecordingsItCannotModel) {
   Recording rec = simulate_recording(phone(12, 0.5)).rec;
   rec.gyro.clear();

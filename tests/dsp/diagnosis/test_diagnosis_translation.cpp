@@ -109,9 +109,9 @@ TEST(Translation, AJacobianStepWithTheInliersHeldMatchesTheTranslationFittedAgai
   const DiagnosisModel m(sim.rec);
   const auto all = every_observation(m);
   const ModelParams p = with_offset(sim, 0.01, true);
-  TranslationFit taken;
+  DiagnosisModel::Settled taken;
   const auto base = m.residuals(p, all, taken);
-  ASSERT_TRUE(taken.state);
+  ASSERT_TRUE(taken.translation.state);
   const auto again = m.residuals_near(p, all, taken);
   double worst = 0;
   for (size_t k = 0; k < all.size(); ++k)
@@ -147,7 +147,8 @@ TEST(Translation, AJacobianStepWithTheInliersHeldMatchesTheTranslationFittedAgai
   std::vector<Eigen::Vector2d> fewer(base.begin(), base.end() - 1);
   const std::vector<int> idx(all.begin(), all.end() - 1);
   const GyroTrack track(m.recording().gyro, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), 1.0);
-  EXPECT_THROW(remove_fitted_translation(m, idx, fewer, track, TimeModel{}, Eigen::Matrix3d::Identity(), kTranslationKnotS, taken),
+  EXPECT_THROW(remove_fitted_translation(m, idx, fewer, track, TimeModel{}, Eigen::Matrix3d::Identity(), kTranslationKnotS,
+                                         taken.translation),
                std::invalid_argument);
 }
 
