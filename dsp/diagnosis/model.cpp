@@ -348,8 +348,12 @@ std::optional<Eigen::Vector2d> DiagnosisModel::residual(const ModelParams& p, in
 }
 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx) const {
-  Settled unused;
-  return residuals(p, idx, unused);
+  // Nothing kept: most callers (a held-out RMS, a criterion) look once and move on.
+  std::vector<Eigen::Vector2d> out = rotation_residuals(p, idx, nullptr, nullptr);
+  if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return out;
+  const MatchSetup ms = match_setup(p);
+  remove_translation(*this, idx, out, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s);
+  return out;
 }
 
 std::vector<Eigen::Vector2d> DiagnosisModel::rotation_residuals(const ModelParams& p, const std::vector<int>& idx,
