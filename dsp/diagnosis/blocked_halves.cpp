@@ -82,20 +82,26 @@ Halves rate_halves(const DiagnosisModel& m, const std::vector<int>& idx, const M
 // S = sum |d_i|^2 / sigma^2 its signal energy on the half, the drop is S + 2 sum r_i.d_i /
 // sigma^2 with standard deviation 2 sqrt(S) for independent noise; the margin is 3 sqrt(S). A
 // stand-in's wrong half costs about S itself, far past the margin once S is more than 9.
-HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const Hypothesis& poorer, const Hypothesis& richer,
-                          double sigma, int iterations) {
+HalvesFits fit_halves(const DiagnosisModel& m, const Halves& h, const Hypothesis& hyp, double sigma, int iterations) {
+  return {{fit_params(m, h.a, hyp.params, hyp.free, sigma, iterations), fit_params(m, h.b, hyp.params, hyp.free, sigma, iterations)}};
+}
+
+HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const HalvesFits& poorer, const ParamMask& poorer_free,
+                          const HalvesFits& richer, const ParamMask& richer_free, double sigma) {
   HalvesVerdict v{std::numeric_limits<double>::infinity(), 0};
-  ModelParams fitted[2];
   for (int dir = 0; dir < 2; ++dir) {
-    const std::vector<int>& learn = dir ? h.b : h.a;
     const std::vector<int>& judge = dir ? h.a : h.b;
-    const ModelParams p0 = fit_params(m, learn, poorer.params, poorer.free, sigma, iterations);
-    fitted[dir] = fit_params(m, learn, richer.params, richer.free, sigma, iterations);
-    const auto r0 = m.residuals(p0, judge), r1 = m.residuals(fitted[dir], judge);
+    const auto r0 = m.residuals(poorer.on[dir], judge), r1 = m.residuals(richer.on[dir], judge);
     v.drop = std::min(v.drop, robust_chi2(r0, sigma) - robust_chi2(r1, sigma) + 3.0 * std::sqrt(signal_energy(r0, r1, sigma)));
   }
-  v.apart_sigmas = apart(m, h, fitted[0], fitted[1], richer.free, richer.free & ~poorer.free);
+  v.apart_sigmas = apart(m, h, richer.on[0], richer.on[1], richer_free, richer_free & ~poorer_free);
   return v;
+}
+
+HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const Hypothesis& poorer, const Hypothesis& richer,
+                          double sigma, int iterations) {
+  return cross_check(m, h, fit_halves(m, h, poorer, sigma, iterations), poorer.free,
+                     fit_halves(m, h, richer, sigma, iterations), richer.free, sigma);
 }
 
 }  // namespace rsd::dsp

@@ -35,6 +35,15 @@ struct HalvesVerdict {
   // largest; 0 where a half cannot measure them).
   double apart_sigmas = 0;
 };
+// A hypothesis fitted on each half: on[0] on h.a, on[1] on h.b.
+struct HalvesFits {
+  ModelParams on[2];
+};
+HalvesFits fit_halves(const DiagnosisModel& m, const Halves& h, const Hypothesis& hyp, double sigma, int iterations);
+
+// Judges the two hypotheses, each fitted on both halves, each fit on the half it did not see.
+HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const HalvesFits& poorer, const ParamMask& poorer_free,
+                          const HalvesFits& richer, const ParamMask& richer_free, double sigma);
 // Fits both hypotheses on each half (at most `iterations`), judges them on the other.
 HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const Hypothesis& poorer, const Hypothesis& richer,
                           double sigma, int iterations);

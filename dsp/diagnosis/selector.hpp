@@ -3,12 +3,13 @@
 // diagnosis; select.cpp runs its rounds.
 //
 // Thread contract: a Selector's judgements do not change once built (it only remembers the
-// states `remove` fitted); its methods may be called from one thread at a time (they evaluate
+// states `remove` fitted and the states it fitted on the blocked halves); its methods may be called from one thread at a time (they evaluate
 // the DiagnosisModel, which is not thread-safe, and fill that memory).
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -55,7 +56,8 @@ class Selector {
     const Hypothesis p{poorer.params, mask_of(poorer.effects, lens_)}, r{richer.params, mask_of(richer.effects, lens_)};
     for (auto [h, drop] : {std::pair{&time_halves_, &time_drop}, std::pair{&rate_halves_, &rate_drop}}) {
       if (!h->usable()) continue;
-      const HalvesVerdict v = cross_check(m_, *h, p, r, sigma_, opt_.screen_iterations);
+      const HalvesVerdict v = cross_check(m_, *h, fit_halves(m_, *h, p, sigma_, opt_.screen_iterations), p.free,
+                                          on_halves(*h, richer, r), r.free, sigma_);
       *drop = v.drop, apart = std::max(apart, v.apart_sigmas);
     }
     // A drop of exactly zero is a half that cannot show the effect (no motion there): it holds.
@@ -216,6 +218,20 @@ class Selector {
     return a.v == b.v && a.flip_readout == b.flip_readout && a.other_lens == b.other_lens &&
            a.translation_nuisance == b.translation_nuisance && a.translation_knot_s == b.translation_knot_s;
   }
+  // `richer` (hypothesis r) fitted on both halves of h. Remembered: the blocked halves judge
+  // each named effect against the same richer state.
+  const HalvesFits& on_halves(const Halves& h, const State& richer, const Hypothesis& r) const {
+    for (const FittedHalves& f : halves_fits_)
+      if (f.h == &h && f.of.effects == richer.effects && same(f.of.params, richer.params)) return f.fits;
+    halves_fits_.push_back({&h, richer, fit_halves(m_, h, r, sigma_, opt_.screen_iterations)});
+    return halves_fits_.back().fits;
+  }
+  struct FittedHalves {
+    const Halves* h;
+    State of;
+    HalvesFits fits;
+  };
+  mutable std::deque<FittedHalves> halves_fits_;  // a deque: on_halves hands out references
   struct Removed {
     State from;
     Effect e;

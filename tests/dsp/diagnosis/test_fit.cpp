@@ -1,0 +1,86 @@
+// dsp::fit_params (fit.hpp): the Levenberg-Marquardt fit, whose Jacobian is by differences at
+// the start and by Broyden's update after each step, must end at the minimum of the robust
+// cost. Checked against a different code path: robust_chi2 on DiagnosisModel::residuals
+// along each free parameter's axis, a parabola through three points a sigma apart.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "dsp/diagnosis/effects.hpp"
+#include "dsp/diagnosis/fit.hpp"
+#include "dsp/sim/recording_simulation.hpp"
+#include "tests/dsp/diagnosis/diagnosis_configs.hpp"
+
+using namespace rsd::dsp;
+
+namespace {
+
+// A 640x480 camera with a 29 ms readout, a 4 ms clock offset, a focal length 3% long and barrel
+// distortion, all of which the nominal model lacks: the fit starts tens of sigmas away.
+struct Case {
+  SimulatedRecording sim;
+  std::vector<int> all;
+  ParamMask free;
+  double sigma = 0;
+};
+
+Case far_start() {
+  SimConfig c = rsd::test::simulation(ObservationKind::Matches, 11, 3.0, 0.5);
+  c.start_time_s = 1000;
+  c.matches_per_pair = 60;
+  c.rotation_amplitude_rad = 0.25, c.motion_frequency_hz = 1.2;
+  c.effects.line_delay_s = 6e-5;
+  c.effects.time_offset_s = 4e-3;
+  c.effects.fxfy = Eigen::Vector2d(515, 515);
+  c.effects.k1k2 = Eigen::Vector2d(-0.05, 0);
+  Case k{simulate_recording(c), {}, {}, 0};
+  for (size_t i = 0; i < k.sim.rec.matches.size(); ++i) k.all.push_back(static_cast<int>(i));
+  const LensModel lens = k.sim.rec.nominal.cam.dist.model;
+  for (Effect e : {Effect::RollingShutter, Effect::TimeOffset, Effect::FocalLength, Effect::LensDistortion})
+    k.free |= effect_params(e, lens);
+  return k;
+}
+
+// Where the robust chi-square is least along p's axis through `at`, in sigmas of p from `at`:
+// the vertex of the parabola through the cost at -s, 0 and +s, s the sigma the curvature gives
+// (found from a first probe). Also returns that sigma.
+std::pair<double, double> vertex_in_sigmas(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& at,
+                                           Param p, double probe, double sigma_px) {
+  auto cost = [&](double d) {
+    ModelParams q = at;
+    set_param(q, p, at[p] + d, m.recording().nominal);
+    return robust_chi2(m.residuals(q, idx), sigma_px);
+  };
+  const double c0 = cost(0);
+  // chi2(d) ~ c0 + g d + d^2 / sigma^2 (a sigma's move costs one): the probe gives sigma, a
+  // parabola through +-sigma the vertex.
+  auto curvature = [&](double s) { return (cost(s) + cost(-s) - 2 * c0) / (s * s); };  // 2 / sigma^2
+  const double sigma = std::sqrt(2.0 / curvature(probe));
+  const double cp = cost(sigma), cm = cost(-sigma);
+  const double vertex = -((cp - cm) / (2 * sigma)) / ((cp + cm - 2 * c0) / (sigma * sigma));
+  return {vertex / sigma, sigma};
+}
+
+}  // namespace
+
+// An updated Jacobian alone stopped there 1 to 7.5 sigmas from the minimum along these axes (the
+// focal length 7 px short of its 15 px move, k1 a fifth of the way): the stopping tests must be
+// met on the Jacobian by differences.
+TEST(Fit, EndsAtTheRobustCostsMinimumFromFarAway) {
+  const Case k = far_start();
+  const DiagnosisModel m(k.sim.rec);
+  const double sigma_px = std::sqrt(2.0) * 0.5;
+  const ModelParams start = nominal_params(k.sim.rec.nominal);
+  const ModelParams fitted = fit_params(m, k.all, start, k.free, sigma_px, 50);
+  EXPECT_NEAR(fitted[Param::LineDelay], 6e-5, 3e-6);
+  EXPECT_NEAR(fitted[Param::TimeOffset], 4e-3, 3e-4);
+  for (auto [p, probe] : {std::pair{Param::LineDelay, 1e-7}, std::pair{Param::TimeOffset, 1e-5}, std::pair{Param::Fx, 0.5},
+                          std::pair{Param::K1, 1e-4}}) {
+    const auto [vertex, sigma] = vertex_in_sigmas(m, k.all, fitted, p, probe, sigma_px);
+    std::printf("%s: start %.6g, fitted %.9g, sigma %.3g; the cost's least %.4f sigma away\n", param_name(p), start[p],
+                fitted[p], sigma, vertex);
+    EXPECT_GT(std::abs(fitted[p] - start[p]), 10 * sigma) << param_name(p);  // the start is far
+    EXPECT_LT(std::abs(vertex), 0.05) << param_name(p);
+  }
+}
