@@ -156,11 +156,11 @@ class RobustLoss final : public ceres::LossFunction {
 };
 
 // All residuals (sigma units) and, on demand, their Jacobian (param_scale units; by forward
-// differences or a secant update, with_jacobian) at one point x, computed in bulk. DiagnosisModel::residuals is far cheaper for all
-// observations at once (it caches the motion track per parameter value) than per observation,
-// while Ceres wants one residual block per observation (so that the loss applies to each
-// observation's residual length): every block's cost function is a view onto this evaluator,
-// which recomputes only when x changes. Ceres asks for residuals alone when it tries a step
+// differences or a secant update, with_jacobian) at one point x, computed in bulk.
+// DiagnosisModel::residuals is far cheaper for all observations at once (it caches the motion
+// track per parameter value) than per observation, while Ceres wants one residual block per
+// observation (so that the loss applies to each observation's residual length): every block's
+// cost function is a view onto this evaluator, which recomputes only when x changes. Ceres asks for residuals alone when it tries a step
 // and for Jacobians at accepted points, so the two are cached separately. Not thread safe:
 // the solver runs single-threaded.
 class BulkEvaluator {

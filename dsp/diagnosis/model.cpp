@@ -349,11 +349,7 @@ std::optional<Eigen::Vector2d> DiagnosisModel::residual(const ModelParams& p, in
 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx) const {
   // Nothing kept: most callers (a held-out RMS, a criterion) look once and move on.
-  std::vector<Eigen::Vector2d> out = rotation_residuals(p, idx, nullptr, nullptr);
-  if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return out;
-  const MatchSetup ms = match_setup(p);
-  remove_translation(*this, idx, out, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s);
-  return out;
+  return translation_out(p, idx, rotation_residuals(p, idx, nullptr, nullptr), nullptr);
 }
 
 std::vector<Eigen::Vector2d> DiagnosisModel::rotation_residuals(const ModelParams& p, const std::vector<int>& idx,
@@ -379,15 +375,18 @@ std::vector<Eigen::Vector2d> DiagnosisModel::rotation_residuals(const ModelParam
   return out;
 }
 
+std::vector<Eigen::Vector2d> DiagnosisModel::translation_out(const ModelParams& p, const std::vector<int>& idx,
+                                                             std::vector<Eigen::Vector2d> r, TranslationFit* keep) const {
+  if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return r;
+  const MatchSetup ms = match_setup(p);
+  remove_translation(*this, idx, r, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s, keep);
+  return r;
+}
+
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx,
                                                        Settled& settled) const {
   settled.translation.state.reset();
-  std::vector<Eigen::Vector2d> out = rotation_residuals(p, idx, &settled, nullptr);
-  if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return out;
-  const MatchSetup ms = match_setup(p);
-  remove_translation(*this, idx, out, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s,
-                     &settled.translation);
-  return out;
+  return translation_out(p, idx, rotation_residuals(p, idx, &settled, nullptr), &settled.translation);
 }
 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals_near(const ModelParams& p, const std::vector<int>& idx,

@@ -159,6 +159,10 @@ class DiagnosisModel {
   // The residuals of idx as the rotation model leaves them (no translation taken out).
   std::vector<Eigen::Vector2d> rotation_residuals(const ModelParams& p, const std::vector<int>& idx, Settled* settled,
                                                   const Settled* near) const;
+  // `r` (rotation_residuals of idx) with, under p's translation nuisance, the translation taken
+  // out; what it took out goes to `keep` when given.
+  std::vector<Eigen::Vector2d> translation_out(const ModelParams& p, const std::vector<int>& idx,
+                                               std::vector<Eigen::Vector2d> r, TranslationFit* keep) const;
   const GyroTrack& track(const Eigen::Vector3d& bias, const Eigen::Vector3d& scale) const;
 
   const Recording& rec_;
