@@ -155,12 +155,12 @@ class RobustLoss final : public ceres::LossFunction {
   }
 };
 
-// All residuals (sigma units) and, on demand, their Jacobian (param_scale units; by forward
-// differences or a secant update, with_jacobian) at one point x, computed in bulk.
-// DiagnosisModel::residuals is far cheaper for all observations at once (it caches the motion
-// track per parameter value) than per observation, while Ceres wants one residual block per
-// observation (so that the loss applies to each observation's residual length): every block's
-// cost function is a view onto this evaluator, which recomputes only when x changes. Ceres asks for residuals alone when it tries a step
+// All residuals (sigma units) and, on demand, their forward-difference Jacobian (param_scale
+// units) at one point x, computed in bulk. DiagnosisModel::residuals is far cheaper for all
+// observations at once (it caches the motion track per parameter value) than per observation,
+// while Ceres wants one residual block per observation (so that the loss applies to each
+// observation's residual length): every block's cost function is a view onto this evaluator,
+// which recomputes only when x changes. Ceres asks for residuals alone when it tries a step
 // and for Jacobians at accepted points, so the two are cached separately. Not thread safe:
 // the solver runs single-threaded.
 class BulkEvaluator {
@@ -169,9 +169,6 @@ class BulkEvaluator {
       : m_(m), idx_(idx), c_(c), sigma_(sigma), k_(static_cast<int>(c.free.size())) {}
 
   int size() const { return k_; }
-  // Whether the latest Jacobian is by differences; that the next one be.
-  bool exact() const { return exact_; }
-  void ask_exact() { want_exact_ = true; }
 
   // Residual of observation i at x, and its 2 x k row-major Jacobian when `jac` is non-null.
   void get(const double* x, size_t i, double* r, double* jac) {
@@ -212,13 +209,6 @@ class BulkEvaluator {
     return res_;
   }
 
-  // The Jacobian at x: by forward differences where an exact one is asked for (the first point,
-  // and each point ask_exact() is called at), else by Broyden's update from the last point's.
-  const Values& with_jacobian(const double* x) {
-    if (same(jac_, x) && (exact_ || !want_exact_)) return jac_;
-    return want_exact_ || jac_.x.size() != k_ ? differences(x) : secant_update(x);
-  }
-
   // Forward differences, stepping away from the nearer bound; a failed prediction (at x or at
   // the step) gets a zero Jacobian row, so its constant residual pulls nowhere. Each step starts
   // every match's rolling-shutter fixed point from its solution at x (two projections instead of
@@ -226,8 +216,8 @@ class BulkEvaluator {
   // translation settled on at x (translation.hpp, TranslationFit): a column costs the rotation
   // model's residuals and one pass of the velocity fit, not four passes (a diagnosis under
   // parallax took a third less time).
-  const Values& differences(const double* x) {
-    want_exact_ = false, exact_ = true;
+  const Values& with_jacobian(const double* x) {
+    if (same(jac_, x)) return jac_;
     if (same(res_, x)) jac_.x = res_.x, jac_.r = res_.r, jac_.ok = res_.ok, jac_.settled = res_.settled;
     else evaluate(x, jac_);
     const size_t n = idx_.size();
@@ -244,32 +234,12 @@ class BulkEvaluator {
     return jac_;
   }
 
-  // Broyden's rank-one update of the last Jacobian for the step dx to x: each observation's rows
-  // J += (dr - J dx) dx^T / |dx|^2, which makes them exact along the step, from the residuals
-  // the solver already evaluated at x (a trial step's), for no residual evaluation at all. A
-  // prediction failed at either end gets a zero row, as in differences().
-  const Values& secant_update(const double* x) {
-    exact_ = false;
-    const Values& now = residuals_at(x);
-    const Eigen::VectorXd dx = now.x - jac_.x;
-    const double dd = dx.squaredNorm();
-    for (size_t i = 0; i < idx_.size(); ++i) {
-      auto rows = jac_.J.block(2 * i, 0, 2, k_);
-      if (!(jac_.ok[i] && now.ok[i])) rows.setZero();
-      else if (dd > 0) rows += ((now.r[i] - jac_.r[i]) - rows * dx) * dx.transpose() / dd;
-    }
-    jac_.x = now.x, jac_.r = now.r, jac_.ok = now.ok, jac_.settled = now.settled;
-    return jac_;
-  }
-
   const DiagnosisModel& m_;
   const std::vector<int>& idx_;
   const Coordinates& c_;
   const double sigma_;
   const int k_;
   Values res_, jac_;
-  bool want_exact_ = true;  // the next Jacobian by differences
-  bool exact_ = false;      // jac_.J is by differences (else a secant update's)
 };
 
 // One observation's residual block: two residuals, the k free parameters.
@@ -321,6 +291,7 @@ ModelParams fit_params(const DiagnosisModel& m, const std::vector<int>& idx, con
   // k is small (at most kParamCount) and the blocks share the one parameter block: the dense
   // normal equations are k x k.
   so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  so.max_num_iterations = max_iterations;
   // Comparable to the hand-written solver's test: a relative cost decrease or a step (in
   // param_scale units, which are each parameter's natural resolution) below 1e-7.
   so.function_tolerance = 1e-7;
@@ -337,23 +308,8 @@ ModelParams fit_params(const DiagnosisModel& m, const std::vector<int>& idx, con
   so.num_threads = 1;  // dsp runs on its caller's thread; the bulk evaluator's cache needs it
   so.logging_type = ceres::SILENT;
   so.minimizer_progress_to_stdout = false;
-  // The Jacobian by differences at the start, by Broyden's update after each step (the
-  // evaluator's), each update saving a Jacobian's k bulk evaluations. An updated Jacobian is
-  // exact only along the steps taken: from a start far from the minimum, the steps it gives
-  // shrink before the minimum is reached (a focal length stopped 7 px short of a 15 px move),
-  // and the solver's tests, met there, mean nothing. So the solver runs again from where it
-  // stopped, with the Jacobian by differences there, until a run stops on that one (on the step
-  // it gives, or at its gradient): the tests then hold as when every Jacobian was by
-  // differences. The suite's diagnoses took 147 s of one core instead of 158, their values
-  // moving in the last digits (docs/diagnosis.md, "Speed").
-  for (int left = max_iterations; left > 0;) {
-    so.max_num_iterations = left;
-    ceres::Solver::Summary summary;
-    ceres::Solve(so, &pb, &summary);
-    left -= static_cast<int>(summary.iterations.size()) - 1;  // iteration 0 is the start
-    if (bulk.exact() || summary.termination_type != ceres::CONVERGENCE) break;
-    bulk.ask_exact();
-  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &pb, &summary);
   return c.at(x.data());
 }
 

@@ -33,17 +33,14 @@ double robust_chi2(const std::vector<Eigen::Vector2d>& residuals, double sigma_p
 // recordings. 1 for independent residuals.
 double design_effect(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx, double sigma_px);
 
+// Fits the parameters in `free` (starting at `start`, clamped into their physical bounds) with
+// Ceres: Levenberg-Marquardt within those bounds on the robust cost (robust_chi2's loss, one
+// residual block per observation), with a forward-difference Jacobian in param_scale units.
+// Returns the fitted parameters.
 // The fit's limits of a parameter (the physical ones: a line delay within the frame period, an
 // offset inside the motion data, focal lengths within a factor two, |k| <= 1, ...).
 std::pair<double, double> param_bounds(Param p, const DiagnosisModel& m);
 
-// Fits the parameters in `free` (starting at `start`, clamped into their physical bounds) with
-// Ceres: Levenberg-Marquardt within those bounds on the robust cost (robust_chi2's loss, one
-// residual block per observation), at most max_iterations steps in all. The Jacobian (in
-// param_scale units) is by forward differences at the start and by Broyden's secant update
-// after each step; the fit stops where the solver's tests (a relative cost decrease below 1e-7,
-// or a step below 1e-7 of a parameter's scale) hold for the Jacobian by differences. Returns
-// the fitted parameters.
 ModelParams fit_params(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& start,
                        const ParamMask& free, double sigma_px, int max_iterations = 30);
 

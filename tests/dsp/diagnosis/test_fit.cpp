@@ -1,7 +1,8 @@
-// dsp::fit_params (fit.hpp): the Levenberg-Marquardt fit, whose Jacobian is by differences at
-// the start and by Broyden's update after each step, must end at the minimum of the robust
-// cost. Checked against a different code path: robust_chi2 on DiagnosisModel::residuals
-// along each free parameter's axis, a parabola through three points a sigma apart.
+// dsp::fit_params (fit.hpp): the Levenberg-Marquardt fit must end at the minimum of the robust
+// cost, checked against a different code path: robust_chi2 on DiagnosisModel::residuals along
+// each free parameter's axis, a parabola through three points a sigma apart. A guard for any
+// cheaper Jacobian: one by Broyden's secant updates, the fit stopping on it, ended 1 to 7.5
+// sigmas off here (the focal length 7 px short of its 15 px move, k1 a fifth of the way).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -64,9 +65,6 @@ std::pair<double, double> vertex_in_sigmas(const DiagnosisModel& m, const std::v
 
 }  // namespace
 
-// An updated Jacobian alone stopped there 1 to 7.5 sigmas from the minimum along these axes (the
-// focal length 7 px short of its 15 px move, k1 a fifth of the way): the stopping tests must be
-// met on the Jacobian by differences.
 TEST(Fit, EndsAtTheRobustCostsMinimumFromFarAway) {
   const Case k = far_start();
   const DiagnosisModel m(k.sim.rec);
