@@ -3,8 +3,9 @@
 // diagnosis; select.cpp runs its rounds.
 //
 // Thread contract: a Selector's judgements do not change once built (it only remembers the
-// states `remove` fitted and the states it fitted on the blocked halves); its methods may be called from one thread at a time (they evaluate
-// the DiagnosisModel, which is not thread-safe, and fill that memory).
+// states `remove` fitted and the states it fitted on the blocked halves); its methods may be
+// called from one thread at a time (they evaluate the DiagnosisModel, which is not thread-safe,
+// and fill that memory).
 #pragma once
 
 #include <algorithm>
