@@ -83,7 +83,8 @@ Halves rate_halves(const DiagnosisModel& m, const std::vector<int>& idx, const M
 // sigma^2 with standard deviation 2 sqrt(S) for independent noise; the margin is 3 sqrt(S). A
 // stand-in's wrong half costs about S itself, far past the margin once S is more than 9.
 HalvesFits fit_halves(const DiagnosisModel& m, const Halves& h, const Hypothesis& hyp, double sigma, int iterations) {
-  return {{fit_params(m, h.a, hyp.params, hyp.free, sigma, iterations), fit_params(m, h.b, hyp.params, hyp.free, sigma, iterations)}};
+  return {{fit_params(m, h.a, hyp.params, hyp.free, sigma, iterations),
+           fit_params(m, h.b, hyp.params, hyp.free, sigma, iterations)}};
 }
 
 HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const HalvesFits& poorer, const ParamMask& poorer_free,

@@ -165,17 +165,18 @@ bool forward_pair(const Selector& sel, const std::vector<std::pair<Effect, std::
   std::optional<State> best;
   double best_projected = -std::numeric_limits<double>::infinity();
   std::vector<Effect> pair;
-  std::vector<std::optional<State>> alone(refused.size());  // s with refused[i], screened once
-  for (size_t i = 0; i < refused.size(); ++i)
+  for (size_t i = 0; i < refused.size(); ++i) {
+    std::optional<State> alone;  // s with refused[i], screened once for all its pairs
     for (size_t j = i + 1; j < refused.size(); ++j) {
       const Effect a = refused[i].first, b = refused[j].first;
       const auto lens = [](Effect e) { return e == Effect::LensDistortion || e == Effect::LensModel; };
       if (lens(a) && lens(b)) continue;  // one lens or the other
-      if (!alone[i]) alone[i] = sel.screen_add(s, a);
-      State c = sel.screen_add(*alone[i], b);
+      if (!alone) alone = sel.screen_add(s, a);
+      State c = sel.screen_add(*alone, b);
       const double d = projected_drop(sel, here, c);
       if (d > best_projected) best_projected = d, best = std::move(c), pair = {a, b};
     }
+  }
   if (!best || best_projected < sel.opt_.min_bic_drop) return false;
   State richer = sel.refit_all(*best);
   out.drop = sel.drop(s, richer);
