@@ -1,5 +1,7 @@
 #include "dsp/diagnosis/fit.hpp"
 
+#include "dsp/diagnosis/match_jacobian.hpp"
+
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
@@ -222,16 +224,65 @@ class BulkEvaluator {
     else evaluate(x, jac_);
     const size_t n = idx_.size();
     jac_.J.setZero(2 * n, k_);
+    std::vector<bool> done(k_, false);
+    analytic_columns(done);
     Values step;
     for (int j = 0; j < k_; ++j) {
-      const double h = (x[j] + 1e-3 > c_.hi[j]) ? -1e-3 : 1e-3;
+      if (done[j]) continue;
       Eigen::VectorXd xh = jac_.x;
-      xh[j] += h;
+      xh[j] += step_of(j);
       evaluate(xh.data(), step, &jac_);
       for (size_t i = 0; i < n; ++i)
-        if (jac_.ok[i] && step.ok[i]) jac_.J.block<2, 1>(2 * i, j) = (step.r[i] - jac_.r[i]) / h;
+        if (jac_.ok[i] && step.ok[i]) jac_.J.block<2, 1>(2 * i, j) = (step.r[i] - jac_.r[i]) / step_of(j);
     }
     return jac_;
+  }
+
+  // A difference's step: away from the nearer bound.
+  double step_of(int j) const { return (jac_.x[j] + 1e-3 > c_.hi[j]) ? -1e-3 : 1e-3; }
+
+  // The columns of matches' parameters that leave the gyro track as it is, from the rotation
+  // model's analytic derivatives (DiagnosisModel::rotation_jacobian, match_jacobian.hpp): the
+  // chain x_j -> p (param_scale, and a parameter that follows another, fy after fx). Under the
+  // translation nuisance the column is the difference the translation pass makes of the
+  // linearised rotation residuals, r + h dr/dx_j, at x + h e_j (the pass moves with the clock and
+  // the mount), as a column by differences takes it of the residuals themselves.
+  void analytic_columns(std::vector<bool>& done) {
+    if (m_.kind() != ObservationKind::Matches) return;
+    std::vector<int> cols;
+    for (int j = 0; j < k_; ++j) cols.push_back(analytic_column(c_.free[j]) >= 0 ? j : -1);
+    if (std::all_of(cols.begin(), cols.end(), [](int j) { return j < 0; })) return;
+    const ModelParams p = c_.at(jac_.x.data());
+    const std::vector<MatchJacobian> D = m_.rotation_jacobian(p, idx_, jac_.settled);
+    const size_t n = idx_.size();
+    for (int j : cols) {
+      if (j < 0) continue;
+      Eigen::Matrix<double, MatchJacobian::ColsAtCompileTime, 1> chain;
+      chain.setZero();
+      chain[analytic_column(c_.free[j])] = c_.scale[j];
+      bool all = true;
+      for (int q = 0; q < kParamCount; ++q)
+        if (const auto f = follows(Param(q), c_.nominal); f && f->leader == c_.free[j]) {
+          const int a = analytic_column(Param(q));
+          all = all && a >= 0;
+          if (a >= 0) chain[a] = c_.scale[j] * f->factor;
+        }
+      if (!all) continue;
+      done[j] = true;
+      if (!p.translation_nuisance) {
+        for (size_t i = 0; i < n; ++i)
+          if (jac_.ok[i]) jac_.J.block<2, 1>(2 * i, j) = D[i] * chain / sigma_;
+        continue;
+      }
+      const double h = step_of(j);
+      std::vector<Eigen::Vector2d> r = jac_.settled.rotation;
+      for (size_t i = 0; i < n; ++i) r[i] += h * (D[i] * chain);
+      Eigen::VectorXd xh = jac_.x;
+      xh[j] += h;
+      r = m_.translation_out_near(c_.at(xh.data()), idx_, std::move(r), jac_.settled);
+      for (size_t i = 0; i < n; ++i)
+        if (jac_.ok[i] && r[i].allFinite()) jac_.J.block<2, 1>(2 * i, j) = (r[i] / sigma_ - jac_.r[i]) / h;
+    }
   }
 
   const DiagnosisModel& m_;

@@ -125,6 +125,18 @@ Eigen::Matrix3d GyroTrack::camera_at(double t) const {
   return a.R * exp_so3_fast(phi) * imu_to_camera_t_;
 }
 
+Eigen::Matrix3d GyroTrack::camera_at(double t, size_t& hint, Eigen::Vector3d& rate) const {
+  Eigen::Vector3d phi;
+  const Knot& a = interval(t, phi, hint);
+  rate.setZero();
+  if (t >= knots_.front().t && t < knots_.back().t) {
+    const Knot& b = knots_[hint + 1];
+    const double h = b.t - a.t;
+    rate = imu_to_camera_ * hermite(a.w, a.s, b.w, b.s, h, (t - a.t) / h).rate;
+  }
+  return a.R * exp_so3_fast(phi) * imu_to_camera_t_;
+}
+
 Eigen::Vector3d GyroTrack::to_world(double t, const Eigen::Vector3d& v, size_t& hint) const {
   Eigen::Vector3d phi;
   const Knot& a = interval(t, phi, hint);

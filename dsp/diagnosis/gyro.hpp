@@ -47,6 +47,13 @@ class GyroTrack {
   // the same or near, so the search starts there.
   Eigen::Vector3d to_world(double t, const Eigen::Vector3d& v, size_t& hint) const;
   Eigen::Vector3d to_camera(double t, const Eigen::Vector3d& d, size_t& hint) const;
+  // camera_at with the caller's hint (as to_world's), and the camera's rate w_c (camera axes)
+  // there, so that dR_c/dt = R_c [w_c]x: the Hermite curve's rate turned into camera axes (zero
+  // outside the data, where the track is held). The rate leaves out the interval's own turn of
+  // the rate's axis (the Magnus term, the exponential's Jacobian), a share of the angle turned
+  // since the interval's start squared: the analytic Jacobian of the diagnosis's clock parameters
+  // (match_jacobian.hpp) needs no more.
+  Eigen::Matrix3d camera_at(double t, size_t& hint, Eigen::Vector3d& rate) const;
   const Eigen::Vector3d& bias() const { return bias_; }
   const Eigen::Vector3d& scale() const { return scale_; }
   double t_begin() const { return knots_.front().t; }

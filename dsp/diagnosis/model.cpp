@@ -1,5 +1,6 @@
 #include "dsp/diagnosis/model.hpp"
 
+#include "dsp/diagnosis/match_jacobian.hpp"
 #include "dsp/diagnosis/translation.hpp"
 
 #include <algorithm>
@@ -386,16 +387,56 @@ std::vector<Eigen::Vector2d> DiagnosisModel::translation_out(const ModelParams& 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx,
                                                        Settled& settled) const {
   settled.translation.state.reset();
-  return translation_out(p, idx, rotation_residuals(p, idx, &settled, nullptr), &settled.translation);
+  std::vector<Eigen::Vector2d> r = rotation_residuals(p, idx, &settled, nullptr);
+  const bool nuisance = rec_.kind == ObservationKind::Matches && p.translation_nuisance;
+  settled.rotation = nuisance ? r : std::vector<Eigen::Vector2d>{};
+  return translation_out(p, idx, std::move(r), &settled.translation);
 }
 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals_near(const ModelParams& p, const std::vector<int>& idx,
                                                             const Settled& near) const {
-  std::vector<Eigen::Vector2d> out = rotation_residuals(p, idx, nullptr, &near);
-  if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return out;
+  return translation_out_near(p, idx, rotation_residuals(p, idx, nullptr, &near), near);
+}
+
+std::vector<Eigen::Vector2d> DiagnosisModel::translation_out_near(const ModelParams& p, const std::vector<int>& idx,
+                                                                  std::vector<Eigen::Vector2d> r,
+                                                                  const Settled& near) const {
+  if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return r;
   const MatchSetup ms = match_setup(p);
-  remove_fitted_translation(*this, idx, out, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s,
+  remove_fitted_translation(*this, idx, r, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s,
                             near.translation);
+  return r;
+}
+
+std::vector<MatchJacobian> DiagnosisModel::rotation_jacobian(const ModelParams& p, const std::vector<int>& idx,
+                                                             const Settled& at) const {
+  if (rec_.kind != ObservationKind::Matches || at.rows.size() != idx.size())
+    throw std::invalid_argument("diagnosis: rotation_jacobian needs matches settled on the same observations");
+  const GyroTrack& tr = track(bias_of(p), scale_of(p));
+  const MatchSetup ms = match_setup(p);
+  const double rate = 1 + ms.tm.drift_ppm * 1e-6;  // d motion_time / d t_camera
+  const Eigen::Matrix3d mount_jr = mount_right_jacobian({p[Param::MountX], p[Param::MountY], p[Param::MountZ]});
+  std::vector<MatchJacobian> out(idx.size(), MatchJacobian::Zero());
+  TrackHints at_hint;
+  for (size_t k = 0; k < idx.size(); ++k) {
+    const Obs& o = obs_[idx[k]];
+    const Eigen::Vector3d* ray = ms.rays->get(idx[k]);
+    if (!std::isfinite(at.rows[k].row) || !ray) continue;
+    // t = motion_time(T + row_time(v)), row_time linear in the line delay: row_time(v) = l f(v).
+    auto clock = [&](double T, double v, double& t, Eigen::Vector3d& dt) {
+      const double rt = ms.rt.row_time(v);
+      t = ms.tm.motion_time(T + rt);
+      dt = {rate * rt / ms.rt.line_delay_s, 1.0, 1e-6 * (T + rt - t0_)};
+    };
+    MatchAtSolution m;
+    double ta, tb;
+    clock(o.T, o.px_a.y(), ta, m.dta);
+    clock(o.T_b, at.rows[k].row, tb, m.dtb);
+    m.ray = *ray, m.mount = ms.s.mount, m.mount_jr = mount_jr, m.dtb_dv = rate / ms.rt.r();
+    m.R_a = tr.camera_at(ta, at_hint.a, m.w_a);
+    m.R_b = tr.camera_at(tb, at_hint.b, m.w_b);
+    out[k] = -match_prediction_jacobian(ms.s.cam, m);
+  }
   return out;
 }
 

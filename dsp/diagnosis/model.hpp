@@ -106,6 +106,8 @@ class DiagnosisModel {
   struct Settled {
     TranslationFit translation;
     std::vector<RowStart> rows;  // matches: per observation of idx
+    // Under the translation nuisance: the residuals before the translation was taken out.
+    std::vector<Eigen::Vector2d> rotation;
   };
   // As residuals(p, idx), and what they settled on goes to `settled`.
   std::vector<Eigen::Vector2d> residuals(const ModelParams& p, const std::vector<int>& idx, Settled& settled) const;
@@ -115,6 +117,18 @@ class DiagnosisModel {
   // (remove_fitted_translation). Throws std::invalid_argument when idx is not the size `near`
   // was settled on.
   std::vector<Eigen::Vector2d> residuals_near(const ModelParams& p, const std::vector<int>& idx, const Settled& near) const;
+  // r, residuals of idx as the rotation model leaves them at p (near the point `near` settled
+  // at), with the translation taken out as it settled there (remove_fitted_translation): the
+  // last step of residuals_near, for a Jacobian column the rotation model's part of which is
+  // analytic (fit.cpp). r as it is without the translation nuisance.
+  std::vector<Eigen::Vector2d> translation_out_near(const ModelParams& p, const std::vector<int>& idx,
+                                                    std::vector<Eigen::Vector2d> r, const Settled& near) const;
+  // Matches: d(residual before the translation) / d(parameter) of each observation of idx for the
+  // parameters kAnalyticParams (match_jacobian.hpp), at p where `at` was settled on idx (its
+  // fixed points); zero for a failed prediction. Throws std::invalid_argument for landmarks or
+  // when `at` was settled on other observations.
+  std::vector<Eigen::Matrix<double, 2, 14>> rotation_jacobian(const ModelParams& p, const std::vector<int>& idx,
+                                                              const Settled& at) const;
   // Position of observation i's frame (frame_a for a match) in time order (0 = first frame).
   int frame_rank(int i) const { return obs_[i].rank; }
   double frame_time(int i) const { return obs_[i].T; }

@@ -186,6 +186,21 @@ Eigen::Vector2d distort(const Distortion& d, const Eigen::Vector2d& xn, Eigen::M
   return radtan(d, xn);
 }
 
+Eigen::Matrix<double, 2, 4> distort_radial_jacobian(const Distortion& d, const Eigen::Vector2d& xn) {
+  const double r = xn.norm();
+  Eigen::Matrix<double, 2, 4> J;
+  if (d.model == LensModel::PinholeRadtan) {
+    const double r2 = r * r;
+    J << xn * r2, xn * (r2 * r2), xn * (r2 * r2 * r2), Eigen::Vector2d::Zero();
+    return J;
+  }
+  // x_d = (theta_d / r) x_n and d(theta_d)/dk_j = theta^(2j + 1): the column is x_n theta^(2j) (theta / r),
+  // theta / r -> 1 at the axis.
+  const double t = std::atan(r), t2 = t * t, q = r < kSmallR ? 1.0 : t / r;
+  J << xn * (q * t2), xn * (q * t2 * t2), xn * (q * t2 * t2 * t2), xn * (q * t2 * t2 * t2 * t2);
+  return J;
+}
+
 std::optional<Eigen::Vector2d> undistort(const Distortion& d, const Eigen::Vector2d& xd) {
   if (d.is_identity()) return xd;
   return d.model == LensModel::PinholeEqui ? equi_inverse(d, xd) : radtan_inverse(d, xd);

@@ -57,6 +57,10 @@ Eigen::Vector2d distort(const Distortion& d, const Eigen::Vector2d& xn);
 Eigen::Matrix2d distort_jacobian(const Distortion& d, const Eigen::Vector2d& xn);
 // Both at once, sharing the work (the rectifier's Newton steps need both at every node).
 Eigen::Vector2d distort(const Distortion& d, const Eigen::Vector2d& xn, Eigen::Matrix2d& jacobian);
+// d(distort)/d(k1, k2, k3, k4): how the distorted point moves with the lens's radial terms
+// (pinhole-radtan: k1, k2, k3 of r^2, r^4, r^6, and none for k4; pinhole-equi: k1..k4 of theta^3
+// .. theta^9). The diagnosis's analytic Jacobian uses it (dsp/diagnosis/match_jacobian.hpp).
+Eigen::Matrix<double, 2, 4> distort_radial_jacobian(const Distortion& d, const Eigen::Vector2d& xn);
 // The inverse of distort(); nullopt where there is none: a radtan polynomial far outside its
 // monotonic region, an equidistant point beyond the lens's field (equi_max_theta).
 std::optional<Eigen::Vector2d> undistort(const Distortion& d, const Eigen::Vector2d& xd);
