@@ -95,6 +95,28 @@ TEST(LensModel, EquidistantJacobianMatchesFiniteDifferences) {
   }
 }
 
+// d(distort)/d(k1..k4) against central differences in each term, for both families (radtan with
+// tangential terms: k4 is not one of its terms, its column zero), near the axis and far off it.
+TEST(LensModel, RadialTermJacobianMatchesFiniteDifferences) {
+  std::vector<Distortion> lenses(std::begin(kLenses), std::end(kLenses));
+  lenses.push_back(Distortion{-0.28, 0.07, 1e-3, -2e-3, 0.01});
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> theta(0.0, 1.0), phi(-M_PI, M_PI);
+  for (const Distortion& d : lenses)
+    for (int i = 0; i < 100; ++i) {
+      const Vector2d xn = i == 0 ? Vector2d(1e-9, 0) : at_angle(theta(rng), phi(rng));
+      const Eigen::Matrix<double, 2, 4> J = distort_radial_jacobian(d, xn);
+      for (int k = 0; k < 4; ++k) {
+        Distortion hi = d, lo = d;
+        double* term_hi[] = {&hi.k1, &hi.k2, &hi.k3, &hi.k4};
+        double* term_lo[] = {&lo.k1, &lo.k2, &lo.k3, &lo.k4};
+        *term_hi[k] += 1e-6, *term_lo[k] -= 1e-6;
+        const Vector2d fd = (distort(hi, xn) - distort(lo, xn)) / 2e-6;
+        EXPECT_LE((J.col(k) - fd).norm(), 1e-8 * std::max(1.0, fd.norm())) << "term k" << k + 1 << " at " << xn.transpose();
+      }
+    }
+}
+
 // The one call that gives the point and its Jacobian together (the rectifier's Newton steps)
 // gives what the two separate calls give, for both lens families, on and off the axis.
 TEST(LensModel, PointAndJacobianTogetherEqualTheSeparateCalls) {
