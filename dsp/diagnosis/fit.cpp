@@ -211,13 +211,14 @@ class BulkEvaluator {
     return res_;
   }
 
-  // Forward differences, stepping away from the nearer bound; a failed prediction (at x or at
-  // the step) gets a zero Jacobian row, so its constant residual pulls nowhere. Each step starts
-  // every match's rolling-shutter fixed point from its solution at x (two projections instead of
-  // three), and under the translation nuisance keeps the inliers and the scene's slope the
-  // translation settled on at x (translation.hpp, TranslationFit): a column costs the rotation
-  // model's residuals and one pass of the velocity fit, not four passes (a diagnosis under
-  // parallax took a third less time).
+  // A matches recording's columns come from the rotation model's analytic derivatives
+  // (analytic_columns); the rest (landmarks, the lever arm) by forward differences, stepping away
+  // from the nearer bound. A failed prediction (at x or at the step) gets a zero Jacobian row,
+  // so its constant residual pulls nowhere. Each step starts every match's rolling-shutter fixed
+  // point from its solution at x (two projections instead of three), and under the translation
+  // nuisance keeps the inliers and the scene's slope the translation settled on at x
+  // (translation.hpp, TranslationFit): a column costs the rotation model's residuals and one
+  // pass of the velocity fit, not four passes (a diagnosis under parallax took a third less time).
   const Values& with_jacobian(const double* x) {
     if (same(jac_, x)) return jac_;
     if (same(res_, x)) jac_.x = res_.x, jac_.r = res_.r, jac_.ok = res_.ok, jac_.settled = res_.settled;
@@ -241,19 +242,23 @@ class BulkEvaluator {
   // A difference's step: away from the nearer bound.
   double step_of(int j) const { return (jac_.x[j] + 1e-3 > c_.hi[j]) ? -1e-3 : 1e-3; }
 
-  // The columns of matches' parameters that leave the gyro track as it is, from the rotation
-  // model's analytic derivatives (DiagnosisModel::rotation_jacobian, match_jacobian.hpp): the
-  // chain x_j -> p (param_scale, and a parameter that follows another, fy after fx). Under the
-  // translation nuisance the column is the difference the translation pass makes of the
-  // linearised rotation residuals, r + h dr/dx_j, at x + h e_j (the pass moves with the clock and
-  // the mount), as a column by differences takes it of the residuals themselves.
+  // The columns of a matches recording's parameters (all but the lever arm, which matches do not
+  // see) from the rotation model's analytic derivatives (DiagnosisModel::rotation_jacobian,
+  // match_jacobian.hpp), through the chain x_j -> p (param_scale, and a parameter that follows
+  // another, fy after fx): one pass over the matches for every column, where differences cost a
+  // pass per column (the walking phone under parallax: 30 -> 23 s; the benchmark's minute 7.4 ->
+  // 5.8 s). Under the translation nuisance the column is the difference the translation pass
+  // makes of the linearised rotation residuals, r + h dr/dx_j, at x + h e_j (the pass moves with
+  // the clock, the mount and the gyro), as a column by differences takes it of the residuals.
   void analytic_columns(std::vector<bool>& done) {
     if (m_.kind() != ObservationKind::Matches) return;
     std::vector<int> cols;
     for (int j = 0; j < k_; ++j) cols.push_back(analytic_column(c_.free[j]) >= 0 ? j : -1);
     if (std::all_of(cols.begin(), cols.end(), [](int j) { return j < 0; })) return;
     const ModelParams p = c_.at(jac_.x.data());
-    const std::vector<MatchJacobian> D = m_.rotation_jacobian(p, idx_, jac_.settled);
+    bool gyro = false;  // a bias or scale column asked for
+    for (int j = 0; j < k_; ++j) gyro = gyro || analytic_column(c_.free[j]) >= analytic_column(Param::BiasX);
+    const std::vector<MatchJacobian> D = m_.rotation_jacobian(p, idx_, jac_.settled, gyro);
     const size_t n = idx_.size();
     for (int j : cols) {
       if (j < 0) continue;

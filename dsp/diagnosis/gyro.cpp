@@ -33,6 +33,14 @@ Partial hermite(const Eigen::Vector3d& w0, const Eigen::Vector3d& s0, const Eige
   return {h * (H00 * w0 + H10 * h * s0 + H01 * w1 + H11 * h * s1), h00 * w0 + h10 * h * s0 + h01 * w1 + h11 * h * s1};
 }
 
+// d/dt of the Hermite rate at share tau of an interval of length h.
+Eigen::Vector3d hermite_slope(const Eigen::Vector3d& w0, const Eigen::Vector3d& s0, const Eigen::Vector3d& w1,
+                              const Eigen::Vector3d& s1, double h, double tau) {
+  const double t2 = tau * tau;
+  const double d00 = 6 * t2 - 6 * tau, d10 = 3 * t2 - 4 * tau + 1, d01 = -d00, d11 = 3 * t2 - 2 * tau;
+  return (d00 * w0 + d01 * w1) / h + d10 * s0 + d11 * s1;
+}
+
 // Rotation over the first share tau of interval k: the Hermite integral plus the second Magnus
 // term for dR/dt = R [w]x, (dt^2 / 12) w(0) x w(dt) (as integrate_gyro).
 Eigen::Vector3d step(const Eigen::Vector3d& w0, const Eigen::Vector3d& s0, const Eigen::Vector3d& w1,
@@ -99,6 +107,43 @@ GyroTrack::GyroTrack(const std::vector<GyroSample>& g, const Eigen::Vector3d& bi
   }
 }
 
+const std::vector<GyroTrack::ByGyro>& GyroTrack::knots_by_gyro() const {
+  std::call_once(by_gyro_once_, [this] {
+    by_gyro_.assign(knots_.size(), ByGyro::Zero());
+    for (size_t i = 1; i < knots_.size(); ++i) {
+      const Knot &a = knots_[i - 1], &b = knots_[i];
+      const Eigen::Vector3d phi = step(a.w, a.s, b.w, b.s, b.t - a.t, 1.0);
+      // R_a Exp(e) Exp(phi) Exp(J_r(phi) d phi) = R_a Exp(phi) Exp(Exp(phi)^T e + J_r(phi) d phi).
+      by_gyro_[i] = exp_so3_fast(-phi) * by_gyro_[i - 1] + so3_right_jacobian(phi) * step_by_gyro(a, b, 1.0);
+    }
+  });
+  return by_gyro_;
+}
+
+// The step is linear in the knots' rates and slopes but for the Magnus term's product: with
+// w = diag(S) (w_m - b), a bias moves every rate by -S_k e_k (the slopes, differences of rates,
+// not at all) and a scale S_k each rate's and slope's k-th component by w_k / S_k, s_k / S_k
+// (nothing when S_k is zero: the rate is then zero whatever the measurement).
+GyroTrack::ByGyro GyroTrack::step_by_gyro(const Knot& a, const Knot& b, double tau) const {
+  const double h = b.t - a.t, dt = tau * h;
+  const Eigen::Vector3d w = hermite(a.w, a.s, b.w, b.s, h, tau).rate;
+  ByGyro D;
+  for (int j = 0; j < 6; ++j) {
+    const int k = j % 3;
+    const Eigen::Vector3d e = Eigen::Vector3d::Unit(k);
+    Eigen::Vector3d dw0, ds0, dw1, ds1;
+    if (j < 3) {
+      dw0 = dw1 = -scale_[k] * e, ds0 = ds1 = Eigen::Vector3d::Zero();
+    } else {
+      const double per = scale_[k] != 0 ? 1.0 / scale_[k] : 0.0;
+      dw0 = a.w[k] * per * e, ds0 = a.s[k] * per * e, dw1 = b.w[k] * per * e, ds1 = b.s[k] * per * e;
+    }
+    const Partial dp = hermite(dw0, ds0, dw1, ds1, h, tau);
+    D.col(j) = dp.integral + dt * dt / 12.0 * (dw0.cross(w) + a.w.cross(dp.rate));
+  }
+  return D;
+}
+
 const GyroTrack::Knot& GyroTrack::interval(double t, Eigen::Vector3d& phi, size_t& hint) const {
   phi.setZero();
   if (t < knots_.front().t) return knots_.front();
@@ -125,14 +170,23 @@ Eigen::Matrix3d GyroTrack::camera_at(double t) const {
   return a.R * exp_so3_fast(phi) * imu_to_camera_t_;
 }
 
-Eigen::Matrix3d GyroTrack::camera_at(double t, size_t& hint, Eigen::Vector3d& rate) const {
+Eigen::Matrix3d GyroTrack::camera_at(double t, size_t& hint, Eigen::Vector3d& rate, ByGyro* by_gyro) const {
   Eigen::Vector3d phi;
   const Knot& a = interval(t, phi, hint);
   rate.setZero();
+  const std::vector<ByGyro>* G = by_gyro ? &knots_by_gyro() : nullptr;
+  if (by_gyro) *by_gyro = (*G)[&a - knots_.data()];  // held at the ends
   if (t >= knots_.front().t && t < knots_.back().t) {
+    // R_imu = R_k Exp(phi(t)): the body rate is J_r(phi) phi', phi' the Hermite rate and the
+    // Magnus term's derivative (across a long gap, where dt is large, it is not small).
     const Knot& b = knots_[hint + 1];
-    const double h = b.t - a.t;
-    rate = imu_to_camera_ * hermite(a.w, a.s, b.w, b.s, h, (t - a.t) / h).rate;
+    const double h = b.t - a.t, tau = (t - a.t) / h, dt = t - a.t;
+    const Eigen::Vector3d w = hermite(a.w, a.s, b.w, b.s, h, tau).rate;
+    const Eigen::Vector3d slope = hermite_slope(a.w, a.s, b.w, b.s, h, tau);
+    const Eigen::Vector3d dphi = w + dt / 6.0 * a.w.cross(w) + dt * dt / 12.0 * a.w.cross(slope);
+    const Eigen::Matrix3d Jr = so3_right_jacobian(phi);
+    rate = imu_to_camera_ * (Jr * dphi);
+    if (by_gyro) *by_gyro = exp_so3_fast(-phi) * (*G)[hint] + Jr * step_by_gyro(a, b, tau);
   }
   return a.R * exp_so3_fast(phi) * imu_to_camera_t_;
 }

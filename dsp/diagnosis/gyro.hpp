@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 #include <limits>
+#include <mutex>
 #include <vector>
 
 #include "dsp/observation/observation_model.hpp"
@@ -48,12 +49,15 @@ class GyroTrack {
   Eigen::Vector3d to_world(double t, const Eigen::Vector3d& v, size_t& hint) const;
   Eigen::Vector3d to_camera(double t, const Eigen::Vector3d& d, size_t& hint) const;
   // camera_at with the caller's hint (as to_world's), and the camera's rate w_c (camera axes)
-  // there, so that dR_c/dt = R_c [w_c]x: the Hermite curve's rate turned into camera axes (zero
-  // outside the data, where the track is held). The rate leaves out the interval's own turn of
-  // the rate's axis (the Magnus term, the exponential's Jacobian), a share of the angle turned
-  // since the interval's start squared: the analytic Jacobian of the diagnosis's clock parameters
-  // (match_jacobian.hpp) needs no more.
-  Eigen::Matrix3d camera_at(double t, size_t& hint, Eigen::Vector3d& rate) const;
+  // there, dR_c/dt = R_c [w_c]x: the derivative of the track itself (the Hermite rate with the
+  // Magnus term's change, through the exponential's Jacobian), zero outside the data where the
+  // track is held. With `by_gyro`, also how the track's IMU orientation turns with the gyro's
+  // bias and scale: R_imu(t) -> R_imu(t) Exp(G (d bias, d scale)), G its 3 x 6 matrix (IMU
+  // axes), the derivative of the track's own integration (knot by knot, through each step's
+  // exponential), not of the continuous motion. The diagnosis's analytic Jacobian
+  // (match_jacobian.hpp) uses both.
+  using ByGyro = Eigen::Matrix<double, 3, 6>;
+  Eigen::Matrix3d camera_at(double t, size_t& hint, Eigen::Vector3d& rate, ByGyro* by_gyro = nullptr) const;
   const Eigen::Vector3d& bias() const { return bias_; }
   const Eigen::Vector3d& scale() const { return scale_; }
   double t_begin() const { return knots_.front().t; }
@@ -65,6 +69,13 @@ class GyroTrack {
     Eigen::Matrix3d R;     // world-from-IMU at t
     Eigen::Vector3d w, s;  // bias-free rate and its slope
   };
+  // Per knot, R -> R Exp(G (d bias, d scale)) (camera_at's by_gyro): integrated on the first
+  // call that asks (a track is built for every bias the fits try, most never asked), once.
+  const std::vector<ByGyro>& knots_by_gyro() const;
+  mutable std::once_flag by_gyro_once_;
+  mutable std::vector<ByGyro> by_gyro_;
+  // d(step over the first share tau of the interval from knot a)/d(bias, scale).
+  ByGyro step_by_gyro(const Knot& a, const Knot& b, double tau) const;
   // The knot whose interval holds t (knots_.front() before, knots_.back() after the data) and
   // the rotation vector from it to t (zero outside the data).
   const Knot& interval(double t, Eigen::Vector3d& phi, size_t& hint) const;

@@ -9,7 +9,7 @@ namespace rsd::dsp {
 
 namespace {
 
-constexpr int kLineDelay = 0, kOffset = 1, kDrift = 2, kFx = 3, kFy = 4, kCx = 5, kCy = 6, kMount = 11;
+constexpr int kLineDelay = 0, kOffset = 1, kDrift = 2, kFx = 3, kFy = 4, kCx = 5, kCy = 6, kMount = 11, kBias = 14;
 constexpr int kLens = 8;  // fx, fy, cx, cy, k1..k4: columns kFx.. kFx + 7
 using LensJacobian = Eigen::Matrix<double, 2, kLens>;
 
@@ -27,13 +27,6 @@ LensJacobian pixel_by_lens(const CameraModel& cam, const Eigen::Vector2d& xn, Ei
 }
 
 }  // namespace
-
-Eigen::Matrix3d mount_right_jacobian(const Eigen::Vector3d& r) {
-  const double a = r.norm();
-  const Eigen::Matrix3d H = hat(r);
-  if (a < 1e-6) return Eigen::Matrix3d::Identity() - 0.5 * H + H * H / 6.0;
-  return Eigen::Matrix3d::Identity() - (1 - std::cos(a)) / (a * a) * H + (a - std::sin(a)) / (a * a * a) * H * H;
-}
 
 int analytic_column(Param q) {
   for (size_t j = 0; j < kAnalyticParams.size(); ++j)
@@ -67,6 +60,9 @@ MatchJacobian match_prediction_jacobian(const CameraModel& cam, const MatchAtSol
   // The mount.
   const Eigen::Matrix3d dX_de = M * (Rba * hat(u) - hat(y));
   D.middleCols<3>(kMount) = dpi_dX * dX_de * m.mount_jr;
+  // The gyro: dX = M dy = -M [y]x (R_b^T R_a E G_a - E G_b) dg.
+  const Eigen::Matrix3d& E = m.imu_to_camera;
+  D.middleCols<6>(kBias) = -dpi_dX * M * hat(y) * (Rba * E * m.gyro_a - E * m.gyro_b);
   // The fixed point: v* moves with each parameter as dv*/dp = (dq_y/dp) / (1 - dq_y/dv).
   const Eigen::Vector2d dq_dv = dq_dtb * m.dtb_dv;
   const double settle = 1.0 - dq_dv.y();

@@ -117,8 +117,9 @@ Distortion lens_of(const NominalModel& n, const ModelParams& p) {
   return d;
 }
 
-// The few gyro tracks last asked for, newest first: a numeric Jacobian asks for the base bias
-// and one perturbation per bias axis, over and over.
+// The few gyro tracks last asked for, newest first: a Jacobian under the translation nuisance
+// asks for the base bias and one perturbation per bias and scale axis (the translation pass
+// at each), over and over.
 struct DiagnosisModel::TrackCache {
   std::vector<std::unique_ptr<GyroTrack>> tracks;
 };
@@ -409,13 +410,13 @@ std::vector<Eigen::Vector2d> DiagnosisModel::translation_out_near(const ModelPar
 }
 
 std::vector<MatchJacobian> DiagnosisModel::rotation_jacobian(const ModelParams& p, const std::vector<int>& idx,
-                                                             const Settled& at) const {
+                                                             const Settled& at, bool gyro) const {
   if (rec_.kind != ObservationKind::Matches || at.rows.size() != idx.size())
     throw std::invalid_argument("diagnosis: rotation_jacobian needs matches settled on the same observations");
   const GyroTrack& tr = track(bias_of(p), scale_of(p));
   const MatchSetup ms = match_setup(p);
   const double rate = 1 + ms.tm.drift_ppm * 1e-6;  // d motion_time / d t_camera
-  const Eigen::Matrix3d mount_jr = mount_right_jacobian({p[Param::MountX], p[Param::MountY], p[Param::MountZ]});
+  const Eigen::Matrix3d mount_jr = so3_right_jacobian({p[Param::MountX], p[Param::MountY], p[Param::MountZ]});
   std::vector<MatchJacobian> out(idx.size(), MatchJacobian::Zero());
   TrackHints at_hint;
   for (size_t k = 0; k < idx.size(); ++k) {
@@ -433,8 +434,10 @@ std::vector<MatchJacobian> DiagnosisModel::rotation_jacobian(const ModelParams& 
     clock(o.T, o.px_a.y(), ta, m.dta);
     clock(o.T_b, at.rows[k].row, tb, m.dtb);
     m.ray = *ray, m.mount = ms.s.mount, m.mount_jr = mount_jr, m.dtb_dv = rate / ms.rt.r();
-    m.R_a = tr.camera_at(ta, at_hint.a, m.w_a);
-    m.R_b = tr.camera_at(tb, at_hint.b, m.w_b);
+    m.R_a = tr.camera_at(ta, at_hint.a, m.w_a, gyro ? &m.gyro_a : nullptr);
+    m.R_b = tr.camera_at(tb, at_hint.b, m.w_b, gyro ? &m.gyro_b : nullptr);
+    if (!gyro) m.gyro_a.setZero(), m.gyro_b.setZero();
+    m.imu_to_camera = rec_.nominal.imu_to_camera;
     out[k] = -match_prediction_jacobian(ms.s.cam, m);
   }
   return out;

@@ -125,10 +125,11 @@ class DiagnosisModel {
                                                     std::vector<Eigen::Vector2d> r, const Settled& near) const;
   // Matches: d(residual before the translation) / d(parameter) of each observation of idx for the
   // parameters kAnalyticParams (match_jacobian.hpp), at p where `at` was settled on idx (its
-  // fixed points); zero for a failed prediction. Throws std::invalid_argument for landmarks or
-  // when `at` was settled on other observations.
-  std::vector<Eigen::Matrix<double, 2, 14>> rotation_jacobian(const ModelParams& p, const std::vector<int>& idx,
-                                                              const Settled& at) const;
+  // fixed points); zero for a failed prediction. Without `gyro` the bias and scale columns are
+  // left zero (they need the track's derivative, integrated over all of it once per bias).
+  // Throws std::invalid_argument for landmarks or when `at` was settled on other observations.
+  std::vector<Eigen::Matrix<double, 2, 20>> rotation_jacobian(const ModelParams& p, const std::vector<int>& idx,
+                                                              const Settled& at, bool gyro = true) const;
   // Position of observation i's frame (frame_a for a match) in time order (0 = first frame).
   int frame_rank(int i) const { return obs_[i].rank; }
   double frame_time(int i) const { return obs_[i].T; }

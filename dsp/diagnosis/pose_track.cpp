@@ -41,6 +41,17 @@ Eigen::Vector3d rotate_so3(const Eigen::Vector3d& phi, const Eigen::Vector3d& v)
   return v + a * pv + b * phi.cross(pv);
 }
 
+Eigen::Matrix3d so3_right_jacobian(const Eigen::Vector3d& phi) {
+  // J_r = I - b K + c K^2, b = (1 - cos x) / x^2, c = (x - sin x) / x^3 = (1 - sin(x)/x) / x^2.
+  const double x2 = phi.squaredNorm();
+  double a, b;
+  rodrigues_coefficients(x2, a, b);
+  constexpr double r20 = 1.0 / 20, r42 = 1.0 / 42, r72 = 1.0 / 72;
+  const double c = x2 < 0.0625 ? (1 - x2 * r20 * (1 - x2 * r42 * (1 - x2 * r72))) / 6 : (1 - a) / x2;
+  const Eigen::Matrix3d K = hat(phi);
+  return Eigen::Matrix3d::Identity() - b * K + c * K * K;
+}
+
 PoseTrack::PoseTrack(std::vector<PoseSample> poses) {
   if (poses.empty()) throw std::invalid_argument("trajectory: no poses");
   std::stable_sort(poses.begin(), poses.end(), [](const PoseSample& a, const PoseSample& b) { return a.t < b.t; });

@@ -18,6 +18,9 @@ namespace rsd::dsp {
 Eigen::Matrix3d exp_so3_fast(const Eigen::Vector3d& phi);
 // Exp(phi) v by Rodrigues' formula on the vector (the same series as exp_so3_fast).
 Eigen::Vector3d rotate_so3(const Eigen::Vector3d& phi, const Eigen::Vector3d& v);
+// The right Jacobian J_r(phi) of so(3): Exp(phi + d) = Exp(phi) Exp(J_r(phi) d) to first order,
+// so that d/dt Exp(phi(t)) = Exp(phi) [J_r(phi) phi']x.
+Eigen::Matrix3d so3_right_jacobian(const Eigen::Vector3d& phi);
 
 class PoseTrack {
  public:

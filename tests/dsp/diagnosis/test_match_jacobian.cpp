@@ -2,7 +2,9 @@
 // rotation_jacobian) against central differences of DiagnosisModel::residual, the model's own
 // residual with its fixed point solved anew: every parameter with an analytic column, for
 // either lens family as the nominal one and as the other (lens_model), with a mount rotation,
-// a clock drift and either readout direction away from the nominal.
+// a clock drift, a gyro bias and scale and either readout direction away from the nominal. The
+// gyro's columns integrate the change of rate by Simpson's rule where the residual
+// re-integrates the track.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -22,14 +24,17 @@ struct Variant {
   const char* name;
   LensModel nominal_lens;
   bool other_lens, flip_readout;
+  bool phone_gyro = false;  // sampled at 20-200 Hz with gaps, jitter and noise (a phone's)
 };
 
-SimulatedRecording recording(LensModel lens) {
+SimulatedRecording recording(LensModel lens, bool phone_gyro) {
   SimConfig c = rsd::test::simulation(ObservationKind::Matches, 5, 1.0, 0.3);
   c.start_time_s = 1000;
   c.matches_per_pair = 20;
   c.rotation_amplitude_rad = 0.3, c.motion_frequency_hz = 1.5;
   c.effects.line_delay_s = 5e-5;
+  c.nominal.imu_to_camera << 0, -1, 0, -1, 0, 0, 0, 0, -1;  // a phone's gyro axes: E other than I
+  if (phone_gyro) c.gyro = {20, 200, 0.02, 0.03, 5e-4, 0.002};
   if (lens == LensModel::PinholeEqui) c.nominal.cam.dist = Distortion::equidistant(0.02, -0.01, 0.003, -0.001);
   else c.nominal.cam.dist = Distortion{-0.08, 0.02, 1e-3, -5e-4};  // k1, k2, p1, p2: tangential terms too
   return simulate_recording(c);
@@ -43,7 +48,8 @@ ModelParams away(const NominalModel& n, const Variant& v) {
   p[Param::Fx] *= 1.01, p[Param::Fy] *= 1.005, p[Param::Cx] += 3, p[Param::Cy] -= 2;
   p[Param::K1] += 0.01, p[Param::K2] -= 0.005, p[Param::K3] += 0.002, p[Param::K4] -= 0.001;
   p[Param::MountX] = 0.01, p[Param::MountY] = -0.02, p[Param::MountZ] = 0.005;
-  p[Param::BiasX] = 0.002;  // a track other than the nominal one
+  p[Param::BiasX] = 0.002, p[Param::BiasZ] = -0.003;  // a track other than the nominal one
+  p[Param::ScaleX] = 1.01, p[Param::ScaleY] = 0.995;
   return p;
 }
 
@@ -53,7 +59,7 @@ class MatchJacobianTest : public testing::TestWithParam<Variant> {};
 
 TEST_P(MatchJacobianTest, EveryColumnAgreesWithCentralDifferencesOfTheResidual) {
   const Variant v = GetParam();
-  const SimulatedRecording sim = recording(v.nominal_lens);
+  const SimulatedRecording sim = recording(v.nominal_lens, v.phone_gyro);
   const DiagnosisModel m(sim.rec);
   const NominalModel& n = sim.rec.nominal;
   const ModelParams p = away(n, v);
@@ -92,13 +98,13 @@ INSTANTIATE_TEST_SUITE_P(
     testing::Values(Variant{"radtan", LensModel::PinholeRadtan, false, false},
                     Variant{"equi", LensModel::PinholeEqui, false, false},
                     Variant{"radtan_as_equi_flipped", LensModel::PinholeRadtan, true, true},
-                    Variant{"equi_as_radtan", LensModel::PinholeEqui, true, false}),
+                    Variant{"equi_as_radtan", LensModel::PinholeEqui, true, false},
+                    Variant{"radtan_phone_gyro", LensModel::PinholeRadtan, false, false, true}),
     [](const testing::TestParamInfo<Variant>& i) { return std::string(i.param.name); });
 
-// A parameter without an analytic column (the gyro's bias and scale re-integrate the track;
-// the lever arm is the landmarks') has none.
-TEST(MatchJacobian, GyroParametersHaveNoAnalyticColumn) {
-  for (Param q : {Param::BiasX, Param::BiasY, Param::BiasZ, Param::ScaleX, Param::ScaleY, Param::ScaleZ, Param::LeverX})
-    EXPECT_EQ(analytic_column(q), -1) << param_name(q);
+// Only the lever arm (the landmarks') has no analytic column.
+TEST(MatchJacobian, OnlyTheLeverArmHasNoAnalyticColumn) {
+  for (Param q : {Param::LeverX, Param::LeverY, Param::LeverZ}) EXPECT_EQ(analytic_column(q), -1) << param_name(q);
+  EXPECT_EQ(kAnalyticParams.size() + 3, static_cast<size_t>(kParamCount));
   for (size_t c = 0; c < kAnalyticParams.size(); ++c) EXPECT_EQ(analytic_column(kAnalyticParams[c]), static_cast<int>(c));
 }
