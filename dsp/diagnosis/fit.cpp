@@ -354,8 +354,8 @@ ModelParams fit_params(const DiagnosisModel& m, const std::vector<int>& idx, con
   so.parameter_tolerance = 1e-7;
   so.gradient_tolerance = 1e-12;
   // With bounds, Ceres follows every trust-region step by a projected Armijo line search. Its
-  // default cubic interpolation asks for the gradient, i.e. the whole finite-difference
-  // Jacobian (k + 1 bulk evaluations), at each trial point, and backtracking costs more bulk
+  // default cubic interpolation asks for the gradient, i.e. the whole Jacobian (a pass over the
+  // observations and a translation pass per column), at each trial point, and backtracking costs more bulk
   // evaluations per rejected step. One trial of the full step, by bisection (costs alone), is
   // plain Levenberg-Marquardt: the trial is the candidate Ceres then evaluates (cached), and a
   // rejected step shrinks the trust region instead.

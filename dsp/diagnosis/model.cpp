@@ -124,9 +124,9 @@ struct DiagnosisModel::TrackCache {
   std::vector<std::unique_ptr<GyroTrack>> tracks;
 };
 
-// The rays of frame_a's pixels for the last few cameras, each computed when first asked for: a
-// numeric Jacobian asks for the base camera again after every parameter that is not the
-// camera's, and undistorting every pixel anew cost a tenth of a diagnosis.
+// The rays of frame_a's pixels for the last few cameras, each computed when first asked for: the
+// fits' trial points and the uncertainties' differences ask for the same cameras again and
+// again, and undistorting every pixel anew cost a tenth of a diagnosis.
 struct DiagnosisModel::RayCache {
   struct Slot {
     CameraModel cam;

@@ -100,7 +100,7 @@ class DiagnosisModel {
     double row = std::numeric_limits<double>::quiet_NaN(), slope = std::numeric_limits<double>::quiet_NaN();
   };
   // What residuals settled on at one point, for residuals_near at nearby parameters on the same
-  // observations (the fits' finite-difference Jacobian steps, fit.cpp): each match's fixed
+  // observations (the fits' Jacobian, fit.cpp: its analytic columns and its steps): each match's fixed
   // point, and under the translation nuisance what remove_translation settled on
   // (translation.hpp).
   struct Settled {

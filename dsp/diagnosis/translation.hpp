@@ -58,9 +58,9 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
 // the last pass's inliers and the scene's slope. remove_fitted_translation fits the velocity
 // spline again in one pass with those held (at the parameters it is given: the pairs' turns
 // follow the gyro, the mount and the clock), for the residuals of the same observations at
-// nearby parameters, without the passes that chose them. The fits' finite-difference Jacobian
-// (fit.cpp) is taken so: a Jacobian column then costs the rotation model's residuals and one
-// pass, not four passes with their medians. What it leaves out is how the inliers (a step
+// nearby parameters, without the passes that chose them. The fits' Jacobian (fit.cpp) is taken
+// so: a column then costs one pass over the analytic column of the rotation model's residuals
+// (or over the residuals at a step, by differences), not four passes with their medians. What it leaves out is how the inliers (a step
 // function) and the slope move with the parameters: a percent or two of a clock offset's or a
 // line delay's column; a rotation over a tilted ground (a gyro bias, a mount) moves the image as
 // the translation does, and the held slope misses up to a fifth of its change. The fits' trial
