@@ -129,14 +129,28 @@ TEST(DiagnosisGyro, BiasAndImuToCameraAreApplied) {
 // The vector forms the residuals use equal the matrix camera_at applied to the vector, inside
 // the data (rotations of up to about 0.3 rad within an interval: both branches of the series)
 // and held at either end, whatever interval the hint last held.
-TEST(DiagnosisGyro, TurningAVectorEqualsTheMatrix) {
+namespace {
+
+// A fast irregular gyro (8 x the test pose's rate, 20-200 Hz for 2 s) ending in a 0.2 s interval
+// at about 9 rad/s (|phi| past 0.25, the series' other branch), in a phone's axes.
+std::vector<GyroSample> fast_gyro_with_a_long_interval() {
   const SmoothPose pose = test_pose();
-  Eigen::Matrix3d R_ic;
-  R_ic << 0, -1, 0, -1, 0, 0, 0, 0, -1;
   std::vector<GyroSample> g;
   for (double t : irregular_stamps(2.0, 5)) g.push_back({t, 8.0 * pose.body_rate(t)});
-  g.push_back({2.2, Vector3d(6, -5, 4)});  // a 0.2 s interval at about 9 rad/s: |phi| past 0.25
-  const GyroTrack track(clean_gyro(g), Vector3d(0.01, 0, -0.02), R_ic);
+  g.push_back({2.2, Vector3d(6, -5, 4)});
+  return g;
+}
+Eigen::Matrix3d phone_axes() {
+  Eigen::Matrix3d R_ic;
+  R_ic << 0, -1, 0, -1, 0, 0, 0, 0, -1;
+  return R_ic;
+}
+
+}  // namespace
+
+TEST(DiagnosisGyro, TurningAVectorEqualsTheMatrix) {
+  const Eigen::Matrix3d R_ic = phone_axes();
+  const GyroTrack track(clean_gyro(fast_gyro_with_a_long_interval()), Vector3d(0.01, 0, -0.02), R_ic);
   const Vector3d v = Vector3d(0.3, -0.2, 1.0).normalized();
   // The hint carried from time to time as the residuals carry it (forwards, backwards, far).
   size_t hint = 0;
@@ -152,12 +166,8 @@ TEST(DiagnosisGyro, TurningAVectorEqualsTheMatrix) {
 // perturbations: log(R^T R')). Across a 0.2 s interval at 9 rad/s too, where the Magnus term and
 // the exponential's Jacobian are far from negligible, and held (rate zero) outside the data.
 TEST(DiagnosisGyro, RateAndBiasScaleDerivativesAgreeWithDifferencesOfTheTrack) {
-  const SmoothPose pose = test_pose();
-  Eigen::Matrix3d R_ic;
-  R_ic << 0, -1, 0, -1, 0, 0, 0, 0, -1;
-  std::vector<GyroSample> g;
-  for (double t : irregular_stamps(2.0, 5)) g.push_back({t, 8.0 * pose.body_rate(t)});
-  g.push_back({2.2, Vector3d(6, -5, 4)});
+  const Eigen::Matrix3d R_ic = phone_axes();
+  std::vector<GyroSample> g = fast_gyro_with_a_long_interval();
   g.push_back({2.21, Vector3d(6, -5, 4)});
   g = clean_gyro(g);
   const Vector3d bias(0.01, 0, -0.02), scale(1.01, 0.99, 1.002);
