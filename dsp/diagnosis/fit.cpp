@@ -252,16 +252,17 @@ class BulkEvaluator {
   // the clock, the mount and the gyro), as a column by differences takes it of the residuals.
   void analytic_columns(std::vector<bool>& done) {
     if (m_.kind() != ObservationKind::Matches) return;
-    std::vector<int> cols;
-    for (int j = 0; j < k_; ++j) cols.push_back(analytic_column(c_.free[j]) >= 0 ? j : -1);
-    if (std::all_of(cols.begin(), cols.end(), [](int j) { return j < 0; })) return;
+    bool any = false, gyro = false;  // gyro: a bias or scale column asked for (they come last)
+    for (int j = 0; j < k_; ++j) {
+      any = any || analytic_column(c_.free[j]) >= 0;
+      gyro = gyro || analytic_column(c_.free[j]) >= analytic_column(Param::BiasX);
+    }
+    if (!any) return;
     const ModelParams p = c_.at(jac_.x.data());
-    bool gyro = false;  // a bias or scale column asked for
-    for (int j = 0; j < k_; ++j) gyro = gyro || analytic_column(c_.free[j]) >= analytic_column(Param::BiasX);
     const std::vector<MatchJacobian> D = m_.rotation_jacobian(p, idx_, jac_.settled, gyro);
     const size_t n = idx_.size();
-    for (int j : cols) {
-      if (j < 0) continue;
+    for (int j = 0; j < k_; ++j) {
+      if (analytic_column(c_.free[j]) < 0) continue;
       Eigen::Matrix<double, MatchJacobian::ColsAtCompileTime, 1> chain;
       chain.setZero();
       chain[analytic_column(c_.free[j])] = c_.scale[j];
@@ -355,8 +356,8 @@ ModelParams fit_params(const DiagnosisModel& m, const std::vector<int>& idx, con
   so.gradient_tolerance = 1e-12;
   // With bounds, Ceres follows every trust-region step by a projected Armijo line search. Its
   // default cubic interpolation asks for the gradient, i.e. the whole Jacobian (a pass over the
-  // observations and a translation pass per column), at each trial point, and backtracking costs more bulk
-  // evaluations per rejected step. One trial of the full step, by bisection (costs alone), is
+  // observations and a translation pass per column), at each trial point, and backtracking
+  // costs more bulk evaluations per rejected step. One trial of the full step, by bisection (costs alone), is
   // plain Levenberg-Marquardt: the trial is the candidate Ceres then evaluates (cached), and a
   // rejected step shrinks the trust region instead.
   so.line_search_interpolation_type = ceres::BISECTION;

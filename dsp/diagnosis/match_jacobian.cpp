@@ -9,7 +9,7 @@ namespace rsd::dsp {
 
 namespace {
 
-constexpr int kLineDelay = 0, kOffset = 1, kDrift = 2, kFx = 3, kFy = 4, kCx = 5, kCy = 6, kMount = 11, kBias = 14;
+constexpr int kLineDelay = 0, kDrift = 2, kFx = 3, kMount = 11, kBias = 14;  // columns of kAnalyticParams
 constexpr int kLens = 8;  // fx, fy, cx, cy, k1..k4: columns kFx.. kFx + 7
 using LensJacobian = Eigen::Matrix<double, 2, kLens>;
 

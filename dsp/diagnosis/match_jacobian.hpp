@@ -1,9 +1,10 @@
 // The analytic derivatives of a match's prediction (docs/formats/recording-v1.md, "Matches")
-// with respect to the parameters that leave the gyro's integral as it is: the clock (line
-// delay, offset, drift), the intrinsics and lens, the mount. The fits' Jacobian (fit.cpp) takes
-// these columns from here and only the gyro's bias and scale, which re-integrate the track, by
-// differences: a column by differences costs the whole rotation model again (two projections
-// per match, a ray per match when the intrinsics move), these all of them at once.
+// with respect to every parameter a matches recording has but the lever arm (which it does not
+// see): the clock (line delay, offset, drift), the intrinsics and lens, the mount, the gyro's
+// bias and scale. The fits' Jacobian (fit.cpp) takes its columns from here: a column by
+// differences costs the whole rotation model again (two projections per match, a ray per match
+// when the intrinsics move, a track integrated anew when the gyro's values move), these all of
+// them at once.
 //
 // The prediction of a match at its rolling-shutter fixed point v* (spec "Time model"): with u
 // = M^T ray(px_a) (M = Exp(r), the mount), y = R_b^T R_a u, X = M y,

@@ -418,17 +418,17 @@ std::vector<MatchJacobian> DiagnosisModel::rotation_jacobian(const ModelParams& 
   const double rate = 1 + ms.tm.drift_ppm * 1e-6;  // d motion_time / d t_camera
   const Eigen::Matrix3d mount_jr = so3_right_jacobian({p[Param::MountX], p[Param::MountY], p[Param::MountZ]});
   std::vector<MatchJacobian> out(idx.size(), MatchJacobian::Zero());
+  // t = motion_time(T + row_time(v)), row_time linear in the line delay: row_time(v) = l f(v).
+  auto clock = [&](double T, double v, double& t, Eigen::Vector3d& dt) {
+    const double rt = ms.rt.row_time(v);
+    t = ms.tm.motion_time(T + rt);
+    dt = {rate * rt / ms.rt.line_delay_s, 1.0, 1e-6 * (T + rt - t0_)};
+  };
   TrackHints at_hint;
   for (size_t k = 0; k < idx.size(); ++k) {
     const Obs& o = obs_[idx[k]];
     const Eigen::Vector3d* ray = ms.rays->get(idx[k]);
     if (!std::isfinite(at.rows[k].row) || !ray) continue;
-    // t = motion_time(T + row_time(v)), row_time linear in the line delay: row_time(v) = l f(v).
-    auto clock = [&](double T, double v, double& t, Eigen::Vector3d& dt) {
-      const double rt = ms.rt.row_time(v);
-      t = ms.tm.motion_time(T + rt);
-      dt = {rate * rt / ms.rt.line_delay_s, 1.0, 1e-6 * (T + rt - t0_)};
-    };
     MatchAtSolution m;
     double ta, tb;
     clock(o.T, o.px_a.y(), ta, m.dta);
