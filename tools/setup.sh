@@ -14,6 +14,7 @@ PACKAGES=(
   libspdlog-dev            # logging
   libplplot-dev plplot-driver-cairo  # plots (PNG/SVG) from the tools
   libceres-dev             # least squares: bundle adjustment, diagnosis fits
+  liblapack-dev            # band Cholesky of the diagnosis's translation spline (dsp/diagnosis)
   libyaml-cpp-dev          # scenario, recording and config files
   libfftw3-dev             # FFT for LED-flicker row-rate calibration
   libpng-dev               # PNG frames in and out

@@ -249,7 +249,9 @@ class BulkEvaluator {
   // pass per column (the walking phone under parallax: 30 -> 23 s; the benchmark's minute 7.4 ->
   // 5.8 s). Under the translation nuisance the column is the difference the translation pass
   // makes of the linearised rotation residuals, r + h dr/dx_j, at x + h e_j (the pass moves with
-  // the clock, the mount and the gyro), as a column by differences takes it of the residuals.
+  // the clock, the mount and the gyro), as a column by differences takes it of the residuals;
+  // where the pass does not move (the line delay, the intrinsics, the lens) it is linear, and
+  // takes those columns with one factorisation (held_columns).
   void analytic_columns(std::vector<bool>& done) {
     if (m_.kind() != ObservationKind::Matches) return;
     bool any = false, gyro = false;  // gyro: a bias or scale column asked for (they come last)
@@ -261,6 +263,7 @@ class BulkEvaluator {
     const ModelParams p = c_.at(jac_.x.data());
     const std::vector<MatchJacobian> D = m_.rotation_jacobian(p, idx_, jac_.settled, gyro);
     const size_t n = idx_.size();
+    std::vector<int> held;  // under the nuisance: columns whose translation pass holds
     for (int j = 0; j < k_; ++j) {
       if (analytic_column(c_.free[j]) < 0) continue;
       Eigen::Matrix<double, MatchJacobian::ColsAtCompileTime, 1> chain;
@@ -275,9 +278,13 @@ class BulkEvaluator {
         }
       if (!all) continue;
       done[j] = true;
-      if (!p.translation_nuisance) {
+      bool moves = false;  // whether the column moves the translation pass (the pairs' turns)
+      for (int a = 0; a < chain.size(); ++a)
+        moves = moves || (chain[a] != 0 && DiagnosisModel::moves_translation_pass(kAnalyticParams[a]));
+      if (!p.translation_nuisance || !moves) {
         for (size_t i = 0; i < n; ++i)
           if (jac_.ok[i]) jac_.J.block<2, 1>(2 * i, j) = D[i] * chain / sigma_;
+        if (p.translation_nuisance) held.push_back(j);
         continue;
       }
       const double h = step_of(j);
@@ -289,6 +296,19 @@ class BulkEvaluator {
       for (size_t i = 0; i < n; ++i)
         if (jac_.ok[i] && r[i].allFinite()) jac_.J.block<2, 1>(2 * i, j) = (r[i] / sigma_ - jac_.r[i]) / h;
     }
+    held_columns(p, held);
+  }
+
+  // The columns `held` (the rotation model's, scaled) with the translation taken out: the pass is
+  // linear in the residuals where the pairs' turns hold, one factorisation for all of them.
+  void held_columns(const ModelParams& p, const std::vector<int>& held) {
+    if (held.empty()) return;
+    Eigen::MatrixXd cols(jac_.J.rows(), static_cast<Eigen::Index>(held.size()));
+    for (size_t c = 0; c < held.size(); ++c) cols.col(c) = jac_.J.col(held[c]);
+    m_.translation_out_of_columns(p, idx_, cols, jac_.settled);
+    for (size_t i = 0; i < idx_.size(); ++i)
+      if (jac_.ok[i])
+        for (size_t c = 0; c < held.size(); ++c) jac_.J.block<2, 1>(2 * i, held[c]) = cols.block<2, 1>(2 * i, c);
   }
 
   const DiagnosisModel& m_;

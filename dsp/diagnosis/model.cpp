@@ -409,6 +409,24 @@ std::vector<Eigen::Vector2d> DiagnosisModel::translation_out_near(const ModelPar
   return r;
 }
 
+void DiagnosisModel::translation_out_of_columns(const ModelParams& p, const std::vector<int>& idx, Eigen::MatrixXd& cols,
+                                                const Settled& near) const {
+  if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return;
+  const MatchSetup ms = match_setup(p);
+  remove_fitted_translation_from_columns(*this, idx, cols, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t,
+                                         p.translation_knot_s, near.translation);
+}
+
+bool DiagnosisModel::moves_translation_pass(Param q) {
+  switch (q) {
+    case Param::LineDelay: case Param::Fx: case Param::Fy: case Param::Cx: case Param::Cy:
+    case Param::K1: case Param::K2: case Param::K3: case Param::K4:
+      return false;
+    default:
+      return true;
+  }
+}
+
 std::vector<MatchJacobian> DiagnosisModel::rotation_jacobian(const ModelParams& p, const std::vector<int>& idx,
                                                              const Settled& at, bool gyro) const {
   if (rec_.kind != ObservationKind::Matches || at.rows.size() != idx.size())

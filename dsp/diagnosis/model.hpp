@@ -123,6 +123,16 @@ class DiagnosisModel {
   // analytic (fit.cpp). r as it is without the translation nuisance.
   std::vector<Eigen::Vector2d> translation_out_near(const ModelParams& p, const std::vector<int>& idx,
                                                     std::vector<Eigen::Vector2d> r, const Settled& near) const;
+  // The linear part of translation_out_near taken out of each column of `cols` (2 x idx.size()
+  // rows, remove_fitted_translation_from_columns): the Jacobian columns, under the translation
+  // nuisance, of the parameters that do not move the translation pass (moves_translation_pass).
+  // Nothing without the nuisance.
+  void translation_out_of_columns(const ModelParams& p, const std::vector<int>& idx, Eigen::MatrixXd& cols,
+                                  const Settled& near) const;
+  // Whether q moves the translation pass of a matches recording: the frame pairs' turns follow
+  // the clock's offset and drift, the mount and the gyro's bias and scale (and the lever arm,
+  // which matches do not see); the line delay, the intrinsics and the lens leave them.
+  static bool moves_translation_pass(Param q);
   // Matches: d(residual before the translation) / d(parameter) of each observation of idx for the
   // parameters kAnalyticParams (match_jacobian.hpp), at p where `at` was settled on idx (its
   // fixed points); zero for a failed prediction. Without `gyro` the bias and scale columns are

@@ -77,46 +77,18 @@ class Selector {
   // s with its BIC on the screening subsample (what screened hypotheses are compared with).
   State on_screen(const State& s) const { return {s.effects, s.params, bic(s.params, s.effects, screen_)}; }
 
-  // The hypothesis "s plus e", fitted on the screening subsample.
+  // The hypothesis "s plus e", fitted on the screening subsample. Remembered: a round that named
+  // nothing is followed by one that asks every candidate again, the same ones from the same
+  // state (under a hand-held shake's parallax a tenth of the diagnosis).
   State screen_add(const State& s, Effect e) const {
-    std::vector<Effect> effects = s.effects;
-    effects.push_back(e);
-    ModelParams p = s.params;
-    for (int k = 0; k < kParamCount; ++k)
-      if (effect_params(e, lens_)[k]) p.v[k] = start_.v[k];
-    if (e == Effect::LensModel) switch_lens(effects, p);
-    if (e == Effect::ReadoutDirection) {
-      p.flip_readout = true;
-      // The order of rows read means nothing without a readout time: a nominal global
-      // shutter brings rolling_shutter along.
-      if (!s.has(Effect::RollingShutter) && nominal_[Param::LineDelay] == 0) effects.push_back(Effect::RollingShutter);
-    }
-    if (e == Effect::TimeOffset) p[Param::TimeOffset] = refine_time_offset(m_, screen_, p, sigma_);
-    p = fit_params(m_, screen_, p, mask_of(effects, lens_), sigma_, opt_.screen_iterations);
-    return {effects, p, bic(p, effects, screen_)};
+    return remembered(FitKind::Add, s, e, &screen_, opt_.screen_iterations, [&] { return fit_add(s, e); });
   }
 
   // s without e, fitted on idx from s's values. Remembered: the blocked halves and the held-out
   // check ask for the same states of the same selection (each a refit on every fitting
   // observation, a third of a diagnosis under the translation nuisance).
   State remove(const State& s, Effect e, const std::vector<int>& idx, int iterations) const {
-    for (const Removed& r : removed_)
-      if (r.e == e && r.idx == &idx && r.iterations == iterations && r.from.effects == s.effects && same(r.from.params, s.params))
-        return r.to;
-    std::vector<Effect> effects;
-    for (Effect f : s.effects)
-      if (f != e) effects.push_back(f);
-    ModelParams p = s.params;
-    const ParamMask drop = effect_params(e, lens_);
-    for (int k = 0; k < kParamCount; ++k)
-      // With its followers (fy follows fx): a focal length withdrawn left fy 26% off on a real clip.
-      if (drop[k]) set_param(p, static_cast<Param>(k), nominal_.v[k], m_.recording().nominal);
-    if (e == Effect::ReadoutDirection) p.flip_readout = false;
-    if (e == Effect::LensModel) p.other_lens = false;
-    p = fit_params(m_, idx, p, mask_of(effects, lens_), sigma_, iterations);
-    State to{effects, p, bic(p, effects, idx)};
-    removed_.push_back({s, e, &idx, iterations, to});
-    return to;
+    return remembered(FitKind::Remove, s, e, &idx, iterations, [&] { return fit_remove(s, e, idx, iterations); });
   }
 
   // lens_model: the other family's lens, starting from its nearest stand-in for the lens the
@@ -129,9 +101,12 @@ class Selector {
     effects.erase(std::remove(effects.begin(), effects.end(), Effect::LensDistortion), effects.end());
   }
 
+  // A screened hypothesis refitted on every fitting observation. Remembered, as screen_add.
   State refit_all(const State& screened) const {
-    const ModelParams p = fit_params(m_, fit_, screened.params, mask_of(screened.effects, lens_), sigma_, opt_.max_iterations);
-    return {screened.effects, p, bic(p, screened.effects, fit_)};
+    return remembered(FitKind::Refit, screened, Effect{}, &fit_, opt_.max_iterations, [&] {
+      const ModelParams p = fit_params(m_, fit_, screened.params, mask_of(screened.effects, lens_), sigma_, opt_.max_iterations);
+      return State{screened.effects, p, bic(p, screened.effects, fit_)};
+    });
   }
 
   // BIC drop from `poorer` to `richer` (both on the fitting set), with the chi-square drop
@@ -215,6 +190,38 @@ class Selector {
   double field_;    // the largest angle off the axis the image sees (radians), through the nominal lens
 
  private:
+  // screen_add's and remove's fits.
+  State fit_add(const State& s, Effect e) const {
+    std::vector<Effect> effects = s.effects;
+    effects.push_back(e);
+    ModelParams p = s.params;
+    for (int k = 0; k < kParamCount; ++k)
+      if (effect_params(e, lens_)[k]) p.v[k] = start_.v[k];
+    if (e == Effect::LensModel) switch_lens(effects, p);
+    if (e == Effect::ReadoutDirection) {
+      p.flip_readout = true;
+      // The order of rows read means nothing without a readout time: a nominal global
+      // shutter brings rolling_shutter along.
+      if (!s.has(Effect::RollingShutter) && nominal_[Param::LineDelay] == 0) effects.push_back(Effect::RollingShutter);
+    }
+    if (e == Effect::TimeOffset) p[Param::TimeOffset] = refine_time_offset(m_, screen_, p, sigma_);
+    p = fit_params(m_, screen_, p, mask_of(effects, lens_), sigma_, opt_.screen_iterations);
+    return {effects, p, bic(p, effects, screen_)};
+  }
+  State fit_remove(const State& s, Effect e, const std::vector<int>& idx, int iterations) const {
+    std::vector<Effect> effects;
+    for (Effect f : s.effects)
+      if (f != e) effects.push_back(f);
+    ModelParams p = s.params;
+    const ParamMask drop = effect_params(e, lens_);
+    for (int k = 0; k < kParamCount; ++k)
+      // With its followers (fy follows fx): a focal length withdrawn left fy 26% off on a real clip.
+      if (drop[k]) set_param(p, static_cast<Param>(k), nominal_.v[k], m_.recording().nominal);
+    if (e == Effect::ReadoutDirection) p.flip_readout = false;
+    if (e == Effect::LensModel) p.other_lens = false;
+    p = fit_params(m_, idx, p, mask_of(effects, lens_), sigma_, iterations);
+    return {effects, p, bic(p, effects, idx)};
+  }
   static bool same(const ModelParams& a, const ModelParams& b) {
     return a.v == b.v && a.flip_readout == b.flip_readout && a.other_lens == b.other_lens &&
            a.translation_nuisance == b.translation_nuisance && a.translation_knot_s == b.translation_knot_s;
@@ -233,14 +240,27 @@ class Selector {
     HalvesFits fits;
   };
   mutable std::deque<FittedHalves> halves_fits_;  // a deque: on_halves hands out references
-  struct Removed {
+  // The fits a selection asks for more than once, by what they started from.
+  enum class FitKind { Add, Refit, Remove };
+  struct Remembered {
+    FitKind kind;
     State from;
     Effect e;
     const std::vector<int>* idx;
     int iterations;
     State to;
   };
-  mutable std::vector<Removed> removed_;
+  mutable std::vector<Remembered> remembered_;
+  template <class Fit>
+  State remembered(FitKind kind, const State& from, Effect e, const std::vector<int>* idx, int iterations, const Fit& fit) const {
+    for (const Remembered& r : remembered_)
+      if (r.kind == kind && r.e == e && r.idx == idx && r.iterations == iterations && r.from.effects == from.effects &&
+          same(r.from.params, from.params))
+        return r.to;
+    State to = fit();
+    remembered_.push_back({kind, from, e, idx, iterations, to});
+    return to;
+  }
 };
 
 }  // namespace rsd::dsp::selection

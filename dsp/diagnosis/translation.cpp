@@ -1,7 +1,6 @@
 #include "dsp/diagnosis/translation.hpp"
 
 #include <Eigen/Dense>
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -11,6 +10,7 @@
 #include <tuple>
 
 #include "dsp/core/statistics.hpp"
+#include "dsp/diagnosis/band_cholesky.hpp"
 #include "dsp/diagnosis/model.hpp"
 #include "dsp/diagnosis/parallax.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
@@ -19,14 +19,14 @@ namespace rsd::dsp {
 
 namespace {
 
-// One frame pair's share of the velocity fit: its time and the normal equations of its inliers
-// in the velocity over depth (world axes), and how a velocity turns into its translation over
-// depth (camera axes): beta = dt R^T u.
+// One frame pair's share of the velocity fit: its time and the normal matrix of its inliers in
+// the velocity over depth (world axes), and how a velocity turns into its translation over depth
+// (camera axes): beta = dt R^T u. The right-hand sides are kept beside the pairs, rows 3q..3q+2
+// pair q's (one column per set of residuals).
 struct PairSums {
   double t = 0;
   Eigen::Matrix3d turn = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d b = Eigen::Vector3d::Zero();
 };
 
 // Uniform cubic B-spline: the weights of the four control points at fraction u of an interval.
@@ -51,31 +51,28 @@ struct Spline {
 // The band of the velocity spline's normal matrix: a pair touches four control points of three.
 constexpr int kBand = 3 * 4 - 1;
 
-// Each pair's velocity over depth u (world axes) from the spline's control points minimising
-// the pairs' squared residuals (their N and b; zero where the normal matrix is not positive
-// definite), with a light penalty on the second difference of the control points (it decides
-// only where the data leave a direction free: a stretch without pairs, a component no pair
-// shows). A pair's time touches four consecutive control points and the penalty three, so the
-// normal matrix is banded (kBand scalars either side of the diagonal): it is gathered as a
-// band, handed to the sparse solver column by column in the order it stores them, and
-// factorised in its natural order (a band has no fill outside itself; a fill-reducing ordering
-// cost more than the factorisation).
-std::vector<Eigen::Vector3d> pair_velocities(const Spline& sp, const std::vector<PairSums>& pairs) {
+// The normal matrix of the spline's control points: the pairs' N through the spline's weights
+// and a light penalty on the second difference of the control points (it decides only where
+// the data leave a direction free: a stretch without pairs, a component no pair shows). A
+// pair's time touches four consecutive control points and the penalty three, so it is banded
+// (kBand scalars either side of the diagonal), gathered and factorised as a band.
+BandCholesky velocity_normal(const Spline& sp, const std::vector<PairSums>& pairs) {
   const int n = 3 * sp.controls();
   Eigen::MatrixXd band = Eigen::MatrixXd::Zero(kBand + 1, n);  // band(i - j + kBand, j) = A(i, j), i <= j
   auto add = [&](int i, int j, double v) {
     if (i <= j) band(i - j + kBand, j) += v;
   };
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
   double trace = 0;
   for (const PairSums& p : pairs) {
     std::array<double, 4> w;
     const int j = sp.first(p.t, w);
+    // (w w^T) kron N, its upper triangle: the blocks above the diagonal whole, those on it half.
     for (int a = 0; a < 4; ++a) {
-      rhs.segment<3>(3 * (j + a)) += w[a] * p.b;
-      for (int c = 0; c < 4; ++c)
-        for (int x = 0; x < 3; ++x)
-          for (int y = 0; y < 3; ++y) add(3 * (j + a) + x, 3 * (j + c) + y, w[a] * w[c] * p.N(x, y));
+      for (int x = 0; x < 3; ++x)
+        for (int y = x; y < 3; ++y) band(kBand + x - y, 3 * (j + a) + y) += w[a] * w[a] * p.N(x, y);
+      for (int c = a + 1; c < 4; ++c)
+        for (int y = 0; y < 3; ++y)
+          for (int x = 0; x < 3; ++x) band(kBand + 3 * (a - c) + x - y, 3 * (j + c) + y) += w[a] * w[c] * p.N(x, y);
     }
     trace += p.N.trace();
   }
@@ -87,28 +84,38 @@ std::vector<Eigen::Vector3d> pair_velocities(const Spline& sp, const std::vector
         for (int x = 0; x < 3; ++x) add(3 * (k + a) + x, 3 * (k + c) + x, lambda * d[a] * d[c]);
   }
   band.row(kBand).array() += ridge;
-  Eigen::SparseMatrix<double> A(n, n);
-  A.reserve(Eigen::VectorXi::Constant(n, kBand + 1));
-  for (int j = 0; j < n; ++j)
-    for (int i = std::max(0, j - kBand); i <= j; ++i) A.insert(i, j) = band(i - j + kBand, j);
-  std::vector<Eigen::Vector3d> u(pairs.size(), Eigen::Vector3d::Zero());
-  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt(A);
-  if (ldlt.info() != Eigen::Success) return u;
-  const Eigen::VectorXd c = ldlt.solve(rhs);
+  return BandCholesky(std::move(band));
+}
+
+// Each pair's velocity over depth (world axes; rows 3q..3q+2 pair q's, a column per column of
+// the right-hand sides B, laid out alike) from the spline's control points minimising the
+// pairs' squared residuals (their N and B), velocity_normal of the same pairs; zero where the
+// normal matrix is not positive definite.
+Eigen::MatrixXd pair_velocities(const Spline& sp, const std::vector<PairSums>& pairs, const Eigen::MatrixXd& B) {
+  Eigen::MatrixXd U = Eigen::MatrixXd::Zero(B.rows(), B.cols());
+  const BandCholesky normal = velocity_normal(sp, pairs);
+  if (!normal.ok()) return U;
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(normal.size(), B.cols());
+  std::array<double, 4> w;
   for (size_t q = 0; q < pairs.size(); ++q) {
-    std::array<double, 4> w;
     const int j = sp.first(pairs[q].t, w);
-    for (int a = 0; a < 4; ++a) u[q] += w[a] * c.segment<3>(3 * (j + a));
+    for (int a = 0; a < 4; ++a) c.middleRows<3>(3 * (j + a)) += w[a] * B.middleRows<3>(3 * q);
   }
-  return u;
+  normal.solve(c);
+  for (size_t q = 0; q < pairs.size(); ++q) {
+    const int j = sp.first(pairs[q].t, w);
+    for (int a = 0; a < 4; ++a) U.middleRows<3>(3 * q) += w[a] * c.middleRows<3>(3 * (j + a));
+  }
+  return U;
 }
 
 // The pairs' normal equations over the inliers `in` (observations in pair order, flow(k) the
 // 2 x 3 flow of observation k per unit velocity, rk(k) its residual), summed in registers over
 // each pair's run of observations and stored once.
 template <class Flow, class Residual>
-void pair_sums(std::vector<PairSums>& pairs, const std::vector<int>& pair_of, const std::vector<bool>& in, const Flow& flow,
-               const Residual& rk) {
+void pair_sums(std::vector<PairSums>& pairs, Eigen::MatrixXd& B, const std::vector<int>& pair_of, const std::vector<bool>& in,
+               const Flow& flow, const Residual& rk) {
+  B.setZero(3 * static_cast<Eigen::Index>(pairs.size()), 1);
   for (size_t k = 0; k < pair_of.size();) {
     const int q = pair_of[k];
     Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
@@ -118,22 +125,22 @@ void pair_sums(std::vector<PairSums>& pairs, const std::vector<int>& pair_of, co
       const Eigen::Matrix<double, 2, 3> Jk = flow(k);
       N += Jk.transpose() * Jk, b += Jk.transpose() * rk(k);
     }
-    pairs[q].N = N, pairs[q].b = b;
+    pairs[q].N = N, B.middleRows<3>(3 * q) = b;
   }
 }
 
 // The scene's slope g (inverse depth 1 + g . xn over the depth at the optical axis) that best
-// explains the inliers' residuals given the translations u: r - f = (g . xn) f, f = J u per
+// explains the inliers' residuals given the translations U: r - f = (g . xn) f, f = J u per
 // observation, linear in g. A light ridge keeps g at zero where the translation shows none.
 template <class Residual>
 Eigen::Vector2d scene_slope(const std::vector<Eigen::Matrix<double, 2, 3>>& J, const std::vector<Eigen::Vector2d>& xn,
-                            const std::vector<int>& pair_of, const std::vector<Eigen::Vector3d>& u, const std::vector<bool>& in,
+                            const std::vector<int>& pair_of, const Eigen::MatrixXd& U, const std::vector<bool>& in,
                             const Residual& r) {
   Eigen::Matrix2d N = Eigen::Matrix2d::Zero();
   Eigen::Vector2d b = Eigen::Vector2d::Zero();
   for (size_t k = 0; k < J.size(); ++k) {
     if (!in[k]) continue;
-    const Eigen::Vector2d f = J[k] * u[pair_of[k]];
+    const Eigen::Vector2d f = J[k] * U.middleRows<3>(3 * pair_of[k]);
     const Eigen::Matrix2d A = f * xn[k].transpose();  // d(flow)/dg
     N += A.transpose() * A, b += A.transpose() * (r(k) - f);
   }
@@ -229,20 +236,20 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   // hundreds). From the second on, the scene's slope too (scene_slope): one plane's inverse
   // depth is affine in the normalised image coordinates, and a ground ahead of a forward-flying
   // drone or a car leaves, at one depth, pixels of parallax growing towards the image's bottom.
-  std::vector<Eigen::Vector3d> u(pairs.size(), Eigen::Vector3d::Zero());
+  Eigen::MatrixXd U = Eigen::MatrixXd::Zero(3 * static_cast<Eigen::Index>(pairs.size()), 1), B;
   std::vector<double> len(n);
   s.in.assign(n, false);
   auto depth_factor = [&](size_t k) { return 1.0 + s.slope.dot(s.xn[k]); };
-  auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * (J[k] * u[s.pair_of[k]])); };
+  auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * (J[k] * U.middleRows<3>(3 * s.pair_of[k]))); };
   auto left = [&](size_t k) { return Eigen::Vector2d(rk[k] - flow(k)); };
   for (int pass = 0; pass < 4; ++pass) {
     for (size_t k = 0; k < n; ++k) len[k] = left(k).norm();
     const double limit = 4 * std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6);
     for (size_t k = 0; k < n; ++k) s.in[k] = len[k] <= limit;
-    if (pass >= 1) s.slope = scene_slope(J, s.xn, s.pair_of, u, s.in, [&](size_t k) { return rk[k]; });
-    pair_sums(pairs, s.pair_of, s.in, [&](size_t k) { return Eigen::Matrix<double, 2, 3>(depth_factor(k) * J[k]); },
+    if (pass >= 1) s.slope = scene_slope(J, s.xn, s.pair_of, U, s.in, [&](size_t k) { return rk[k]; });
+    pair_sums(pairs, B, s.pair_of, s.in, [&](size_t k) { return Eigen::Matrix<double, 2, 3>(depth_factor(k) * J[k]); },
               [&](size_t k) { return rk[k]; });
-    u = pair_velocities(sp, pairs);
+    U = pair_velocities(sp, pairs, B);
   }
   for (size_t k = 0; k < n; ++k) r[s.position[k]] = left(k);
   if (keep) keep->state = st;
@@ -263,9 +270,32 @@ void remove_fitted_translation(const DiagnosisModel& m, const std::vector<int>& 
   auto flow = [&](size_t k) {
     return Eigen::Matrix<double, 2, 3>((1.0 + s.slope.dot(s.xn[k])) * (s.unit[k] * pairs[s.pair_of[k]].turn));
   };
-  pair_sums(pairs, s.pair_of, in, flow, [&](size_t k) { return r[s.position[k]]; });
-  const std::vector<Eigen::Vector3d> u = pair_velocities(sp, pairs);
-  for (size_t k = 0; k < s.position.size(); ++k) r[s.position[k]] -= flow(k) * u[s.pair_of[k]];
+  Eigen::MatrixXd B;
+  pair_sums(pairs, B, s.pair_of, in, flow, [&](size_t k) { return r[s.position[k]]; });
+  const Eigen::MatrixXd U = pair_velocities(sp, pairs, B);
+  for (size_t k = 0; k < s.position.size(); ++k) r[s.position[k]] -= flow(k) * U.middleRows<3>(3 * s.pair_of[k]);
+}
+
+void remove_fitted_translation_from_columns(const DiagnosisModel& m, const std::vector<int>& idx, Eigen::MatrixXd& cols,
+                                            const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t,
+                                            double knot_s, const TranslationFit& fit) {
+  if (!fit.state || cols.cols() == 0) return;
+  const TranslationFit::State& s = *fit.state;
+  if (static_cast<size_t>(cols.rows()) != 2 * s.size || idx.size() != s.size)
+    throw std::invalid_argument("remove_fitted_translation_from_columns: columns of other observations than the fit's");
+  std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
+  const Spline sp = spline_over(pairs, knot_s);
+  auto rows = [&](size_t k) { return cols.middleRows<2>(2 * static_cast<Eigen::Index>(s.position[k])); };
+  std::vector<Eigen::Matrix<double, 2, 3>> F(s.position.size());
+  for (size_t k = 0; k < F.size(); ++k) F[k] = (1.0 + s.slope.dot(s.xn[k])) * (s.unit[k] * pairs[s.pair_of[k]].turn);
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3 * static_cast<Eigen::Index>(pairs.size()), cols.cols());
+  for (size_t k = 0; k < F.size(); ++k) {
+    if (!s.in[k] || !rows(k).allFinite()) continue;
+    const int q = s.pair_of[k];
+    pairs[q].N += F[k].transpose() * F[k], B.middleRows<3>(3 * q) += F[k].transpose() * rows(k);
+  }
+  const Eigen::MatrixXd U = pair_velocities(sp, pairs, B);
+  for (size_t k = 0; k < F.size(); ++k) rows(k) -= F[k] * U.middleRows<3>(3 * s.pair_of[k]);
 }
 
 double translation_knot_spacing(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p) {

@@ -76,6 +76,19 @@ void remove_fitted_translation(const DiagnosisModel& m, const std::vector<int>& 
                                const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s,
                                const TranslationFit& fit);
 
+// The part of remove_fitted_translation that is linear in the residuals, taken out of every
+// column of `cols` (2 x idx.size() rows: observation k's in rows 2k and 2k + 1) with one
+// factorisation: the velocity spline fitted to each column as to residuals, with `fit`'s inliers
+// and slope, at the pairs' turns of `track`, `tm`, `mount_t`. A Jacobian column by a parameter
+// that does not move the turns (the line delay, the intrinsics, the lens: not the clock's
+// offset or drift, the mount, the gyro) is so the column of remove_fitted_translation's
+// residuals, exactly (fit.cpp). An observation whose column has a NaN is left out of the fit;
+// nothing without `fit`'s state. Throws std::invalid_argument when idx or `cols` is not of the
+// size `fit` was fitted to.
+void remove_fitted_translation_from_columns(const DiagnosisModel& m, const std::vector<int>& idx, Eigen::MatrixXd& cols,
+                                            const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t,
+                                            double knot_s, const TranslationFit& fit);
+
 // The knot spacing for the translation nuisance of `p` (its translation_nuisance on; the richest
 // rotation fit, every applicable effect free, so that a finer spline is not asked to take what an
 // effect explains) on the observations idx: kTranslationKnotsS in turn while the finer spline

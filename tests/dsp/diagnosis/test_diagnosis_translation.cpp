@@ -3,7 +3,8 @@
 // ground ahead is (at the true model the noise is left); it cannot take up what a clock offset
 // leaves (a free translation per frame pair took up most of it); a hand-held shake faster than
 // the default knots gets finer ones, a flight keeps the default; a Jacobian step with the
-// translation's inliers and slope held agrees with the translation fitted again. Whole
+// translation's inliers and slope held agrees with the translation fitted again, and is linear
+// for the parameters that leave the frame pairs' turns. Whole
 // diagnoses under it: test_translation_diagnoses.cpp.
 #include <gtest/gtest.h>
 
@@ -150,6 +151,56 @@ TEST(Translation, AJacobianStepWithTheInliersHeldMatchesTheTranslationFittedAgai
   EXPECT_THROW(remove_fitted_translation(m, idx, fewer, track, TimeModel{}, Eigen::Matrix3d::Identity(), kTranslationKnotS,
                                          taken.translation),
                std::invalid_argument);
+}
+
+// Where a parameter leaves the frame pairs' turns (the line delay, the intrinsics, the lens), the
+// held translation pass is linear in the residuals: the change it makes of the rotation model's
+// change is the change of residuals_near, to rounding (the fits' Jacobian takes these columns
+// so, all with one factorisation). A parameter that moves the turns (the clock's offset) does
+// not pass through it so, as moves_translation_pass says.
+TEST(Translation, TheHeldPassTakesAColumnThatLeavesThePairsTurnsLinearly) {
+  SimConfig c = forward_flight(8, 15.0);
+  c.unmodelled.scene_slope = kGround;
+  c.effects.time_offset_s = 0.01;
+  const SimulatedRecording sim = simulate_recording(c);
+  const DiagnosisModel m(sim.rec);
+  const auto all = every_observation(m);
+  const ModelParams p = with_offset(sim, 0.01, true);
+  DiagnosisModel::Settled taken;
+  const auto base = m.residuals(p, all, taken);
+  ModelParams p_plain = p;
+  p_plain.translation_nuisance = false;
+  const auto raw_p = m.residuals(p_plain, all);
+  struct Step {
+    Param q;
+    double h;
+  };
+  for (const Step st : {Step{Param::LineDelay, 1e-7}, Step{Param::Fx, 2.0}, Step{Param::K1, 1e-3}, Step{Param::Cy, 2.0},
+                        Step{Param::TimeOffset, 1e-3}}) {
+    ModelParams q = p;
+    q[st.q] += st.h;
+    ModelParams q_plain = q;
+    q_plain.translation_nuisance = false;
+    const auto raw_q = m.residuals(q_plain, all), near = m.residuals_near(q, all, taken);
+    Eigen::MatrixXd cols = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(all.size()), 1);
+    for (size_t k = 0; k < all.size(); ++k) cols.block<2, 1>(2 * k, 0) = raw_q[k] - raw_p[k];
+    m.translation_out_of_columns(q, all, cols, taken);
+    double diff = 0, size = 0;
+    for (size_t k = 0; k < all.size(); ++k) {
+      if (!base[k].allFinite() || !near[k].allFinite() || !raw_q[k].allFinite()) continue;
+      const Eigen::Vector2d change = near[k] - base[k];
+      diff = std::max(diff, (cols.block<2, 1>(2 * k, 0) - change).norm()), size = std::max(size, change.norm());
+    }
+    ASSERT_GT(size, 1e-3) << param_name(st.q);
+    if (DiagnosisModel::moves_translation_pass(st.q)) EXPECT_GT(diff, 1e-3 * size) << param_name(st.q);
+    else EXPECT_LT(diff, 1e-6 * size) << param_name(st.q);
+  }
+  for (Param q : {Param::LineDelay, Param::Fx, Param::Fy, Param::Cx, Param::Cy, Param::K1, Param::K2, Param::K3, Param::K4})
+    EXPECT_FALSE(DiagnosisModel::moves_translation_pass(q)) << param_name(q);
+  for (Param q : {Param::TimeOffset, Param::Drift, Param::MountX, Param::BiasY, Param::ScaleZ})
+    EXPECT_TRUE(DiagnosisModel::moves_translation_pass(q)) << param_name(q);
+  Eigen::MatrixXd wrong = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(all.size()) - 2, 1);
+  EXPECT_THROW(m.translation_out_of_columns(p, all, wrong, taken), std::invalid_argument);
 }
 
 TEST(Translation, AShakeFasterThanTheKnotsGetsFinerKnotsAndAFlightKeepsItsOwn) {
