@@ -387,10 +387,11 @@ std::vector<Eigen::Vector2d> DiagnosisModel::translation_out(const ModelParams& 
 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx,
                                                        Settled& settled) const {
-  settled.translation.state.reset();
   std::vector<Eigen::Vector2d> r = rotation_residuals(p, idx, &settled, nullptr);
   const bool nuisance = rec_.kind == ObservationKind::Matches && p.translation_nuisance;
   settled.rotation = nuisance ? r : std::vector<Eigen::Vector2d>{};
+  // What settled there before is remove_translation's hint (its frame pairs' grouping).
+  if (!nuisance) settled.translation.state.reset();
   return translation_out(p, idx, std::move(r), &settled.translation);
 }
 

@@ -109,7 +109,8 @@ class DiagnosisModel {
     // Under the translation nuisance: the residuals before the translation was taken out.
     std::vector<Eigen::Vector2d> rotation;
   };
-  // As residuals(p, idx), and what they settled on goes to `settled`.
+  // As residuals(p, idx), and what they settled on goes to `settled` (what it held, settled on the
+  // same idx, speeds the translation up: remove_translation's hint).
   std::vector<Eigen::Vector2d> residuals(const ModelParams& p, const std::vector<int>& idx, Settled& settled) const;
   // As residuals(p, idx), at parameters near those `near` was settled at on the same idx: each
   // match's fixed point starts from its solution there (two projections, not three; the row

@@ -152,22 +152,37 @@ Eigen::Vector2d scene_slope(const std::vector<Eigen::Matrix<double, 2, 3>>& J, c
 
 // The observations of one set of residuals, grouped by frame pair (frame_a's rank and frame_b's
 // time: a frame may be matched to more than one other), with what their translation flow needs.
-struct TranslationFit::State {
-  size_t size = 0;               // the residuals it was fitted to
-  std::vector<size_t> position;  // per observation taken, in pair order: its place in them
+// It depends only on which observations had a residual: a fit asks for the same grouping at every
+// trial point, and the one its last residuals settled on is taken again when it is the same.
+struct PairGroups {
+  std::vector<int> idx;          // the observations grouped
+  std::vector<bool> finite;      // which of them had a residual
+  std::vector<size_t> position;  // per observation taken, in pair order: its place in idx
   std::vector<int> pair_of;      // its pair
   std::vector<Eigen::Matrix<double, 2, 3>> unit;  // its flow per unit translation, camera axes
   std::vector<Eigen::Vector2d> xn;  // its normalised image coordinates
-  std::vector<size_t> pair_first;   // each pair's first observation (position in the residuals)
-  std::vector<bool> in;             // after the passes: whether it was an inlier of the last
+  std::vector<size_t> pair_first;   // each pair's first observation (position in idx)
+  bool same(const std::vector<int>& of, const std::vector<Eigen::Vector2d>& r) const {
+    if (of != idx || r.size() != finite.size()) return false;
+    for (size_t k = 0; k < r.size(); ++k)
+      if (r[k].allFinite() != finite[k]) return false;
+    return true;
+  }
+};
+
+struct TranslationFit::State {
+  std::shared_ptr<const PairGroups> groups;
+  std::vector<bool> in;  // after the passes: whether each grouped observation was an inlier of the last
   Eigen::Vector2d slope = Eigen::Vector2d::Zero();  // after the passes: the scene's slope
 };
 
 namespace {
 
-// The observations of `r` that have a residual, by pair.
-std::shared_ptr<TranslationFit::State> group_by_pair(const DiagnosisModel& m, const std::vector<int>& idx,
-                                                     const std::vector<Eigen::Vector2d>& r) {
+// The observations of `r` that have a residual, by pair: `prior`'s when it grouped the same.
+std::shared_ptr<const PairGroups> group_by_pair(const DiagnosisModel& m, const std::vector<int>& idx,
+                                                const std::vector<Eigen::Vector2d>& r, const PairGroups* prior,
+                                                const std::shared_ptr<const PairGroups>& prior_owner) {
+  if (prior && prior->same(idx, r)) return prior_owner;
   struct Member {
     int rank;
     double t_b;
@@ -180,9 +195,11 @@ std::shared_ptr<TranslationFit::State> group_by_pair(const DiagnosisModel& m, co
   for (size_t k = 0; k < idx.size(); ++k)
     if (r[k].allFinite()) by_pair.push_back({m.frame_rank(idx[k]), m.frame_time_b(idx[k]), k});
   std::sort(by_pair.begin(), by_pair.end());
-  auto s = std::make_shared<TranslationFit::State>();
+  auto s = std::make_shared<PairGroups>();
   const CameraModel& cam = m.recording().nominal.cam;
-  s->size = r.size();
+  s->idx = idx;
+  s->finite.resize(r.size());
+  for (size_t k = 0; k < r.size(); ++k) s->finite[k] = r[k].allFinite();
   for (size_t k = 0; k < by_pair.size(); ++k) {
     const size_t at = by_pair[k].second;
     const Eigen::Vector2d px = m.observed(idx[at]);
@@ -197,7 +214,7 @@ std::shared_ptr<TranslationFit::State> group_by_pair(const DiagnosisModel& m, co
 
 // Each pair's time on the spline and how a velocity (world axes) turns into its translation
 // over depth (camera axes), at the parameters of `track`, `tm`, `mount_t`.
-std::vector<PairSums> pairs_at(const DiagnosisModel& m, const std::vector<int>& idx, const TranslationFit::State& s,
+std::vector<PairSums> pairs_at(const DiagnosisModel& m, const std::vector<int>& idx, const PairGroups& s,
                                const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t) {
   std::vector<PairSums> pairs(s.pair_first.size());
   for (size_t q = 0; q < pairs.size(); ++q) {
@@ -220,9 +237,12 @@ Spline spline_over(const std::vector<PairSums>& pairs, double knot_s) {
 void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
                         const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s,
                         TranslationFit* keep) {
-  if (keep) keep->state.reset();
-  const std::shared_ptr<TranslationFit::State> st = group_by_pair(m, idx, r);
-  TranslationFit::State& s = *st;
+  std::shared_ptr<const TranslationFit::State> prior;
+  if (keep) prior = std::move(keep->state), keep->state.reset();
+  auto st = std::make_shared<TranslationFit::State>();
+  st->groups = group_by_pair(m, idx, r, prior ? prior->groups.get() : nullptr, prior ? prior->groups : nullptr);
+  TranslationFit::State& fit = *st;
+  const PairGroups& s = *fit.groups;
   if (s.position.empty()) return;
   std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
   const Spline sp = spline_over(pairs, knot_s);
@@ -238,16 +258,16 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   // drone or a car leaves, at one depth, pixels of parallax growing towards the image's bottom.
   Eigen::MatrixXd U = Eigen::MatrixXd::Zero(3 * static_cast<Eigen::Index>(pairs.size()), 1), B;
   std::vector<double> len(n);
-  s.in.assign(n, false);
-  auto depth_factor = [&](size_t k) { return 1.0 + s.slope.dot(s.xn[k]); };
+  fit.in.assign(n, false);
+  auto depth_factor = [&](size_t k) { return 1.0 + fit.slope.dot(s.xn[k]); };
   auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * (J[k] * U.middleRows<3>(3 * s.pair_of[k]))); };
   auto left = [&](size_t k) { return Eigen::Vector2d(rk[k] - flow(k)); };
   for (int pass = 0; pass < 4; ++pass) {
     for (size_t k = 0; k < n; ++k) len[k] = left(k).norm();
     const double limit = 4 * std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6);
-    for (size_t k = 0; k < n; ++k) s.in[k] = len[k] <= limit;
-    if (pass >= 1) s.slope = scene_slope(J, s.xn, s.pair_of, U, s.in, [&](size_t k) { return rk[k]; });
-    pair_sums(pairs, B, s.pair_of, s.in, [&](size_t k) { return Eigen::Matrix<double, 2, 3>(depth_factor(k) * J[k]); },
+    for (size_t k = 0; k < n; ++k) fit.in[k] = len[k] <= limit;
+    if (pass >= 1) fit.slope = scene_slope(J, s.xn, s.pair_of, U, fit.in, [&](size_t k) { return rk[k]; });
+    pair_sums(pairs, B, s.pair_of, fit.in, [&](size_t k) { return Eigen::Matrix<double, 2, 3>(depth_factor(k) * J[k]); },
               [&](size_t k) { return rk[k]; });
     U = pair_velocities(sp, pairs, B);
   }
@@ -259,16 +279,17 @@ void remove_fitted_translation(const DiagnosisModel& m, const std::vector<int>& 
                                const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s,
                                const TranslationFit& fit) {
   if (!fit.state) return remove_translation(m, idx, r, track, tm, mount_t, knot_s);
-  const TranslationFit::State& s = *fit.state;
-  if (r.size() != s.size || idx.size() != s.size)
+  const PairGroups& s = *fit.state->groups;
+  if (r.size() != s.idx.size() || idx.size() != s.idx.size())
     throw std::invalid_argument("remove_fitted_translation: residuals of other observations than the fit's");
   std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
   const Spline sp = spline_over(pairs, knot_s);
   // An observation the fit had whose prediction fails here is left out of it (and stays NaN).
-  std::vector<bool> in = s.in;
+  std::vector<bool> in = fit.state->in;
   for (size_t k = 0; k < in.size(); ++k) in[k] = in[k] && r[s.position[k]].allFinite();
+  const Eigen::Vector2d slope = fit.state->slope;
   auto flow = [&](size_t k) {
-    return Eigen::Matrix<double, 2, 3>((1.0 + s.slope.dot(s.xn[k])) * (s.unit[k] * pairs[s.pair_of[k]].turn));
+    return Eigen::Matrix<double, 2, 3>((1.0 + slope.dot(s.xn[k])) * (s.unit[k] * pairs[s.pair_of[k]].turn));
   };
   Eigen::MatrixXd B;
   pair_sums(pairs, B, s.pair_of, in, flow, [&](size_t k) { return r[s.position[k]]; });
@@ -280,17 +301,19 @@ void remove_fitted_translation_from_columns(const DiagnosisModel& m, const std::
                                             const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t,
                                             double knot_s, const TranslationFit& fit) {
   if (!fit.state || cols.cols() == 0) return;
-  const TranslationFit::State& s = *fit.state;
-  if (static_cast<size_t>(cols.rows()) != 2 * s.size || idx.size() != s.size)
+  const PairGroups& s = *fit.state->groups;
+  const std::vector<bool>& in = fit.state->in;
+  const Eigen::Vector2d slope = fit.state->slope;
+  if (static_cast<size_t>(cols.rows()) != 2 * s.idx.size() || idx.size() != s.idx.size())
     throw std::invalid_argument("remove_fitted_translation_from_columns: columns of other observations than the fit's");
   std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
   const Spline sp = spline_over(pairs, knot_s);
   auto rows = [&](size_t k) { return cols.middleRows<2>(2 * static_cast<Eigen::Index>(s.position[k])); };
   std::vector<Eigen::Matrix<double, 2, 3>> F(s.position.size());
-  for (size_t k = 0; k < F.size(); ++k) F[k] = (1.0 + s.slope.dot(s.xn[k])) * (s.unit[k] * pairs[s.pair_of[k]].turn);
+  for (size_t k = 0; k < F.size(); ++k) F[k] = (1.0 + slope.dot(s.xn[k])) * (s.unit[k] * pairs[s.pair_of[k]].turn);
   Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3 * static_cast<Eigen::Index>(pairs.size()), cols.cols());
   for (size_t k = 0; k < F.size(); ++k) {
-    if (!s.in[k] || !rows(k).allFinite()) continue;
+    if (!in[k] || !rows(k).allFinite()) continue;
     const int q = s.pair_of[k];
     pairs[q].N += F[k].transpose() * F[k], B.middleRows<3>(3 * q) += F[k].transpose() * rows(k);
   }

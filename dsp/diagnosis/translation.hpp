@@ -48,7 +48,9 @@ inline constexpr double kFinerKnotsGain = 0.10;
 // track.camera_at(tm.motion_time(T)) mount_t, mount_t the transpose of the mount rotation
 // (model.cpp, "Matches").
 //
-// What it took out goes to `keep` when given (see TranslationFit).
+// What it took out goes to `keep` when given (see TranslationFit). What `keep` held before is a
+// hint: its grouping of the observations by frame pair is taken again when it grouped the same
+// observations with the same residuals finite (a fit's trial points: a tenth of their time).
 struct TranslationFit;
 void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
                         const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t,
