@@ -301,7 +301,7 @@ bool drop_latest_first(State& s, std::vector<SelectedEffect>& steps, Judge judge
 // that clips) fits one half's structure and mispredicts the other's; the latest pick first.
 bool consistency(const Selector& sel, State& s, std::vector<SelectedEffect>& steps) {
   return drop_latest_first(s, steps, [&](Effect e) -> std::optional<State> {
-    State without = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
+    const State without = sel.without_for_judging(s, e);
     double time_drop = 0, rate_drop = 0, apart = 0;
     const bool holds = sel.consistent(without, s, time_drop, rate_drop, apart);
     for (SelectedEffect& st : steps)
@@ -310,7 +310,7 @@ bool consistency(const Selector& sel, State& s, std::vector<SelectedEffect>& ste
     if (sel.opt_.progress)
       sel.opt_.progress(std::string("dropped ") + effect_name(e) + ": it does not hold on the blocked halves" +
                         (apart > kHalvesAgreeSigmas ? " (they put its value " + std::to_string(std::lround(apart)) + " sigmas apart)" : ""));
-    return without;
+    return sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
   });
 }
 
@@ -337,8 +337,7 @@ void each_improves_held_out(const Selector& sel, State& s, std::vector<SelectedE
                             std::vector<std::string>& withheld) {
   if (sel.held_.empty()) return;
   drop_latest_first(s, steps, [&](Effect e) -> std::optional<State> {
-    State without = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
-    const double drop = sel.heldout_drop(without, s);
+    const double drop = sel.heldout_drop(sel.without_for_judging(s, e), s);
     for (SelectedEffect& st : steps)
       if (st.effect == e) st.heldout_given_others = drop;
     if (drop > 0) return std::nullopt;
@@ -347,7 +346,7 @@ void each_improves_held_out(const Selector& sel, State& s, std::vector<SelectedE
         << "chi-square is " << std::lround(-drop) << " higher with it)";
     withheld.push_back(why.str());
     if (sel.opt_.progress) sel.opt_.progress(withheld.back());
-    return without;
+    return sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
   });
 }
 
