@@ -93,6 +93,23 @@ TEST(Translation, TheVelocitySplineCannotTakeUpAClockOffset) {
   EXPECT_GT(after / before, 0.6);
 }
 
+// A flight over a tilted ground with a 10 ms clock offset, its residuals under the nuisance at
+// the true offset, and what they settled on (the two tests of the fits' Jacobian steps below).
+struct GroundFlight {
+  static SimConfig config() {
+    SimConfig c = forward_flight(8, 15.0);
+    c.unmodelled.scene_slope = kGround;
+    c.effects.time_offset_s = 0.01;
+    return c;
+  }
+  const SimulatedRecording sim = simulate_recording(config());
+  const DiagnosisModel m{sim.rec};
+  const std::vector<int> all = every_observation(m);
+  const ModelParams p = with_offset(sim, 0.01, true);
+  DiagnosisModel::Settled taken;
+  const std::vector<Eigen::Vector2d> base = m.residuals(p, all, taken);
+};
+
 // A fit's finite-difference Jacobian under the nuisance steps with the translation's inliers and
 // slope held as they settled at the point (DiagnosisModel::residuals_near): at the point itself
 // that is the same residual, and a step's change agrees with the one the translation fitted
@@ -103,15 +120,12 @@ TEST(Translation, TheVelocitySplineCannotTakeUpAClockOffset) {
 // model's whole change (the fit's trial steps use the exact residuals: that costs iterations,
 // not accuracy).
 TEST(Translation, AJacobianStepWithTheInliersHeldMatchesTheTranslationFittedAgain) {
-  SimConfig c = forward_flight(8, 15.0);
-  c.unmodelled.scene_slope = kGround;
-  c.effects.time_offset_s = 0.01;
-  const SimulatedRecording sim = simulate_recording(c);
-  const DiagnosisModel m(sim.rec);
-  const auto all = every_observation(m);
-  const ModelParams p = with_offset(sim, 0.01, true);
-  DiagnosisModel::Settled taken;
-  const auto base = m.residuals(p, all, taken);
+  GroundFlight f;
+  const DiagnosisModel& m = f.m;
+  const std::vector<int>& all = f.all;
+  const std::vector<Eigen::Vector2d>& base = f.base;
+  const ModelParams& p = f.p;
+  DiagnosisModel::Settled& taken = f.taken;
   ASSERT_TRUE(taken.translation.state);
   const auto again = m.residuals_near(p, all, taken);
   double worst = 0;
@@ -155,19 +169,16 @@ TEST(Translation, AJacobianStepWithTheInliersHeldMatchesTheTranslationFittedAgai
 
 // Where a parameter leaves the frame pairs' turns (the line delay, the intrinsics, the lens), the
 // held translation pass is linear in the residuals: the change it makes of the rotation model's
-// change is the change of residuals_near, to rounding (the fits' Jacobian takes these columns
-// so, all with one factorisation). A parameter that moves the turns (the clock's offset) does
+// change is the change of residuals_near, to the rolling-shutter rows' settling (1e-8 of it; the
+// fits' Jacobian takes these columns so, all with one factorisation). A parameter that moves the turns (the clock's offset) does
 // not pass through it so, as moves_translation_pass says.
 TEST(Translation, TheHeldPassTakesAColumnThatLeavesThePairsTurnsLinearly) {
-  SimConfig c = forward_flight(8, 15.0);
-  c.unmodelled.scene_slope = kGround;
-  c.effects.time_offset_s = 0.01;
-  const SimulatedRecording sim = simulate_recording(c);
-  const DiagnosisModel m(sim.rec);
-  const auto all = every_observation(m);
-  const ModelParams p = with_offset(sim, 0.01, true);
-  DiagnosisModel::Settled taken;
-  const auto base = m.residuals(p, all, taken);
+  GroundFlight f;
+  const DiagnosisModel& m = f.m;
+  const std::vector<int>& all = f.all;
+  const std::vector<Eigen::Vector2d>& base = f.base;
+  const ModelParams& p = f.p;
+  DiagnosisModel::Settled& taken = f.taken;
   ModelParams p_plain = p;
   p_plain.translation_nuisance = false;
   const auto raw_p = m.residuals(p_plain, all);
