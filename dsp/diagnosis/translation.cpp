@@ -180,9 +180,9 @@ namespace {
 
 // The observations of `r` that have a residual, by pair: `prior`'s when it grouped the same.
 std::shared_ptr<const PairGroups> group_by_pair(const DiagnosisModel& m, const std::vector<int>& idx,
-                                                const std::vector<Eigen::Vector2d>& r, const PairGroups* prior,
-                                                const std::shared_ptr<const PairGroups>& prior_owner) {
-  if (prior && prior->same(idx, r)) return prior_owner;
+                                                const std::vector<Eigen::Vector2d>& r,
+                                                const std::shared_ptr<const PairGroups>& prior) {
+  if (prior && prior->same(idx, r)) return prior;
   struct Member {
     int rank;
     double t_b;
@@ -240,7 +240,7 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   std::shared_ptr<const TranslationFit::State> prior;
   if (keep) prior = std::move(keep->state), keep->state.reset();
   auto st = std::make_shared<TranslationFit::State>();
-  st->groups = group_by_pair(m, idx, r, prior ? prior->groups.get() : nullptr, prior ? prior->groups : nullptr);
+  st->groups = group_by_pair(m, idx, r, prior ? prior->groups : nullptr);
   TranslationFit::State& fit = *st;
   const PairGroups& s = *fit.groups;
   if (s.position.empty()) return;

@@ -121,11 +121,7 @@ struct GroundFlight {
 // not accuracy).
 TEST(Translation, AJacobianStepWithTheInliersHeldMatchesTheTranslationFittedAgain) {
   GroundFlight f;
-  const DiagnosisModel& m = f.m;
-  const std::vector<int>& all = f.all;
-  const std::vector<Eigen::Vector2d>& base = f.base;
-  const ModelParams& p = f.p;
-  DiagnosisModel::Settled& taken = f.taken;
+  auto& [sim, m, all, p, taken, base] = f;
   ASSERT_TRUE(taken.translation.state);
   const auto again = m.residuals_near(p, all, taken);
   double worst = 0;
@@ -174,11 +170,7 @@ TEST(Translation, AJacobianStepWithTheInliersHeldMatchesTheTranslationFittedAgai
 // not pass through it so, as moves_translation_pass says.
 TEST(Translation, TheHeldPassTakesAColumnThatLeavesThePairsTurnsLinearly) {
   GroundFlight f;
-  const DiagnosisModel& m = f.m;
-  const std::vector<int>& all = f.all;
-  const std::vector<Eigen::Vector2d>& base = f.base;
-  const ModelParams& p = f.p;
-  DiagnosisModel::Settled& taken = f.taken;
+  auto& [sim, m, all, p, taken, base] = f;
   ModelParams p_plain = p;
   p_plain.translation_nuisance = false;
   const auto raw_p = m.residuals(p_plain, all);
