@@ -49,6 +49,10 @@ class LcmPublisher {
   rsd::health_t& health() { return health_; }
   void publish_health();
   lcm_t* handle() const { return lcm_; }
+  // Held around every lcm_publish through handle(); whoever else calls into the instance from
+  // another thread (the velocity input's receiving, subscribing) holds it too: LCM's tcpq
+  // provider is not thread-safe (drivers/lcm_receive.hpp).
+  std::mutex& lcm_lock() { return publish_mutex_; }
   // rsd --record: every output (rectified image, frame info, health) is also written to this
   // log, stamped with the wall clock; raw frames are the recorder's (daemon/recording_source).
   void set_recorder(formats::LcmLogWriter* log) { record_ = log; }

@@ -107,7 +107,8 @@ struct Session {
     mount_base = cfg.velocity_input.imu_to_camera;
     const std::optional<dsp::OnlineCalibration> state = load_online_state(cfg.online, mount_base);
     if (state && cfg.online.mode == OnlineMode::Apply) use_online(cfg, *state);
-    velocity_in = std::make_unique<VelocityInput>(pub->handle(), cfg.velocity_channel, velocity, cfg.velocity_input, cfg.lcm_url);
+    velocity_in = std::make_unique<VelocityInput>(pub->handle(), cfg.velocity_channel, velocity, cfg.velocity_input, cfg.lcm_url,
+                                                  &pub->lcm_lock());
     online = make_online(state);
     velocity_in->set_gyro_tap(online.get());
     velocity_in->set_clock_check(!playback() && !messages());  // a live camera: messages share its clock

@@ -70,8 +70,11 @@ class VelocityInput {
  public:
   // lcm_url: the URL `lcm` was made from; an instance that lost its tcpq hub is not unsubscribed
   // at the end (that would reconnect; the owner's drivers::destroy_lcm does it safely).
+  // lcm_lock: the lock other threads hold around their calls into `lcm` (LcmPublisher::lcm_lock),
+  // held here around subscribing, receiving (drivers::handle_lcm) and unsubscribing; null when
+  // no other thread uses the instance.
   VelocityInput(lcm_t* lcm, const std::string& channel, VelocityBuffer& buffer, VelocityInputConfig cfg = {},
-                std::string lcm_url = {});
+                std::string lcm_url = {}, std::mutex* lcm_lock = nullptr);
   ~VelocityInput();
   VelocityInput(const VelocityInput&) = delete;
   VelocityInput& operator=(const VelocityInput&) = delete;
@@ -122,6 +125,7 @@ class VelocityInput {
   void push_imu(int64_t utime_imu, const double* w_measured, const double* v, bool has_linear, bool live);
   lcm_t* lcm_;
   std::string lcm_url_;
+  std::mutex* lcm_lock_ = nullptr;  // see the constructor
   std::string channel_;
   VelocityBuffer& buffer_;
   VelocityInputConfig cfg_;

@@ -51,19 +51,30 @@ void drop_connection(int fd) {
 
 }  // namespace
 
-int handle_lcm(lcm_t* lcm, int timeout_ms, int partial_timeout_ms) {
+int handle_lcm(lcm_t* lcm, int timeout_ms, int partial_timeout_ms, std::mutex* publishing) {
+  std::unique_lock<std::mutex> lock;
+  if (publishing) lock = std::unique_lock<std::mutex>(*publishing);
   const int fd = lcm_get_fileno(lcm);
   if (fd < 0) return -1;
+  if (publishing) lock.unlock();  // waiting for the first bytes, publishing goes on
+  pollfd p{fd, POLLIN, 0};
+  const int ready = poll(&p, 1, timeout_ms);
+  if (ready < 0) return errno == EINTR ? 0 : -1;
+  if (ready == 0) return 0;
+  if (publishing) {
+    lock.lock();
+    // A publish lost the hub meanwhile (-1), or lost it and connected again: the socket polled
+    // is not the provider's (under the same number, lcm_handle_timeout finds nothing: 0).
+    const int now = lcm_get_fileno(lcm);
+    if (now < 0) return -1;
+    if (now != fd) return 0;
+  }
   // Set every time, not once per instance: a reconnected provider has a new socket (and its
   // descriptor number may be an old one's). Not a socket: ENOTSOCK, nothing to guard.
   timeval tv{};
   tv.tv_sec = partial_timeout_ms / 1000;
   tv.tv_usec = (partial_timeout_ms % 1000) * 1000;
   (void)setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-  pollfd p{fd, POLLIN, 0};
-  const int ready = poll(&p, 1, timeout_ms);
-  if (ready < 0) return errno == EINTR ? 0 : -1;
-  if (ready == 0) return 0;
   if (claims_too_much(fd)) drop_connection(fd);
   return lcm_handle_timeout(lcm, 0);
 }

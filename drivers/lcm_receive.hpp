@@ -15,13 +15,21 @@
 // (kLcmMaxChannelBytes, kLcmMaxMessageBytes); (3) never hands a provider without a descriptor
 // (tcpq after it lost its hub) to lcm_handle_timeout, whose FD_SET would abort on -1.
 //
-// Thread contract: none of its own; call it from the instance's receiving thread (the only one
-// that reads its socket: publishing from other threads only writes).
+// Thread contract: call it from the instance's receiving thread (the only one that reads its
+// socket). LCM's tcpq provider is not thread-safe: a publish that fails on a lost hub closes the
+// socket and marks it -1, and a receive that enters the provider then reconnects inside
+// lcm_handle, waiting for good on a hub that accepts and never answers, while the publishers
+// write into that connection until they block too (seen once in a hundred runs of
+// LcmHubFaults on a loaded machine). So when other threads publish through the instance, pass
+// the lock they hold around lcm_publish (`publishing`): handle_lcm holds it from the descriptor
+// check through the provider's read (not while it waits for the first bytes), so the socket it
+// checked is the one the provider reads.
 #pragma once
 
 #include <lcm/lcm.h>
 
 #include <cstdint>
+#include <mutex>
 
 namespace rsd::drivers {
 
@@ -35,7 +43,9 @@ inline constexpr uint32_t kLcmMaxMessageBytes = 256u << 20;
 
 // lcm_handle_timeout(lcm, timeout_ms) with the guards above: > 0 a message was handled, 0 none
 // came within the timeout, < 0 the connection is lost (or the provider cannot receive).
-// partial_timeout_ms bounds the rest of a message (tests and the fuzz target shorten it).
-int handle_lcm(lcm_t* lcm, int timeout_ms, int partial_timeout_ms = kLcmPartialMessageTimeoutMs);
+// partial_timeout_ms bounds the rest of a message (tests and the fuzz target shorten it), and
+// so how long `publishing` is held.
+int handle_lcm(lcm_t* lcm, int timeout_ms, int partial_timeout_ms = kLcmPartialMessageTimeoutMs,
+               std::mutex* publishing = nullptr);
 
 }  // namespace rsd::drivers

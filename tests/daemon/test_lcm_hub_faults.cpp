@@ -2,7 +2,10 @@
 // (issue 38): LCM would wait for the hub's answer for good in lcm_create, and again when a
 // publish or an unsubscribe reconnects an instance that lost its hub. The publisher refuses to
 // start naming the hub's fault; after a loss, publishing goes on (what it sends is lost, as LCM
-// loses it without a hub) and the velocity input ends; neither waits for the silent hub.
+// loses it without a hub) and the velocity input ends; neither waits for the silent hub. The
+// velocity input receives under the publisher's lock (drivers/lcm_receive.hpp): without it, a
+// receive that entered LCM's provider just after a publish lost the hub connected to the silent
+// one, and publishing blocked (once, in a clean-clone run).
 #include <gtest/gtest.h>
 
 #include <memory>
@@ -44,7 +47,8 @@ TEST(LcmHubFaults, AfterTheHubIsReplacedByASilentOnePublishingAndStoppingNeverWa
   const int port = hub->port();
   auto pub = std::make_unique<daemon::LcmPublisher>(url, daemon::Channels{}, kFormat);
   daemon::VelocityBuffer buffer;
-  auto vin = std::make_unique<daemon::VelocityInput>(pub->handle(), "RSD_VELOCITY", buffer, daemon::VelocityInputConfig{}, url);
+  auto vin = std::make_unique<daemon::VelocityInput>(pub->handle(), "RSD_VELOCITY", buffer, daemon::VelocityInputConfig{}, url,
+                                                        &pub->lcm_lock());
   vin->start();
   hub->close_all();  // the hub goes; something that never answers takes its port
   TcpqHub silent(TcpqHub::Mode::Silent, {}, port);

@@ -9,13 +9,20 @@
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <functional>
 #include <future>
+#include <iterator>
+#include <memory>
+#include <mutex>
+#include <string>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -133,6 +140,55 @@ TEST(LcmReceive, TheLcmSourceFailsItsOpenInsteadOfHanging) {
       },
       "LcmSource::open");
   EXPECT_EQ(threw, 1);
+}
+
+// Whether thread `tid` of this process is asleep (blocked in a call), from /proc.
+bool asleep(pid_t tid) {
+  std::ifstream stat("/proc/self/task/" + std::to_string(tid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+  const size_t close = text.rfind(')');  // the state follows the command's name
+  return close != std::string::npos && close + 2 < text.size() && text[close + 2] == 'S';
+}
+
+// LCM's tcpq provider is not thread-safe: a publish that loses the hub closes the socket and
+// marks it -1, and a receive that then enters the provider reconnects inside lcm_handle, to
+// whatever hub took the port; one that never answers held the velocity input's thread for good,
+// and the publishers, writing into that connection, until they blocked too (LcmHubFaults, once
+// in a clean-clone run). With the publishers' lock, the receive that was waiting for the lost
+// connection's last bytes sees the publish's -1 and never enters the provider. In order: the
+// receive waits in its poll; a publish fails (the socket shut for writing) under the lock; a
+// silent hub takes the port; then the old hub's connection closes, waking the receive.
+TEST(LcmReceive, AReceiveNeverReconnectsAConnectionAPublishLostMeanwhile) {
+  test::TcpqHub hub;
+  const int port = hub.port();
+  lcm_t* lcm = lcm_create(hub.url().c_str());
+  ASSERT_NE(lcm, nullptr);
+  const int fd = lcm_get_fileno(lcm);
+  ASSERT_GE(fd, 0);
+  std::mutex publishing;
+  std::atomic<pid_t> tid{0};
+  std::promise<int> received;
+  std::thread receiver([&] {
+    tid = static_cast<pid_t>(syscall(SYS_gettid));
+    received.set_value(handle_lcm(lcm, 600000, kLcmPartialMessageTimeoutMs, &publishing));
+  });
+  while (tid == 0 || !asleep(tid)) std::this_thread::yield();  // in its poll: nothing to read yet
+  std::unique_ptr<test::TcpqHub> silent;
+  {
+    std::lock_guard lock(publishing);
+    shutdown(fd, SHUT_WR);
+    const uint8_t byte = 0;
+    EXPECT_NE(lcm_publish(lcm, "X", &byte, 1), 0);
+    EXPECT_LT(lcm_get_fileno(lcm), 0);  // the provider closed it
+    hub.stop_listening();
+    silent = std::make_unique<test::TcpqHub>(test::TcpqHub::Mode::Silent, std::vector<uint8_t>{}, port);
+    hub.close_all();  // the receive wakes (the socket it polls is the closed one's)
+  }
+  auto got = received.get_future();
+  EXPECT_EQ(test::within_a_minute([&] { return got.get(); }, "the receive after the publish lost the hub"), -1);
+  receiver.join();
+  EXPECT_LT(lcm_get_fileno(lcm), 0);  // not connected again
+  lcm_destroy(lcm);
 }
 
 }  // namespace

@@ -55,11 +55,15 @@ class TcpqHub {
 
   // The hub goes away: its listener and every connection closed.
   void close_all() {
+    stop_listening();
+    for (const int c : clients_) close(c);
+    clients_.clear();
+  }
+  // Its port freed for another hub; the connections it has stay open until close_all().
+  void stop_listening() {
     if (listen_fd_ < 0) return;
     shutdown(listen_fd_, SHUT_RDWR);  // accept() returns
     if (thread_.joinable()) thread_.join();
-    for (const int c : clients_) close(c);
-    clients_.clear();
     close(listen_fd_);
     listen_fd_ = -1;
   }
