@@ -12,6 +12,7 @@
 
 #include "daemon/frame_rectifier.hpp"
 #include "drivers/sim_source.hpp"
+#include "tests/support/sanitizer.hpp"
 
 using namespace rsd;
 
@@ -101,12 +102,19 @@ dsp::CameraModel fisheye() {
 // Rectification puts the features back: every row's orientation integrated from the gyro (one
 // rate held for the frame left 0.065-0.091 px on these frames, 5-8 times more).
 TEST(RectificationEndToEnd, RectifiedFeaturesMatchTheGlobalShutterRender) {
+  // 27 s under AddressSanitizer, where the same maps, warps and renders run in the fisheye's
+  // test to a pinhole output.
+  RSD_SKIP_LONG_IN_SLOW_BUILD("RectificationEndToEnd.AFisheyeFrameIsRectifiedToAPinhole");
   expect_like_the_global_shutter(dsp::CameraModel::from_hfov(640, 480, 60.0 * M_PI / 180.0), {}, 0.04);
 }
 
 // Through a fisheye (pinhole-equi) lens: the rolling shutter removed, the lens kept (the default).
 // (A wide lens sees the same motion as fewer pixels: 2.8-3.0 px raw here.)
-TEST(RectificationEndToEnd, AFisheyeFrameIsRectifiedInItsOwnLens) { expect_like_the_global_shutter(fisheye(), {}, 0.05, 2.0); }
+TEST(RectificationEndToEnd, AFisheyeFrameIsRectifiedInItsOwnLens) {
+  // 25 s under AddressSanitizer, where the fisheye's maps and warps run in the test below.
+  RSD_SKIP_LONG_IN_SLOW_BUILD("RectificationEndToEnd.AFisheyeFrameIsRectifiedToAPinhole");
+  expect_like_the_global_shutter(fisheye(), {}, 0.05, 2.0);
+}
 
 // And with rectification.output: pinhole, the lens undone too: a 100-degree pinhole.
 TEST(RectificationEndToEnd, AFisheyeFrameIsRectifiedToAPinhole) {
