@@ -19,8 +19,8 @@
 // socket). LCM's tcpq provider is not thread-safe: a publish that fails on a lost hub closes the
 // socket and marks it -1, and a receive that enters the provider then reconnects inside
 // lcm_handle, waiting for good on a hub that accepts and never answers, while the publishers
-// write into that connection until they block too (seen once in a hundred runs of
-// LcmHubFaults on a loaded machine). So when other threads publish through the instance, pass
+// write into that connection until they block too (LcmHubFaults failed so once, in a
+// clean-clone run on a loaded machine). So when other threads publish through the instance, pass
 // the lock they hold around lcm_publish (`publishing`): handle_lcm holds it from the descriptor
 // check through the provider's read (not while it waits for the first bytes), so the socket it
 // checked is the one the provider reads.
