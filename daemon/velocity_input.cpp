@@ -17,8 +17,7 @@ namespace rsd::daemon {
 VelocityInput::VelocityInput(lcm_t* lcm, const std::string& channel, VelocityBuffer& buffer, VelocityInputConfig cfg,
                              std::string lcm_url, std::mutex* lcm_lock)
     : lcm_(lcm), lcm_url_(std::move(lcm_url)), lcm_lock_(lcm_lock), channel_(channel), buffer_(buffer), cfg_(std::move(cfg)) {
-  std::unique_lock<std::mutex> lock;
-  if (lcm_lock_) lock = std::unique_lock<std::mutex>(*lcm_lock_);
+  const std::unique_lock<std::mutex> lock = drivers::lock_if(lcm_lock_);
   sub_ = lcm_subscribe(lcm_, channel_.c_str(), &VelocityInput::on_velocity, this);
   if (!cfg_.pose_channel.empty()) pose_sub_ = lcm_subscribe(lcm_, cfg_.pose_channel.c_str(), &VelocityInput::on_pose, this);
 }
@@ -28,8 +27,7 @@ VelocityInput::VelocityInput(lcm_t* lcm, const std::string& channel, VelocityBuf
 // the hub once (no thread handles this instance any more, so no callback reaches this object).
 VelocityInput::~VelocityInput() {
   stop();
-  std::unique_lock<std::mutex> lock;
-  if (lcm_lock_) lock = std::unique_lock<std::mutex>(*lcm_lock_);
+  const std::unique_lock<std::mutex> lock = drivers::lock_if(lcm_lock_);
   if (drivers::lost_tcpq_hub(lcm_, lcm_url_)) return;
   if (sub_) lcm_unsubscribe(lcm_, sub_);
   if (pose_sub_) lcm_unsubscribe(lcm_, pose_sub_);

@@ -52,8 +52,7 @@ void drop_connection(int fd) {
 }  // namespace
 
 int handle_lcm(lcm_t* lcm, int timeout_ms, int partial_timeout_ms, std::mutex* publishing) {
-  std::unique_lock<std::mutex> lock;
-  if (publishing) lock = std::unique_lock<std::mutex>(*publishing);
+  std::unique_lock<std::mutex> lock = lock_if(publishing);
   const int fd = lcm_get_fileno(lcm);
   if (fd < 0) return -1;
   if (publishing) lock.unlock();  // waiting for the first bytes, publishing goes on

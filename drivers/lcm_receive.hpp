@@ -48,4 +48,9 @@ inline constexpr uint32_t kLcmMaxMessageBytes = 256u << 20;
 int handle_lcm(lcm_t* lcm, int timeout_ms, int partial_timeout_ms = kLcmPartialMessageTimeoutMs,
                std::mutex* publishing = nullptr);
 
+// `m` held (not held when there is none): the publishers' lock where an instance has one.
+inline std::unique_lock<std::mutex> lock_if(std::mutex* m) {
+  return m ? std::unique_lock<std::mutex>(*m) : std::unique_lock<std::mutex>();
+}
+
 }  // namespace rsd::drivers
