@@ -15,28 +15,12 @@ RsRenderer::RsRenderer(const CameraModel& cam, const RowTiming& timing, const Re
 }
 
 // Colour seen along the ray through (u, v) from a camera at `centre` with world-from-camera
-// rotation R_wc: the nearest plane hit inside its extent, else the background.
+// rotation R_wc (the scene's colour_along_ray).
 Eigen::Vector3f RsRenderer::shade(const Scene& scene, const Eigen::Vector3d& centre, const Eigen::Matrix3d& R_wc,
                                   double u, double v) const {
   const auto ray_c = cam_.ray({u, v});
   if (!ray_c) return scene.background;
-  const Eigen::Vector3d d = R_wc * *ray_c;
-  double best = std::numeric_limits<double>::infinity();
-  Eigen::Vector3f colour = scene.background;
-  for (size_t k = 0; k < scene.planes.size(); ++k) {
-    const Plane& p = scene.planes[k];
-    const Eigen::Vector3d& n = normals_[k];
-    const double den = n.dot(d);
-    if (std::abs(den) < 1e-12) continue;
-    const double lambda = n.dot(p.origin - centre) / den;
-    if (!(lambda > 0) || lambda >= best) continue;
-    const Eigen::Vector3d rel = centre + lambda * d - p.origin;
-    const double s = rel.dot(p.axis_s), t = rel.dot(p.axis_t);
-    if (s < p.s_min || s > p.s_max || t < p.t_min || t > p.t_max) continue;
-    best = lambda;
-    colour = p.texture->colour(s, t);
-  }
-  return colour;
+  return colour_along_ray(scene, normals_, centre, R_wc, *ray_c);
 }
 
 void RsRenderer::render(const Scene& scene, const CameraMotion& motion, double t_frame, const ImageView& out) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace rsd::dsp {
 
@@ -47,26 +48,42 @@ long floor_to_long(double x) {
 }
 }  // namespace
 
+// The four lattice values around one cell of one octave, for every channel. Consecutive samples
+// of a render mostly fall in the same cell (a cell spans many pixels), so each octave keeps its
+// last cell and hashes only when a sample leaves it: the same values, a twelfth of the hashing.
+// Kept per thread, as renderers on several threads may share a texture.
+struct NoiseTexture::LatticeCell {
+  bool valid = false;
+  unsigned seed = 0;
+  long i = 0, j = 0;
+  float v[4][3];
+};
+
 // One octave of value noise at (s, t) in lattice units, for every channel at once: the cell and
 // its smoothstep weights are the channels' common part.
-void NoiseTexture::octave(double s, double t, float v[3]) const {
+void NoiseTexture::octave(double s, double t, LatticeCell& cell, float v[3]) const {
   const long i = floor_to_long(s), j = floor_to_long(t);
   const double a = s - static_cast<double>(i), b = t - static_cast<double>(j);
   // smoothstep weights: continuous gradient, so features are corners rather than seams
   const double wa = a * a * (3 - 2 * a), wb = b * b * (3 - 2 * b);
-  const std::uint64_t k00 = lattice_key(i, j), k10 = lattice_key(i + 1, j), k01 = lattice_key(i, j + 1),
-                      k11 = lattice_key(i + 1, j + 1);
+  if (!cell.valid || cell.i != i || cell.j != j || cell.seed != seed_) {
+    const std::uint64_t k[4] = {lattice_key(i, j), lattice_key(i + 1, j), lattice_key(i, j + 1), lattice_key(i + 1, j + 1)};
+    for (int q = 0; q < 4; ++q)
+      for (int ch = 0; ch < 3; ++ch) cell.v[q][ch] = lattice(k[q], ch);
+    cell.valid = true, cell.seed = seed_, cell.i = i, cell.j = j;
+  }
   for (int ch = 0; ch < 3; ++ch)
-    v[ch] = static_cast<float>((1 - wa) * (1 - wb) * lattice(k00, ch) + wa * (1 - wb) * lattice(k10, ch) +
-                               (1 - wa) * wb * lattice(k01, ch) + wa * wb * lattice(k11, ch));
+    v[ch] = static_cast<float>((1 - wa) * (1 - wb) * cell.v[0][ch] + wa * (1 - wb) * cell.v[1][ch] +
+                               (1 - wa) * wb * cell.v[2][ch] + wa * wb * cell.v[3][ch]);
 }
 
 Eigen::Vector3f NoiseTexture::colour(double s, double t) const {
   float v[3] = {0, 0, 0}, amp = 0.5f, sum = 0;
   double scale = 1.0 / cell_;
-  for (int o = 0; o < 4; ++o, amp *= 0.5f, scale *= 2.0) {
+  thread_local LatticeCell cells[kOctaves];
+  for (int o = 0; o < kOctaves; ++o, amp *= 0.5f, scale *= 2.0) {
     float ov[3];
-    octave(s * scale, t * scale, ov);
+    octave(s * scale, t * scale, cells[o], ov);
     for (int ch = 0; ch < 3; ++ch) v[ch] += amp * ov[ch];
     sum += amp;
   }
@@ -76,11 +93,24 @@ Eigen::Vector3f NoiseTexture::colour(double s, double t) const {
   return c;
 }
 
+namespace {
+
+// A byte's intensity, as texel() computes it (b / 255.0f): the lookup gives the same floats.
+struct ByteUnits {
+  float v[256];
+  constexpr ByteUnits() : v{} {
+    for (int b = 0; b < 256; ++b) v[b] = static_cast<float>(b) / 255.0f;
+  }
+};
+constexpr ByteUnits kByteUnits;
+
+}  // namespace
+
 Eigen::Vector3f BitmapTexture::texel(int x, int y) const {
   if (x < 0 || y < 0 || x >= img_.width || y >= img_.height) return Eigen::Vector3f::Ones();
   const std::uint8_t* p = img_.data.data() + static_cast<size_t>(y) * img_.stride() + x * channels(img_.format) * sample_bytes(img_.format);
-  if (img_.format == PixelFormat::Rgb8) return Eigen::Vector3f(p[0], p[1], p[2]) / 255.0f;
-  const float g = img_.format == PixelFormat::Mono16 ? *reinterpret_cast<const std::uint16_t*>(p) / 65535.0f : p[0] / 255.0f;
+  if (img_.format == PixelFormat::Rgb8) return Eigen::Vector3f(kByteUnits.v[p[0]], kByteUnits.v[p[1]], kByteUnits.v[p[2]]);
+  const float g = img_.format == PixelFormat::Mono16 ? *reinterpret_cast<const std::uint16_t*>(p) / 65535.0f : kByteUnits.v[p[0]];
   return Eigen::Vector3f::Constant(g);
 }
 
@@ -89,8 +119,39 @@ Eigen::Vector3f BitmapTexture::colour(double s, double t) const {
   const double x = s * ppm_ - 0.5, y = t * ppm_ - 0.5;
   const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
   const float a = static_cast<float>(x - x0), b = static_cast<float>(y - y0);
+  // Renderers call this for every sample of every pixel (the simulated camera, the tests' truth
+  // renders): an RGB picture's four texels inside it are read without a call each.
+  if (img_.format == PixelFormat::Rgb8 && x0 >= 0 && y0 >= 0 && x0 + 1 < img_.width && y0 + 1 < img_.height) {
+    const size_t stride = img_.stride();
+    const std::uint8_t* p = img_.data.data() + static_cast<size_t>(y0) * stride + static_cast<size_t>(x0) * 3;
+    const auto at = [](const std::uint8_t* q) {
+      return Eigen::Vector3f(kByteUnits.v[q[0]], kByteUnits.v[q[1]], kByteUnits.v[q[2]]);
+    };
+    return (1 - a) * (1 - b) * at(p) + a * (1 - b) * at(p + 3) + (1 - a) * b * at(p + stride) + a * b * at(p + stride + 3);
+  }
   return (1 - a) * (1 - b) * texel(x0, y0) + a * (1 - b) * texel(x0 + 1, y0) + (1 - a) * b * texel(x0, y0 + 1) +
          a * b * texel(x0 + 1, y0 + 1);
+}
+
+Eigen::Vector3f colour_along_ray(const Scene& scene, const std::vector<Eigen::Vector3d>& normals,
+                                 const Eigen::Vector3d& centre, const Eigen::Matrix3d& R_wc, const Eigen::Vector3d& ray_c) {
+  const Eigen::Vector3d d = R_wc * ray_c;
+  double best = std::numeric_limits<double>::infinity();
+  Eigen::Vector3f colour = scene.background;
+  for (size_t k = 0; k < scene.planes.size(); ++k) {
+    const Plane& p = scene.planes[k];
+    const Eigen::Vector3d& n = normals[k];
+    const double den = n.dot(d);
+    if (std::abs(den) < 1e-12) continue;
+    const double lambda = n.dot(p.origin - centre) / den;
+    if (!(lambda > 0) || lambda >= best) continue;
+    const Eigen::Vector3d rel = centre + lambda * d - p.origin;
+    const double s = rel.dot(p.axis_s), t = rel.dot(p.axis_t);
+    if (s < p.s_min || s > p.s_max || t < p.t_min || t > p.t_max) continue;
+    best = lambda;
+    colour = p.texture->colour(s, t);
+  }
+  return colour;
 }
 
 Plane fronto_parallel(const Eigen::Vector3d& origin, std::shared_ptr<const Texture> texture) {

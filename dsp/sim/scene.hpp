@@ -42,7 +42,9 @@ class NoiseTexture final : public Texture {
  private:
   std::uint64_t lattice_key(long i, long j) const;
   static float lattice(std::uint64_t key, int channel);
-  void octave(double s, double t, float v[3]) const;
+  static constexpr int kOctaves = 4;
+  struct LatticeCell;
+  void octave(double s, double t, LatticeCell& cell, float v[3]) const;
   unsigned seed_;
   double cell_;
 };
@@ -78,6 +80,12 @@ struct Scene {
   double point_radius_px = 1.5;
   Eigen::Vector3f background{0.2f, 0.2f, 0.2f};
 };
+
+// The colour a ray sees: from `centre` along the camera-axes direction `ray_c` turned into the
+// world by R_wc, the nearest plane it meets inside the plane's extent, else the background.
+// `normals` holds each plane's normal (a renderer computes them once a frame, not once a ray).
+Eigen::Vector3f colour_along_ray(const Scene& scene, const std::vector<Eigen::Vector3d>& normals,
+                                 const Eigen::Vector3d& centre, const Eigen::Matrix3d& R_wc, const Eigen::Vector3d& ray_c);
 
 // A plane facing the camera (s along x, t along y, the camera looking down +z), unbounded,
 // with plane coordinate (0, 0) at `origin`.
