@@ -97,7 +97,7 @@ Measured rectified_rms(daemon::Config cfg, const formats::Calibration& cal, cons
     drivers::FrameMeta meta;
     for (int k = 0; src->capture(raw.view(), meta, std::chrono::milliseconds(100)) == drivers::CaptureStatus::Frame; ++k) {
       const daemon::RectifyResult res = rect.process(raw.view(), rectified.view(), meta, buf);
-      if (k < 2 || !res.rectified) continue;
+      if (k < 2 || k % 2 || !res.rectified) continue;
       render_truth(meta.first_row_ns * 1e-9 + res.reference_time_s, truth.view());
       double frame_sum = 0;
       int frame_n = 0;

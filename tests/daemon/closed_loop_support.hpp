@@ -48,7 +48,9 @@ class SimTruth {
 };
 
 // Plays the recording through the daemon's replay source, velocity input and rectifier with
-// `cal`, and measures every frame (but the first two) against the truth at its reference time.
+// `cal`, and measures every other frame (but the first two) against the truth at its reference
+// time: each frame rectifies, while the truth's render and the tracking, most of a closed loop's
+// time, go to half of them (still thousands of features a replay).
 Measured rectified_rms(daemon::Config cfg, const formats::Calibration& cal, const TruthRender& render_truth);
 
 // An images recording played as the daemon plays it (rsd --replay DIR --speed fast).

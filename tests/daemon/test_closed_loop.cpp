@@ -271,7 +271,7 @@ TEST(ClosedLoop, ThroughAnLcmRecordingAndTheTools) {
 // A fisheye rig (docs/closed-loop.md): a 120-degree equidistant lens, known from its Kalibr
 // camchain (pinhole-equi); the rest hidden as above. The diagnosis names the hidden physics and
 // leaves the lens as the camchain says; the daemon rectifies in the lens's own model, within
-// 0.05 px of what the true calibration gives (nominal 0.56 px, learned and true 0.026 px).
+// 0.05 px of what the true calibration gives (nominal 0.56 px, learned and true 0.027 px).
 TEST(ClosedLoop, AFisheyeRigFromItsKalibrCamchain) {
   const dsp::Distortion lens = dsp::Distortion::equidistant(0.03, -0.01, 0.002, 0);
   const dsp::CameraModel cam = dsp::CameraModel::from_hfov(640, 480, 120 * M_PI / 180, lens);
