@@ -50,7 +50,7 @@ long floor_to_long(double x) {
 
 // The four lattice values around one cell of one octave, for every channel. Consecutive samples
 // of a render mostly fall in the same cell (a cell spans many pixels), so each octave keeps its
-// last cell and hashes only when a sample leaves it: the same values, a twelfth of the hashing.
+// last cell and hashes only when a sample leaves it: the same values, hashed once per cell.
 // Kept per thread, as renderers on several threads may share a texture.
 struct NoiseTexture::LatticeCell {
   bool valid = false;
