@@ -104,12 +104,17 @@ struct ByteUnits {
 };
 constexpr ByteUnits kByteUnits;
 
+// An RGB pixel's three intensities.
+Eigen::Vector3f rgb_units(const std::uint8_t* p) {
+  return Eigen::Vector3f(kByteUnits.v[p[0]], kByteUnits.v[p[1]], kByteUnits.v[p[2]]);
+}
+
 }  // namespace
 
 Eigen::Vector3f BitmapTexture::texel(int x, int y) const {
   if (x < 0 || y < 0 || x >= img_.width || y >= img_.height) return Eigen::Vector3f::Ones();
   const std::uint8_t* p = img_.data.data() + static_cast<size_t>(y) * img_.stride() + x * channels(img_.format) * sample_bytes(img_.format);
-  if (img_.format == PixelFormat::Rgb8) return Eigen::Vector3f(kByteUnits.v[p[0]], kByteUnits.v[p[1]], kByteUnits.v[p[2]]);
+  if (img_.format == PixelFormat::Rgb8) return rgb_units(p);
   const float g = img_.format == PixelFormat::Mono16 ? *reinterpret_cast<const std::uint16_t*>(p) / 65535.0f : kByteUnits.v[p[0]];
   return Eigen::Vector3f::Constant(g);
 }
@@ -124,10 +129,8 @@ Eigen::Vector3f BitmapTexture::colour(double s, double t) const {
   if (img_.format == PixelFormat::Rgb8 && x0 >= 0 && y0 >= 0 && x0 + 1 < img_.width && y0 + 1 < img_.height) {
     const size_t stride = img_.stride();
     const std::uint8_t* p = img_.data.data() + static_cast<size_t>(y0) * stride + static_cast<size_t>(x0) * 3;
-    const auto at = [](const std::uint8_t* q) {
-      return Eigen::Vector3f(kByteUnits.v[q[0]], kByteUnits.v[q[1]], kByteUnits.v[q[2]]);
-    };
-    return (1 - a) * (1 - b) * at(p) + a * (1 - b) * at(p + 3) + (1 - a) * b * at(p + stride) + a * b * at(p + stride + 3);
+    return (1 - a) * (1 - b) * rgb_units(p) + a * (1 - b) * rgb_units(p + 3) + (1 - a) * b * rgb_units(p + stride) +
+           a * b * rgb_units(p + stride + 3);
   }
   return (1 - a) * (1 - b) * texel(x0, y0) + a * (1 - b) * texel(x0 + 1, y0) + (1 - a) * b * texel(x0, y0 + 1) +
          a * b * texel(x0 + 1, y0 + 1);
