@@ -74,6 +74,7 @@ OnlineCalibration from_variances(const Eigen::VectorXd& var) {
 OnlineEstimator::OnlineEstimator(const NominalModel& nominal, const OnlineCalibration& start,
                                  const OnlineEstimatorOptions& opt, const Eigen::Vector3d& gyro_scale)
     : nominal_(nominal), opt_(opt), gyro_scale_(gyro_scale) {
+  step_seen_at_.fill(std::numeric_limits<double>::quiet_NaN());
   require(opt.window_s > 0, "window_s", "positive");
   require(opt.min_rate_rad_s >= 0, "min_rate_rad_s", "zero or positive");
   require(opt.min_matches >= 10, "min_matches", "at least 10");
@@ -208,7 +209,7 @@ void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibrati
   // Successive windows overlap: a fit shares most of its data with the one before, so it
   // carries the information of only the new part of its window.
   const double overlap = have_fit_ ? std::max(1.0, opt_.window_s / dt) : 1.0;
-  bool stepped = false;
+  bool stepped = false, pending = false;
   std::array<bool, kOnlineValues> unseen{};  // values this window says next to nothing of
   const bool global = est_.shutter == Shutter::Global;
   for (int i = 0; i < kOnlineValues; ++i) {
@@ -218,7 +219,8 @@ void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibrati
     }
     if (i == 0) {
       unseen[0] = s[0] > opt_.unobservable * small[0];
-      stepped = accept_offset(unseen[0] && !have_fit_ ? start[0] : z[0], s[0] * s[0], t, unseen[0], overlap) || stepped;
+      const OffsetUpdate u = accept_offset(unseen[0] && !have_fit_ ? start[0] : z[0], s[0] * s[0], t, unseen[0], overlap);
+      stepped = stepped || u == OffsetUpdate::Stepped, pending = pending || u == OffsetUpdate::Pending;
       continue;
     }
     const double prior = var_[i] + walk[i] * walk[i] * dt, r = s[i] * s[i], nu = z[i] - x_[i];
@@ -228,13 +230,18 @@ void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibrati
       else var_[i] = prior;
       unseen[i] = true;
     } else if (!have_fit_ || nu * nu > opt_.step_sigmas * opt_.step_sigmas * (prior + r)) {
-      // The first fit, or a value whose fit lies beyond step_sigmas of the estimate (a step):
-      // it restarts from the fit.
-      stepped = stepped || have_fit_;
-      x_[i] = z[i], var_[i] = r;
+      // The first fit, or a value whose fit lies beyond step_sigmas of the estimate: a step once
+      // confirmed, restarting from the fit; held until then.
+      if (!have_fit_ || step_confirmed(i, t)) {
+        stepped = stepped || have_fit_;
+        x_[i] = z[i], var_[i] = r;
+      } else {
+        var_[i] = prior, pending = true;
+      }
     } else {
       const double k = prior / (prior + r * overlap);
       x_[i] += k * nu, var_[i] = (1 - k) * prior;
+      step_seen_at_[i] = std::numeric_limits<double>::quiet_NaN();
     }
   }
   have_fit_ = true, t_fit_ = t;
@@ -254,12 +261,15 @@ void OnlineEstimator::accept(const OnlineCalibration& fit, const OnlineCalibrati
   settled_ = settled && !stepped ? settled_ + 1 : 0;
   est_.state = settled_ >= opt_.settle ? OnlineState::Converged : OnlineState::Converging;
   est_.converged = est_.state == OnlineState::Converged;
-  est_.reason = stepped ? "a step: restarted from this window's fit" : unseen_bias ? "gyro bias held: this window does not show it" : "";
+  est_.reason = stepped   ? "a step: restarted from this window's fit"
+                : pending ? "a fit far from the estimate: held until a window a whole window later confirms a step"
+                : unseen_bias ? "gyro bias held: this window does not show it"
+                              : "";
   est_.rows = decide_rows(small[1]);
   note_values(sd, small, unseen, with_mount);
 }
 
-bool OnlineEstimator::accept_offset(double z, double r, double t, bool unseen, double overlap) {
+OnlineEstimator::OffsetUpdate OnlineEstimator::accept_offset(double z, double r, double t, bool unseen, double overlap) {
   Eigen::Matrix2d& P = offset_drift_cov_;
   if (!have_fit_) {  // the first fit: the drift held at its start (variance 0) until it is fitted
     const double known = opt_.unobservable * opt_.converged_offset_sigma_s;  // what a start is taken to be good to
@@ -267,7 +277,7 @@ bool OnlineEstimator::accept_offset(double z, double r, double t, bool unseen, d
     P << (unseen ? std::min(r, known * known) : r), 0, 0, 0;
     var_[0] = P(0, 0);
     if (!unseen) offset_fits_.push_back({t, z, r});
-    return false;
+    return OffsetUpdate::Updated;
   }
   // Predicted to t: the offset moves at the drift's rate; both walk.
   const double dt = std::max(t - t_fit_, 1e-3);
@@ -287,8 +297,12 @@ bool OnlineEstimator::accept_offset(double z, double r, double t, bool unseen, d
       offset_fits_.push_back({t, z, r * overlap});
       if (start_drift(t)) {
         var_[0] = P(0, 0);
-        return false;
+        return OffsetUpdate::Updated;
       }
+    }
+    if (!step_confirmed(0, t)) {  // held: the prediction stands until a later window confirms
+      var_[0] = P(0, 0);
+      return OffsetUpdate::Pending;
     }
     // A step (the clock jumped): the offset restarts from the fit; the drift, a rate, stands.
     stepped = true;
@@ -299,13 +313,25 @@ bool OnlineEstimator::accept_offset(double z, double r, double t, bool unseen, d
     const Eigen::Vector2d k = P.col(0) / (P(0, 0) + r * overlap);
     x_[0] += k[0] * nu, drift_ += k[1] * nu;
     P -= k * P.row(0);
+    step_seen_at_[0] = std::numeric_limits<double>::quiet_NaN();
   }
   if (!drift_on_ && !unseen) {
     offset_fits_.push_back({t, z, r * overlap});
     if (t - offset_fits_.front()[0] >= opt_.drift_span_s) start_drift(t);
   }
   var_[0] = P(0, 0);
-  return stepped;
+  return stepped ? OffsetUpdate::Stepped : OffsetUpdate::Updated;
+}
+
+bool OnlineEstimator::step_confirmed(int i, double t) {
+  double& seen = step_seen_at_[i];
+  if (std::isnan(seen)) {
+    seen = t;
+    return false;
+  }
+  if (t - seen < opt_.window_s) return false;
+  seen = std::numeric_limits<double>::quiet_NaN();
+  return true;
 }
 
 // The drift's start: a straight line through the offset fits so far (each weighted by its

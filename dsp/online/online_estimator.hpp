@@ -101,7 +101,9 @@ struct OnlineEstimatorOptions {
   // The fits are combined over time (a Kalman filter per value: the calibration a random walk
   // of these rates, per square root of a second), so that the estimate gathers more data than
   // one window holds; a fit further than `step_sigmas` combined sigmas from the estimate is a
-  // step (the clock jumped, the firmware changed): that value restarts from the fit.
+  // step (the clock jumped, the firmware changed) once a window that starts a whole window
+  // later still says so: that value restarts from the later fit. Until then the estimate is
+  // held, so a glitch shorter than a window (which the overlapping windows all see) passes.
   double offset_walk_s = 2e-5;        // s/sqrt(s)
   double line_delay_walk = 2e-4;      // relative, 1/sqrt(s)
   double bias_walk_rad_s = 5e-5;      // rad/s/sqrt(s)
@@ -168,8 +170,9 @@ class OnlineEstimator {
   // A window's fit (at the window's middle, t) into the estimate; `with_mount`: the mount was fitted.
   void accept(const OnlineCalibration& fit, const OnlineCalibration& sigma, double t, bool with_mount);
   // The offset and the drift: predicted to t, then updated with the window's offset fit z
-  // (variance r, counted `overlap` times); returns whether z was a step.
-  bool accept_offset(double z, double r, double t, bool unseen, double overlap);
+  // (variance r, counted `overlap` times); says whether z was a step, or one not yet confirmed.
+  enum class OffsetUpdate { Updated, Pending, Stepped };
+  OffsetUpdate accept_offset(double z, double r, double t, bool unseen, double overlap);
   // The scale of the line delay's random walk and tolerance: the estimate (rolling), at least
   // the frame period's share of a row (unknown: the estimate may be 0).
   double line_delay_scale(double fit) const;
@@ -197,6 +200,10 @@ class OnlineEstimator {
   // Fits the line through offset_fits_ and starts the drift from it at t, unless its slope is
   // beyond max_drift_ppm or a fit lies beyond 4 sigmas of it (a step, not a rate); whether started.
   bool start_drift(double t);
+  // Per value, the time of the first fit beyond step_sigmas not yet confirmed (NaN: none);
+  // whether the fit at t confirms it (a whole window later), noting it if it is the first.
+  std::array<double, kOnlineValues> step_seen_at_;
+  bool step_confirmed(int i, double t);
   double t_fit_ = 0;  // the last fit's window end
   int settled_ = 0;   // updates in a row with small sigmas and no step
   bool have_fit_ = false;
