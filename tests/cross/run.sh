@@ -8,7 +8,12 @@ set -eu
 src=$1 build=$2
 mkdir -p "$build"
 jobs=$(nproc)
-cmake -S "$src" -B "$build" -DCMAKE_TOOLCHAIN_FILE="$src/tests/cross/aarch64.cmake" -DRSD_DSP_ONLY=ON \
+# Ninja where the machine has it, as the other trees (tools/setup.sh installs it); a tree keeps
+# the generator it was first configured with.
+generator=""
+[ -f "$build/CMakeCache.txt" ] || ! command -v ninja >/dev/null 2>&1 || generator="-G Ninja"
+# shellcheck disable=SC2086  # the generator is two words or none
+cmake -S "$src" -B "$build" $generator -DCMAKE_TOOLCHAIN_FILE="$src/tests/cross/aarch64.cmake" -DRSD_DSP_ONLY=ON \
       -DCMAKE_BUILD_TYPE=Release >"$build/configure.log" 2>&1 || { cat "$build/configure.log"; exit 1; }
 cmake --build "$build" -j"$jobs"
 ctest --test-dir "$build" -j"$jobs" --output-on-failure
