@@ -29,7 +29,7 @@ std::size_t type_size(char type) {
   }
 }
 
-std::uint64_t big_endian(const std::uint8_t* p, std::size_t n) {
+std::uint64_t big_endian_unsigned(const std::uint8_t* p, std::size_t n) {
   std::uint64_t v = 0;
   for (std::size_t i = 0; i < n; ++i) v = v << 8 | p[i];
   return v;
@@ -60,14 +60,14 @@ class PayloadReader {
     for (std::size_t at = begin; at < end;) {
       if (end - at < 8) fail(at, "", "is a truncated item header (" + std::to_string(end - at) + " bytes left, 8 needed)");
       const std::uint8_t* h = base_ + at;
-      if (big_endian(h, 8) == 0) return;
+      if (big_endian_unsigned(h, 8) == 0) return;
       Klv k;
       std::memcpy(k.key, h, 4);
       for (int i = 0; i < 4; ++i)
         if (h[i] < 0x20 || h[i] > 0x7e) fail(at, "", "is not a GPMF key (bytes that are not printable ASCII)");
       k.type = static_cast<char>(h[4]);
       k.struct_size = h[5];
-      k.repeat = static_cast<std::size_t>(big_endian(h + 6, 2));
+      k.repeat = static_cast<std::size_t>(big_endian_unsigned(h + 6, 2));
       k.offset = at;
       k.data = h + 8;
       const std::size_t padded = (k.bytes() + 3) & ~std::size_t{3};
@@ -82,7 +82,7 @@ class PayloadReader {
   // Element i of a numeric item, as a double.
   double number(const Klv& k, std::size_t i) const {
     const std::size_t n = type_size(k.type);
-    const std::uint64_t raw = big_endian(k.data + i * n, n);
+    const std::uint64_t raw = big_endian_unsigned(k.data + i * n, n);
     switch (k.type) {
       case 'b': return static_cast<std::int8_t>(raw);
       case 'B': return static_cast<double>(raw);

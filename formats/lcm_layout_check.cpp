@@ -15,7 +15,7 @@ using lcm_layout::Type;
 // Nested structs deeper than this are refused (the types here nest two deep).
 constexpr int kMaxDepth = 8;
 
-int64_t big_endian(const uint8_t* p, int size) {
+int64_t big_endian_signed(const uint8_t* p, int size) {
   uint64_t v = 0;
   for (int i = 0; i < size; ++i) v = v << 8 | p[i];
   if (size < 8 && (v >> (8 * size - 1)) & 1) v |= ~uint64_t{0} << (8 * size);  // sign-extend
@@ -83,7 +83,7 @@ class Walk {
   LayoutStatus primitive(const Type& ty, const Field& f, int64_t count, int64_t& value) {
     const size_t bytes = static_cast<size_t>(count) * static_cast<size_t>(f.size);  // count <= left(): no overflow
     if (bytes > left()) return fail(LayoutStatus::Truncated, ty.name, f.name, "ends the payload early");
-    if (f.integer && f.ndims == 0) value = big_endian(data_ + pos, f.size);
+    if (f.integer && f.ndims == 0) value = big_endian_signed(data_ + pos, f.size);
     pos += bytes;
     return LayoutStatus::Fits;
   }
@@ -91,7 +91,7 @@ class Walk {
   // An LCM string: a 4-byte length counting its terminating NUL, then that many bytes.
   LayoutStatus string(const Type& ty, const Field& f) {
     if (left() < 4) return fail(LayoutStatus::Truncated, ty.name, f.name, "ends the payload early");
-    const int64_t len = big_endian(data_ + pos, 4);
+    const int64_t len = big_endian_signed(data_ + pos, 4);
     if (lengths_) lengths_->push_back({pos, 4, true, std::string(ty.name) + "." + f.name, len});
     pos += 4;
     if (len < 1 || static_cast<uint64_t>(len) > left())

@@ -36,7 +36,7 @@ struct Patterns {
   std::vector<std::pair<int, double>> frame_energy;  // (frame rank, |r|^2)
 };
 
-Patterns inliers(const DiagnosisModel& m, const std::vector<Eigen::Vector2d>& base, const std::vector<int>& idx) {
+Patterns inlier_patterns(const DiagnosisModel& m, const std::vector<Eigen::Vector2d>& base, const std::vector<int>& idx) {
   const RobustStats st = robust_stats(base);
   Patterns s;
   for (size_t k = 0; k < idx.size(); ++k)
@@ -175,7 +175,7 @@ Located rate_signal(const DiagnosisModel& m, const ModelParams& p, const std::ve
 std::vector<Located> locate(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx_all) {
   const std::vector<int> idx = subsample(idx_all, 3000);
   const auto base = m.residuals(p, idx);
-  const Patterns s = inliers(m, base, idx);
+  const Patterns s = inlier_patterns(m, base, idx);
   if (s.r.size() < 8) return {};
   const bool matches = m.kind() == ObservationKind::Matches;
   std::vector<Param> params = {Param::TimeOffset, Param::LineDelay, Param::K1, Param::K2, Param::Fx, Param::Fy, Param::Drift};
