@@ -66,6 +66,8 @@ GpmfVideo read_gpmf_video(const std::string& path) {
 
   GpmfVideo out;
   out.width = vs.codecpar->width, out.height = vs.codecpar->height;
+  // GoPro's udta FIRM atom, which libavformat's MP4 demuxer gives as the tag `firmware`.
+  if (const AVDictionaryEntry* f = av_dict_get(ctx->metadata, "firmware", nullptr, 0)) out.firmware = f->value;
   std::vector<Payload> payloads;
   const libav::Packet pkt(av_packet_alloc());
   for (int e; (e = av_read_frame(ctx.get(), pkt.get())) != AVERROR_EOF; av_packet_unref(pkt.get())) {

@@ -22,6 +22,7 @@ struct GpmfVideo {
   std::vector<Eigen::Vector3d> gyro_rad_s;
   std::string orin;    // "" when the camera writes none (HERO5-7: documented, docs/formats/gpmf.md)
   std::string device;  // DVNM of the gyro's device, e.g. "Camera", "Hero6 Black"
+  std::string firmware;  // the MP4's firmware tag, e.g. "HD5.02.02.00.00" ("" when absent): the model
   int payloads = 0;
 };
 

@@ -59,12 +59,6 @@ struct Options {
   int track_pairs = static_cast<int>(kTrackedPairs);
 };
 
-std::string matrix_text(const Eigen::Matrix3d& R) {
-  std::ostringstream o;
-  for (int k = 0; k < 9; ++k) o << (k ? "," : "") << R(k / 3, k % 3);
-  return o.str();
-}
-
 // A gyro's axes against the camera's, asked of the pictures (matches recordings): a wrong
 // motion.imu_to_camera is a set-up mistake no effect can stand in for. `check` says so;
 // `search` diagnoses with the axes the pictures follow. What was found goes into the JSON.

@@ -158,6 +158,13 @@ std::string format_vec3(const Eigen::Vector3d& v) {
          ")";
 }
 
+std::string matrix_text(const Eigen::Matrix3d& m) {
+  std::string s;
+  // + 0.0: a product that came out -0 prints as 0.
+  for (int k = 0; k < 9; ++k) s += (k ? "," : "") + format_number(m(k / 3, k % 3) + 0.0);
+  return s;
+}
+
 std::string json_number(double x) {
   if (!std::isfinite(x)) return "null";
   std::ostringstream o;

@@ -76,6 +76,8 @@ std::string format_number(double x, int precision = 4);
 std::string format_fixed(double x, int decimals);
 // "(x, y, z)", each with format_number.
 std::string format_vec3(const Eigen::Vector3d& v);
+// A 3x3 matrix row by row, comma-separated, as --imu-to-camera takes it ("0,-1,0,-1,0,0,0,0,-1").
+std::string matrix_text(const Eigen::Matrix3d& m);
 
 // JSON number with 12 significant digits; null for inf and nan, which JSON lacks.
 std::string json_number(double x);

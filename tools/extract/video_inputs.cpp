@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "formats/gcsv.hpp"
+#include "formats/gopro_axes.hpp"
 #include "formats/gpmf_mp4.hpp"
 #include "formats/recording_v1.hpp"
 #include "formats/sensor_csv.hpp"
@@ -41,12 +42,18 @@ MotionLog motion_of(const formats::GpmfVideo& v, const std::string& clip) {
 
 // A video's frames and a gyro in IMU axes (s) as an images recording whose pictures stay in the
 // video (observations.video), for rsd-diagnose OUT and rsd --replay OUT. The gyro's axes in the
-// camera are what --imu-to-camera (or --nominal's motion.imu_to_camera) says, else the identity:
-// rsd-diagnose --imu-axes search asks the pictures.
-int write_video_recording(const Options& o, const MotionLog& s) {
+// camera are what --imu-to-camera (or --nominal's motion.imu_to_camera) says, else what the
+// clip itself says (`clip_axes`: a GoPro's), else the identity: rsd-diagnose --imu-axes search
+// asks the pictures.
+int write_video_recording(const Options& o, const MotionLog& s, const std::optional<formats::GoProAxes>& clip_axes = std::nullopt) {
   Nominal n = nominal_model(o, s);
   if (n.imu_to_camera) n.model.imu_to_camera = *n.imu_to_camera;
-  else
+  else if (clip_axes) {
+    n.model.imu_to_camera = clip_axes->imu_to_camera;
+    n.notes.push_back("the gyro's axes in the camera: " + clip_axes->letters + " from " + clip_axes->source + ", imu_to_camera " +
+                      matrix_text(clip_axes->imu_to_camera) + " (--imu-to-camera states others; rsd-diagnose --imu-axes check says "
+                      "when the pictures clearly follow others)");
+  } else
     n.notes.push_back("the gyro's axes in the camera: not given, taken as the identity (rsd-diagnose --imu-axes search "
                       "finds them from the pictures; --imu-to-camera states them)");
   dsp::Recording rec;
@@ -74,9 +81,16 @@ int run_on_gopro_clip(const Options& o) {
   if (!o.target.empty()) throw UsageError(o.log + " is a GoPro clip: its motion is its gyro; --target needs a trajectory");
   std::fprintf(stderr, "rsd-extract: reading the GoPro clip %s\n", o.log.c_str());
   const formats::GpmfVideo v = formats::read_gpmf_video(o.log);
-  std::fprintf(stderr, "rsd-extract: %zu frames at %dx%d, %zu gyro samples in %d GPMF payloads (%s, ORIN '%s')\n", v.frame_t_s.size(),
-               v.width, v.height, v.gyro_t_s.size(), v.payloads, v.device.c_str(), v.orin.c_str());
-  return write_video_recording(o, motion_of(v, o.log));
+  std::fprintf(stderr, "rsd-extract: %zu frames at %dx%d, %zu gyro samples in %d GPMF payloads (%s, ORIN '%s', firmware '%s')\n",
+               v.frame_t_s.size(), v.width, v.height, v.gyro_t_s.size(), v.payloads, v.device.c_str(), v.orin.c_str(),
+               v.firmware.c_str());
+  std::optional<formats::GoProAxes> axes;
+  try {
+    axes = formats::gopro_axes(v.orin, v.firmware);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(o.log + ": " + e.what());
+  }
+  return write_video_recording(o, motion_of(v, o.log), axes);
 }
 
 int run_on_video_with_csv(const Options& o) {
