@@ -41,9 +41,13 @@ double signal_energy(const std::vector<Eigen::Vector2d>& r0, const std::vector<E
 // lens that is nearly right) misfits in a way that follows the motion, and moves a value fitted
 // on one stretch of motion from one fitted on another; the blocks' spread sees that, the
 // frames' alone did not, and a real 12 ms clock offset through a rendered fisheye lens was
-// called two halves apart).
+// called two halves apart). Each sigma is at least a tenth of the value's distance from the
+// poorer hypothesis's (`before`): under the translation nuisance the sigmas understate the
+// scatter, and a 0.4 s clock offset that a walk's halves put 2.9 ms apart (8 sigmas) is real
+// beyond doubt: dropping it left 68 px where the noise floor was 3.6. A stand-in's halves differ by
+// about its whole size (a clock jump's: 0 and 3 ms), far past this floor.
 double apart(const DiagnosisModel& m, const Halves& h, const ModelParams& on_a, const ModelParams& on_b,
-             const ParamMask& free_mask, const ParamMask& added) {
+             const ModelParams& before, const ParamMask& free_mask, const ParamMask& added) {
   std::vector<Param> free;
   for (int k = 0; k < kParamCount; ++k)
     if (free_mask[k]) free.push_back(Param(k));
@@ -52,8 +56,10 @@ double apart(const DiagnosisModel& m, const Halves& h, const ModelParams& on_a, 
   if (!va || !vb) return 0;  // a half that cannot measure them (no motion there) has no say
   double worst = 0;
   for (size_t j = 0; j < free.size(); ++j) {
-    const double s = std::sqrt((*va)[j] + (*vb)[j]);
-    if (added[static_cast<size_t>(free[j])] && s > 0) worst = std::max(worst, std::abs(on_a[free[j]] - on_b[free[j]]) / s);
+    const Param q = free[j];
+    const double size = std::abs(0.5 * (on_a[q] + on_b[q]) - before[q]);
+    const double s = std::max(std::sqrt((*va)[j] + (*vb)[j]), kHalvesSizeFraction * size);
+    if (added[static_cast<size_t>(q)] && s > 0) worst = std::max(worst, std::abs(on_a[q] - on_b[q]) / s);
   }
   return worst;
 }
@@ -95,7 +101,7 @@ HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const Halves
     const auto r0 = m.residuals(poorer.on[dir], judge), r1 = m.residuals(richer.on[dir], judge);
     v.drop = std::min(v.drop, robust_chi2(r0, sigma) - robust_chi2(r1, sigma) + 3.0 * std::sqrt(signal_energy(r0, r1, sigma)));
   }
-  v.apart_sigmas = apart(m, h, richer.on[0], richer.on[1], richer_free, richer_free & ~poorer_free);
+  v.apart_sigmas = apart(m, h, richer.on[0], richer.on[1], poorer.on[0], richer_free, richer_free & ~poorer_free);
   return v;
 }
 

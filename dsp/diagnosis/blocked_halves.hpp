@@ -52,6 +52,9 @@ HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const Hypoth
 // sigmas are clustered by blocks of kHalvesBlockS; a half with fewer than 20 blocks (a recording
 // under about 10 s) has no say on the value.
 inline constexpr double kHalvesAgreeSigmas = 4.0;
+// No sigma of that test is below this fraction of the value's distance from the poorer
+// hypothesis's: halves that agree on an effect to a tenth of its size agree on the effect.
+inline constexpr double kHalvesSizeFraction = 0.1;
 inline constexpr double kHalvesBlockS = 0.25;
 
 }  // namespace rsd::dsp
