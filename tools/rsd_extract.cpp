@@ -258,7 +258,8 @@ int main(int argc, char** argv) {
   app.add_option("--readout", o.readout, "nominal readout: top_to_bottom or bottom_to_top (default: the log's metadata)");
   app.add_option("--frame-rate", o.frame_rate_hz, "nominal frame rate, Hz (default: the log's median frame interval)")->check(positive("Hz"));
   app.add_option("--time-offset", o.time_offset_s, "nominal time offset, s (t_motion = t_camera + offset)")->check(finite_number("s"));
-  app.add_option("--imu-to-camera", o.imu_to_camera, "9 numbers, row-major R with w_camera = R w_imu (IMU-frame velocity)");
+  app.add_option("--imu-to-camera", o.imu_to_camera, "9 numbers, row-major R with w_camera = R w_imu (IMU-frame velocity; default for a GoPro MP4: its "
+                 "gyro stream's ORIN, else the order GoPro documents for its model, else the identity)");
   app.add_option("--lever-arm", o.lever_arm, "camera origin in the tracked body's frame, m")->check(vec3("x,y,z in m"));
   app.add_option("--noise-px", o.noise_px, "state the known pixel noise sigma in recording.yaml (default: omitted)")->check(positive("px"));
   app.add_option("--frame-times", o.frame_times, "a video's frames' times, one per line (a phone logger's; with --gyro-csv)")
