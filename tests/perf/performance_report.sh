@@ -14,7 +14,7 @@ doc="$src/docs/performance.md"
 rect="$build/tests/dsp/rectify/bench_rs_rectifier"
 e2e="$build/tests/daemon/bench_pipeline_latency"
 for exe in "$rect" "$e2e"; do
-  [ -x "$exe" ] || { echo "performance_report: $exe is missing: build the tree first" >&2; exit 2; }
+  [ -x "$exe" ] || { echo "performance_report: $exe is missing: build it first (cmake --build $build --target benchmarks)" >&2; exit 2; }
 done
 grep -q '^<!-- generated: begin' "$doc" && grep -q '^<!-- generated: end' "$doc" ||
   { echo "performance_report: $doc lacks the generated markers" >&2; exit 2; }
