@@ -11,6 +11,7 @@ foreach(scenario ${RSD_SCENARIOS})
 endforeach()
 add_executable(test_sim_scenarios test_sim_scenarios.cpp)
 target_link_libraries(test_sim_scenarios PRIVATE rsd_formats_scenario GTest::gtest GTest::gtest_main)
+rsd_test_compile(test_sim_scenarios)
 target_compile_definitions(test_sim_scenarios PRIVATE RSD_SCENARIO_DIR="${PROJECT_SOURCE_DIR}/config/scenarios"
                            RSD_SIM_OUT="${CMAKE_BINARY_DIR}/sim")
 gtest_discover_tests(test_sim_scenarios DISCOVERY_TIMEOUT 60
