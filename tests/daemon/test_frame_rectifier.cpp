@@ -11,6 +11,7 @@
 
 using namespace rsd;
 
+namespace test_frame_rectifier {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 constexpr int kW = 160, kH = 120;
@@ -146,3 +147,5 @@ TEST(FrameRectifier, WaitsForALateSampleUpToTheBound) {
   EXPECT_GE(n.imu_wait_s, 0.005);  // the whole bound, then the rate held
   EXPECT_TRUE(n.rectified);
 }
+
+}  // namespace test_frame_rectifier

@@ -22,6 +22,7 @@
 
 using namespace rsd;
 
+namespace test_pipeline_replay_samples {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 constexpr int kW = 48, kH = 36, kFrames = 10;
@@ -152,3 +153,5 @@ TEST(PipelineReplay, AFrameSeesTheSamplesBeforeTheNextFrameWhateverTheThreadsTim
     EXPECT_EQ(b.velocity_age_s, a.velocity_age_s);
   }
 }
+
+}  // namespace test_pipeline_replay_samples

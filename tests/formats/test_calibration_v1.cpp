@@ -15,7 +15,7 @@
 #include "formats/yaml_map.hpp"
 #include "tests/support/temp_dir.hpp"
 
-namespace rsd {
+namespace rsd::test_calibration_v1 {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 const test::TempDir& g_tmp = test::register_temp_dir("rsd_test_calibration_");
@@ -216,4 +216,4 @@ TEST(CalibrationV1, ValuesBeyondRsdsInputLimitsAreRefusedNamingTheKey) {
 }
 
 }  // namespace
-}  // namespace rsd
+}  // namespace rsd::test_calibration_v1

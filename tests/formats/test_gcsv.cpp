@@ -13,7 +13,7 @@
 #include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
 
-namespace rsd::formats {
+namespace rsd::formats::test_gcsv {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 const test::TempDir& g_tmp = test::register_temp_dir("rsd_test_gcsv_");
@@ -99,4 +99,4 @@ TEST(VideoFrameTimes, AThirtyFramesPerSecondAviFromZero) {
 }
 
 }  // namespace
-}  // namespace rsd::formats
+}  // namespace rsd::formats::test_gcsv

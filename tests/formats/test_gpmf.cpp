@@ -16,7 +16,7 @@
 #include "formats/video_file.hpp"
 #include "tests/support/temp_dir.hpp"
 
-namespace rsd::formats {
+namespace rsd::formats::test_gpmf {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 using Bytes = std::vector<std::uint8_t>;
@@ -218,4 +218,4 @@ TEST(GpmfVideo, FilesWithoutAGoProsTracksAreRefusedNamingThem) {
 }
 
 }  // namespace
-}  // namespace rsd::formats
+}  // namespace rsd::formats::test_gpmf

@@ -14,6 +14,7 @@
 
 using namespace rsd;
 
+namespace test_gyroflow_profile {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 const test::TempDir& g_tmp = test::register_temp_dir("rsd_test_gyroflow_");
@@ -186,3 +187,5 @@ TEST(GyroflowProfile, WhatRsdCannotRepresentIsRefusedNamingTheKey) {
   EXPECT_NE(error_of(write("empty.json", "")).find("'document' must be a mapping"), std::string::npos);
   EXPECT_NE(error_of(write("bare.json", "{}")).find("'calib_dimension' is missing"), std::string::npos) << error_of(write("bare.json", "{}"));
 }
+
+}  // namespace test_gyroflow_profile

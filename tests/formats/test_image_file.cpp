@@ -12,7 +12,7 @@
 #include "formats/image_file.hpp"
 #include "tests/support/temp_dir.hpp"
 
-namespace rsd::formats {
+namespace rsd::formats::test_image_file {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 const test::TempDir& g_tmp = test::register_temp_dir("rsd_test_image_file_");
@@ -104,4 +104,4 @@ TEST(ImageFile, AWholePgmReadsBackWithItsByteOrder) {
 }
 
 }  // namespace
-}  // namespace rsd::formats
+}  // namespace rsd::formats::test_image_file

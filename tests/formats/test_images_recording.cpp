@@ -15,6 +15,7 @@
 using namespace rsd;
 namespace fs = std::filesystem;
 
+namespace test_images_recording {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 // The test's directories, inside one of this process's that goes when it ends.
@@ -193,3 +194,5 @@ TEST(VideoFile, WrittenFramesReadBackInOrder) {
   EXPECT_THROW(formats::VideoReader((dir / "none.mp4").string()), std::runtime_error);
   EXPECT_THROW(formats::VideoWriter((dir / "x.gif").string(), 64, 48, 30), std::runtime_error);
 }
+
+}  // namespace test_images_recording

@@ -15,6 +15,7 @@ using rsd::formats::ConfigError;
 using rsd::formats::Intrinsics;
 using rsd::formats::load_intrinsics;
 
+namespace test_intrinsics_file {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 // The files, in a directory of this process's that goes when it ends.
@@ -255,3 +256,5 @@ TEST(IntrinsicsFile, SizesBeyondTheFrameLimitRefused) {
   const std::string tall = write("ros-tall.yaml", replace(kRos, "image_height: 720", "image_height: 16385"));
   EXPECT_NE(error_of(tall).find("'image_height' must be 4..8000 pixels"), std::string::npos) << error_of(tall);
 }
+
+}  // namespace test_intrinsics_file

@@ -27,6 +27,7 @@ using namespace rsd;
 using namespace rsd::drivers;
 using namespace rsd::formats;
 
+namespace test_lcm_log_reader {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 constexpr int kFrames = 10, kW = 32, kH = 24;
@@ -413,3 +414,5 @@ TEST(ReplayPacer, RealTimeAndFactorsFollowTheLogsClock) {
   EXPECT_FALSE(parse_speed("0", s));
   EXPECT_FALSE(parse_speed("2x", s));
 }
+
+}  // namespace test_lcm_log_reader

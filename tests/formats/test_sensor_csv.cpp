@@ -10,7 +10,7 @@
 #include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
 
-namespace rsd::formats {
+namespace rsd::formats::test_sensor_csv {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 const test::TempDir& g_tmp = test::register_temp_dir("rsd_test_sensor_csv_");
@@ -94,4 +94,4 @@ TEST(SensorCsv, ThePhoneRecordingReadsAsItsSourcePrintedIt) {
 }
 
 }  // namespace
-}  // namespace rsd::formats
+}  // namespace rsd::formats::test_sensor_csv

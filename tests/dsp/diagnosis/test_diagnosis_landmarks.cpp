@@ -24,6 +24,7 @@ using rsd::test::param;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
+namespace test_diagnosis_landmarks {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 constexpr double kNoise = 0.5;
@@ -210,3 +211,5 @@ TEST(DiagnosisLandmarks, WithoutStatedNoiseTheScaleIsEstimated) {
   EXPECT_NEAR(d.sigma_px, kNoise, 0.05 * kNoise);
   EXPECT_EQ(d.noise_floor_px, 0.0);
 }
+
+}  // namespace test_diagnosis_landmarks

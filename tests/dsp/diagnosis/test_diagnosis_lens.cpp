@@ -24,6 +24,7 @@ using rsd::test::find;
 using rsd::test::names;
 using rsd::test::param;
 
+namespace test_diagnosis_lens {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 constexpr double kNoise = 0.5;
@@ -154,3 +155,5 @@ TEST(DiagnosisLens, AnEquidistantNominalWithWrongTermsIsNamedLensDistortionK1ToK
   std::printf("lens against the truth: named %.3f px\n", after);
   EXPECT_LT(after, 0.3);
 }
+
+}  // namespace test_diagnosis_lens

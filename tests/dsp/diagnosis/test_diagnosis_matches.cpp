@@ -25,6 +25,7 @@ using rsd::test::param;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
+namespace test_diagnosis_matches {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 constexpr double kNoise = 0.5;
@@ -308,3 +309,5 @@ TEST(DiagnosisMatches, RejectsRecordingsItCannotModel) {
   rec.matches.push_back({9999, Vector2d(1, 1), 0, Vector2d(1, 1)});
   EXPECT_THROW(DiagnosisModel{rec}, std::invalid_argument);
 }
+
+}  // namespace test_diagnosis_matches

@@ -23,6 +23,7 @@ using rsd::test::param;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
+namespace test_diagnosis_mount_scale {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 constexpr double kNoise = 0.5;
@@ -109,3 +110,5 @@ TEST(DiagnosisMountScale, PrincipalPointIsModelledExactly) {
   p[Param::Cx] = 322.0, p[Param::Cy] = 237.5;
   EXPECT_LT(effect_rms(c, &p), 1e-6);  // and vanishes at the true one
 }
+
+}  // namespace test_diagnosis_mount_scale

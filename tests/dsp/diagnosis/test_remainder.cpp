@@ -16,6 +16,7 @@
 
 using namespace rsd::dsp;
 
+namespace test_remainder {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 // Like the phone: a 1450 px camera, an irregular gyro with jittered, repeated and missing
@@ -158,3 +159,5 @@ TEST(Remainder, UnderstatedNoiseRestartsTheSelectionAtTheDataScale) {
   EXPECT_TRUE(d.effects.empty());
   EXPECT_FALSE(d.remainder.significant);
 }
+
+}  // namespace test_remainder

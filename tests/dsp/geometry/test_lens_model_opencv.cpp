@@ -13,6 +13,7 @@
 
 using namespace rsd::dsp;
 
+namespace test_lens_model_opencv {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 CameraModel fisheye(const Distortion& d) {
@@ -85,3 +86,5 @@ TEST(LensModelOpenCv, EquidistantBackProjectionAgreesWithCvFisheyeUndistortPoint
     }
   }
 }
+
+}  // namespace test_lens_model_opencv

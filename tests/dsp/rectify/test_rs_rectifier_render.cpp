@@ -14,6 +14,7 @@
 using namespace rsd::dsp;
 using Eigen::Vector3d;
 
+namespace test_rs_rectifier_render {  // shares a unity unit (tests/CMakeLists.txt)
 namespace {
 
 CameraModel camera(int w, int h, double hfov_deg) { return CameraModel::from_hfov(w, h, hfov_deg * M_PI / 180); }
@@ -107,3 +108,4 @@ TEST(RsRectifier, RectifiedGroundIsTheGlobalShutterGround) {
   EXPECT_GT(r.unrectified_rms, 4 * r.rectified_rms);
 }
 
+}  // namespace test_rs_rectifier_render
