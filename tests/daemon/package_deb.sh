@@ -3,8 +3,9 @@
 # root (dpkg-deb -x) and checks it as an installation: the file list (programs, units, the
 # conffile, man pages, the LCM type jar, rsd-spy, docs; no test binaries), the conffile mark,
 # the installed programs' --version, the installed configuration through the installed rsd's
-# --check-config, and systemd-analyze verify of the installed units against that root (it
-# exits 0 even on bad values, so any output at all is a failure), and their exposure in
+# --check-config, a video written through the installed video module, and systemd-analyze
+# verify of the installed units against that root (it exits 0 even on bad values, so any output
+# at all is a failure), and their exposure in
 # systemd-analyze security --offline=true: at most 2.0 (--threshold=20) for each.
 set -eu
 build=$(cd "$1" && pwd); work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
@@ -30,6 +31,12 @@ dpkg-deb -x "$deb" "$root"
 "$root/usr/bin/rsd-diagnose" --version | grep -q '^rsd-diagnose [0-9]' || fail "rsd-diagnose --version"
 "$root/usr/bin/rsd-spy" --version | grep -q '^rsd-spy [0-9]' || fail "rsd-spy --version"
 "$root/usr/bin/rsd" --check-config --config "$root/etc/rsd/rsd.yaml" || fail "the installed rsd.yaml does not check"
+# The video module is in the library folder, and the installed programs find it there (from
+# their own folder, not the build tree's): the installed rsd replays the reference log into a video.
+grep -Eq '^/usr/lib/([^/]+/)?rsd/rsd_video_opencv\.so$' "$work/list" || fail "missing the video module rsd_video_opencv.so"
+"$root/usr/bin/rsd" --replay "$(dirname "$0")/../data/reference-sim-96x72.lcmlog" --speed fast \
+  --output-video "$work/out.avi" >"$work/video.log" 2>&1 || { cat "$work/video.log"; fail "the installed rsd wrote no video"; }
+[ -s "$work/out.avi" ] || fail "the installed rsd wrote an empty video"
 grep -q "^ExecStart=/usr/bin/rsd --config /etc/rsd/rsd.yaml" "$root/usr/lib/systemd/system/rsd.service" ||
   fail "rsd.service does not run the installed rsd on the installed configuration"
 # Against the root, systemd-analyze finds everything there: give it what a Debian 12 system has
