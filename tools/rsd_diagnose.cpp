@@ -141,6 +141,14 @@ void write_file(const std::string& path, const std::string& text) {
   if (!f) throw std::runtime_error(path + ": cannot write");
 }
 
+// What the gyro's rates said of its stamps (dsp/diagnosis/gyro_stamps.hpp), on stderr.
+void say_gyro_stamps(const rsd::dsp::StampSpread& s) {
+  if (s.moved_rms_s > 0)
+    std::cerr << "rsd-diagnose: the gyro's stamps jitter by " << format_number(1e3 * s.jitter_s, 2)
+              << " ms (RMS, seen in its rates); its samples' times taken from the rates (moved "
+              << format_number(1e3 * s.moved_rms_s, 2) << " ms RMS)\n";
+}
+
 int run(int argc, char** argv) {
   Options o;
   CLI::App app(kDescription, "rsd-diagnose");
@@ -176,6 +184,7 @@ int run(int argc, char** argv) {
   const std::string axes = check_imu_axes(rec, o.imu_axes);
   // The model is built first so that an unsupported recording fails before the long part.
   const DiagnosisModel model(rec);
+  say_gyro_stamps(model.gyro_stamps());
   std::cerr << "rsd-diagnose: diagnosing " << model.size() << " observations...\n";
   DiagnosisOptions opt;
   opt.heldout_every = o.heldout_every;

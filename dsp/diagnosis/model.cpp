@@ -1,5 +1,6 @@
 #include "dsp/diagnosis/model.hpp"
 
+#include "dsp/diagnosis/gyro_stamps.hpp"
 #include "dsp/diagnosis/match_jacobian.hpp"
 #include "dsp/diagnosis/translation.hpp"
 
@@ -8,6 +9,7 @@
 #include <limits>
 #include <stdexcept>
 #include <unordered_map>
+#include <utility>
 
 #include "dsp/geometry/camera_motion.hpp"
 
@@ -253,6 +255,11 @@ DiagnosisModel::DiagnosisModel(const Recording& rec)
   }
   gyro_ = clean_gyro(rec.gyro);
   max_gap_ = gap_limit(gyro_);
+  // The stamps' jitter turns a rate's integral by the rate's change over the error, pair by
+  // pair; where the rates hold the samples' times, they are taken from there.
+  GyroStamps stamps = estimate_gyro_stamps(gyro_, max_gap_);
+  gyro_ = std::move(stamps.gyro);
+  stamps_ = stamps.spread;
   obs_.reserve(rec.matches.size());
   for (const Match& mt : rec.matches) {
     const auto a = frame.find(mt.frame_a), b = frame.find(mt.frame_b);

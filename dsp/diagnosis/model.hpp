@@ -23,6 +23,7 @@
 
 #include "dsp/geometry/camera_motion.hpp"
 #include "dsp/diagnosis/gyro.hpp"
+#include "dsp/diagnosis/gyro_stamps.hpp"
 #include "dsp/diagnosis/pose_track.hpp"
 #include "dsp/diagnosis/translation.hpp"
 #include "dsp/observation/recording.hpp"
@@ -160,6 +161,9 @@ class DiagnosisModel {
   // The longest gyro gap a match may span and still be predicted: 1.5 x the 95th percentile
   // of the sampling intervals, at least 20 ms (infinite for landmarks).
   double max_gyro_gap() const { return max_gap_; }
+  // Matches: what the gyro's rates said of its stamps, and how far the samples' times were
+  // moved to where the rates put them (dsp/diagnosis/gyro_stamps.hpp).
+  const StampSpread& gyro_stamps() const { return stamps_; }
   // Whether effect parameters apply: gyro bias to gyro motion, lever arm to trajectories.
   bool has_gyro() const { return rec_.motion == MotionKind::Gyro; }
 
@@ -197,6 +201,7 @@ class DiagnosisModel {
   std::optional<SampledTrajectory> body_slow_;  // the bracketing solver's fallback
   std::vector<GyroSample> gyro_;
   double max_gap_ = std::numeric_limits<double>::infinity();
+  StampSpread stamps_;
   std::vector<Obs> obs_;
   std::unique_ptr<TrackCache> tracks_;
   std::unique_ptr<RayCache> rays_;

@@ -129,10 +129,20 @@ TEST(DiagnosisMatches, ConcealedGyroBias) {
   c.effects.gyro_bias = b;
   expect_concealed(c);
   const Diagnosis d = expect_named(c, "gyro_bias ");
+  // Over 5 s the bias is held to about 0.3-0.7 mrad/s (the reported sigmas); over seeds 1-9 the
+  // values scatter by 0.6-0.9 mrad/s RMS per axis, up to 1.6 mrad/s (with the gyro's stamps as
+  // given and with their times taken from the rates alike, thirtieth session): 1.5 mrad/s is
+  // about 2.3 sigmas of the worst axis, and the reported sigma must cover the error at 3.
   const NamedEffect* e = find(d, "gyro_bias");
-  EXPECT_NEAR(param(e, "bx"), b.x(), 1e-3);
-  EXPECT_NEAR(param(e, "by"), b.y(), 1e-3);
-  EXPECT_NEAR(param(e, "bz"), b.z(), 1e-3);
+  const char* axes[3] = {"bx", "by", "bz"};
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(param(e, axes[k]), b[k], 1.5e-3) << axes[k];
+    for (const ParamUncertainty& u : d.uncertainties)
+      if (u.effect == "gyro_bias" && u.param == axes[k]) {
+        ASSERT_TRUE(u.sigma) << axes[k];
+        EXPECT_LT(std::abs(u.value - b[k]), 3 * *u.sigma) << axes[k];
+      }
+  }
 }
 
 TEST(DiagnosisMatches, ConcealedLensDistortion) {
