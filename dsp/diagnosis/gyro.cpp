@@ -69,6 +69,11 @@ double interval_percentile(const std::vector<GyroSample>& g, int percent) {
   return dt[dt.size() * percent / 100];
 }
 
+double gyro_gap_limit(const std::vector<GyroSample>& g) {
+  if (g.size() < 2) return std::numeric_limits<double>::infinity();
+  return std::max(1.5 * interval_percentile(g, 95), 0.02);
+}
+
 GyroTrack::GyroTrack(const std::vector<GyroSample>& g, const Eigen::Vector3d& bias, const Eigen::Matrix3d& imu_to_camera,
                      double max_interval, const Eigen::Vector3d& scale)
     : bias_(bias), scale_(scale), imu_to_camera_t_(imu_to_camera.transpose()), imu_to_camera_(imu_to_camera) {

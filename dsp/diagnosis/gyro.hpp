@@ -28,6 +28,10 @@ std::vector<GyroSample> clean_gyro(std::vector<GyroSample> gyro);
 // the n intervals in order.
 double interval_percentile(const std::vector<GyroSample>& gyro, int percent);
 
+// The longest interval between samples of `gyro` (sorted) that is still sampling, not a gap:
+// 1.5 x the 95th percentile of the intervals, at least 20 ms (infinite under two samples).
+double gyro_gap_limit(const std::vector<GyroSample>& gyro);
+
 class GyroTrack {
  public:
   // `gyro` as clean_gyro returns it (at least one sample). w_true = w_measured - bias (spec

@@ -221,13 +221,6 @@ std::optional<RowSolution> fixed_point_row(F&& pixel_at, double v_start,
   return std::nullopt;
 }
 
-// The longest interval between gyro samples that is still sampling, not a gap: 1.5 x the 95th
-// percentile of the intervals, at least 20 ms.
-double gap_limit(const std::vector<GyroSample>& g) {
-  if (g.size() < 2) return std::numeric_limits<double>::infinity();
-  return std::max(1.5 * interval_percentile(g, 95), 0.02);
-}
-
 }  // namespace
 
 DiagnosisModel::DiagnosisModel(const Recording& rec)
@@ -254,7 +247,7 @@ DiagnosisModel::DiagnosisModel(const Recording& rec)
     return;
   }
   gyro_ = clean_gyro(rec.gyro);
-  max_gap_ = gap_limit(gyro_);
+  max_gap_ = gyro_gap_limit(gyro_);
   // The stamps' jitter turns a rate's integral by the rate's change over the error, pair by
   // pair; where the rates hold the samples' times, they are taken from there.
   GyroStamps stamps = estimate_gyro_stamps(gyro_, max_gap_);
