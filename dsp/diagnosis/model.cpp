@@ -420,7 +420,7 @@ void DiagnosisModel::translation_out_of_columns(const ModelParams& p, const std:
 
 bool DiagnosisModel::moves_translation_pass(Param q) {
   switch (q) {
-    case Param::LineDelay: case Param::Fx: case Param::Fy: case Param::Cx: case Param::Cy:
+    case Param::Fx: case Param::Fy: case Param::Cx: case Param::Cy:
     case Param::K1: case Param::K2: case Param::K3: case Param::K4:
       return false;
     default:

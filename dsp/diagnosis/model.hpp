@@ -133,7 +133,8 @@ class DiagnosisModel {
                                   const Settled& near) const;
   // Whether q moves the translation pass of a matches recording: the frame pairs' turns follow
   // the clock's offset and drift, the mount and the gyro's bias and scale (and the lever arm,
-  // which matches do not see); the line delay, the intrinsics and the lens leave them.
+  // which matches do not see), the matches' times the line delay; the intrinsics and the lens
+  // leave them.
   static bool moves_translation_pass(Param q);
   // Matches: d(residual before the translation) / d(parameter) of each observation of idx for the
   // parameters kAnalyticParams (match_jacobian.hpp), at p where `at` was settled on idx (its

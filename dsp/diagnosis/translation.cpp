@@ -19,14 +19,23 @@ namespace rsd::dsp {
 
 namespace {
 
+// A pair's unknowns: the velocity over depth at its time and that velocity's rate of change
+// (world axes), w = (u(t), u'(t)). A match sees the camera move between its two rows' times,
+// not between the frames' starts: its velocity is u(t + delta) ~ u(t) + delta u'(t), delta its
+// rows' mean time after the frames' (docs/diagnosis.md, "Parallax"). Over a hand's shake the
+// velocity changes by up to a tenth across a 25 ms readout, a flow error that grows down the
+// image and that a principal point and a mount's pitch took up.
+constexpr int kW = 6;
+using PairFlow = Eigen::Matrix<double, 2, kW>;
+
 // One frame pair's share of the velocity fit: its time and the normal matrix of its inliers in
-// the velocity over depth (world axes), and how a velocity turns into its translation over depth
-// (camera axes): beta = dt R^T u. The right-hand sides are kept beside the pairs, rows 3q..3q+2
-// pair q's (one column per set of residuals).
+// w (world axes), and how a velocity turns into its translation over depth (camera axes):
+// beta = dt R^T u. The right-hand sides are kept beside the pairs, rows 6q..6q+5 pair q's (one
+// column per set of residuals).
 struct PairSums {
   double t = 0;
   Eigen::Matrix3d turn = Eigen::Matrix3d::Zero();
-  Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
+  Eigen::Matrix<double, kW, kW> N = Eigen::Matrix<double, kW, kW>::Zero();
 };
 
 // Uniform cubic B-spline: the weights of the four control points at fraction u of an interval.
@@ -35,15 +44,24 @@ std::array<double, 4> cubic_weights(double u) {
   return {v * v * v / 6, (3 * u3 - 6 * u2 + 4) / 6, (-3 * u3 + 3 * u2 + 3 * u + 1) / 6, u3 / 6};
 }
 
-// The velocity spline over [t0, t0 + intervals x knot_s]: a time's first control point and weights.
+// Their derivatives by time, over a knot spacing of one.
+std::array<double, 4> cubic_slopes(double u) {
+  const double v = 1 - u;
+  return {-v * v / 2, (3 * u * u - 4 * u) / 2, (-3 * u * u + 2 * u + 1) / 2, u * u / 2};
+}
+
+// The velocity spline over [t0, t0 + intervals x knot_s]: a time's first control point, the
+// weights of the four and their derivatives by time (what gives u and u' there).
 struct Spline {
   double t0, knot;
   int intervals;
   int controls() const { return intervals + 3; }
-  int first(double t, std::array<double, 4>& w) const {
+  int first(double t, std::array<double, 4>& w, std::array<double, 4>& dw) const {
     const double s = (t - t0) / knot;
     const int j = std::clamp(static_cast<int>(std::floor(s)), 0, intervals - 1);
-    w = cubic_weights(std::clamp(s - j, 0.0, 1.0));
+    const double u = std::clamp(s - j, 0.0, 1.0);
+    w = cubic_weights(u), dw = cubic_slopes(u);
+    for (double& d : dw) d /= knot;
     return j;
   }
 };
@@ -52,7 +70,7 @@ struct Spline {
 constexpr int kBand = 3 * 4 - 1;
 
 // The normal matrix of the spline's control points: the pairs' N through the spline's weights
-// and a light penalty on the second difference of the control points (it decides only where
+// (u(t) and u'(t) both linear in the control points) and a light penalty on the second difference of the control points (it decides only where
 // the data leave a direction free: a stretch without pairs, a component no pair shows). A
 // pair's time touches four consecutive control points and the penalty three, so it is banded
 // (kBand scalars either side of the diagonal), gathered and factorised as a band.
@@ -64,17 +82,18 @@ BandCholesky velocity_normal(const Spline& sp, const std::vector<PairSums>& pair
   };
   double trace = 0;
   for (const PairSums& p : pairs) {
-    std::array<double, 4> w;
-    const int j = sp.first(p.t, w);
-    // (w w^T) kron N, its upper triangle: the blocks above the diagonal whole, those on it half.
-    for (int a = 0; a < 4; ++a) {
-      for (int x = 0; x < 3; ++x)
-        for (int y = x; y < 3; ++y) band(kBand + x - y, 3 * (j + a) + y) += w[a] * w[a] * p.N(x, y);
-      for (int c = a + 1; c < 4; ++c)
+    std::array<double, 4> w, dw;
+    const int j = sp.first(p.t, w, dw);
+    // Control points a and c: W_a^T N W_c, W_a = (w_a I; dw_a I); its upper triangle, the
+    // blocks above the diagonal whole, those on it half.
+    const auto N00 = p.N.topLeftCorner<3, 3>(), N01 = p.N.topRightCorner<3, 3>(), N11 = p.N.bottomRightCorner<3, 3>();
+    for (int a = 0; a < 4; ++a)
+      for (int c = a; c < 4; ++c) {
+        const Eigen::Matrix3d M = w[a] * w[c] * N00 + w[a] * dw[c] * N01 + dw[a] * w[c] * N01.transpose() + dw[a] * dw[c] * N11;
         for (int y = 0; y < 3; ++y)
-          for (int x = 0; x < 3; ++x) band(kBand + 3 * (a - c) + x - y, 3 * (j + c) + y) += w[a] * w[c] * p.N(x, y);
-    }
-    trace += p.N.trace();
+          for (int x = 0; x < (a == c ? y + 1 : 3); ++x) band(kBand + 3 * (a - c) + x - y, 3 * (j + c) + y) += M(x, y);
+      }
+    trace += N00.trace();
   }
   const double lambda = 1e-4 * trace / n, ridge = 1e-9 * trace / n + 1e-12;
   for (int k = 0; k + 2 < sp.controls(); ++k) {
@@ -87,45 +106,50 @@ BandCholesky velocity_normal(const Spline& sp, const std::vector<PairSums>& pair
   return BandCholesky(std::move(band));
 }
 
-// Each pair's velocity over depth (world axes; rows 3q..3q+2 pair q's, a column per column of
-// the right-hand sides B, laid out alike) from the spline's control points minimising the
-// pairs' squared residuals (their N and B), velocity_normal of the same pairs; zero where the
-// normal matrix is not positive definite.
+// Each pair's w, its velocity over depth and that velocity's rate (world axes; rows 6q..6q+5
+// pair q's, a column per column of the right-hand sides B, laid out alike) from the spline's
+// control points minimising the pairs' squared residuals (their N and B), velocity_normal of
+// the same pairs; zero where the normal matrix is not positive definite.
 Eigen::MatrixXd pair_velocities(const Spline& sp, const std::vector<PairSums>& pairs, const Eigen::MatrixXd& B) {
   Eigen::MatrixXd U = Eigen::MatrixXd::Zero(B.rows(), B.cols());
   const BandCholesky normal = velocity_normal(sp, pairs);
   if (!normal.ok()) return U;
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(normal.size(), B.cols());
-  std::array<double, 4> w;
+  std::array<double, 4> w, dw;
   for (size_t q = 0; q < pairs.size(); ++q) {
-    const int j = sp.first(pairs[q].t, w);
-    for (int a = 0; a < 4; ++a) c.middleRows<3>(3 * (j + a)) += w[a] * B.middleRows<3>(3 * q);
+    const int j = sp.first(pairs[q].t, w, dw);
+    for (int a = 0; a < 4; ++a)
+      c.middleRows<3>(3 * (j + a)) += w[a] * B.middleRows<3>(kW * q) + dw[a] * B.middleRows<3>(kW * q + 3);
   }
   normal.solve(c);
   for (size_t q = 0; q < pairs.size(); ++q) {
-    const int j = sp.first(pairs[q].t, w);
-    for (int a = 0; a < 4; ++a) U.middleRows<3>(3 * q) += w[a] * c.middleRows<3>(3 * (j + a));
+    const int j = sp.first(pairs[q].t, w, dw);
+    for (int a = 0; a < 4; ++a) {
+      U.middleRows<3>(kW * q) += w[a] * c.middleRows<3>(3 * (j + a));
+      U.middleRows<3>(kW * q + 3) += dw[a] * c.middleRows<3>(3 * (j + a));
+    }
   }
   return U;
 }
 
 // The pairs' normal equations over the inliers `in` (observations in pair order, flow(k) the
-// 2 x 3 flow of observation k per unit velocity, rk(k) its residual), summed in registers over
-// each pair's run of observations and stored once.
+// 2 x 6 flow of observation k per unit w, rk(k) its residual), summed in registers over each
+// pair's run of observations and stored once.
 template <class Flow, class Residual>
 void pair_sums(std::vector<PairSums>& pairs, Eigen::MatrixXd& B, const std::vector<int>& pair_of, const std::vector<bool>& in,
                const Flow& flow, const Residual& rk) {
-  B.setZero(3 * static_cast<Eigen::Index>(pairs.size()), 1);
+  B.setZero(kW * static_cast<Eigen::Index>(pairs.size()), 1);
   for (size_t k = 0; k < pair_of.size();) {
     const int q = pair_of[k];
-    Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    Eigen::Matrix<double, kW, kW> N = Eigen::Matrix<double, kW, kW>::Zero();
+    Eigen::Matrix<double, kW, 1> b = Eigen::Matrix<double, kW, 1>::Zero();
     for (; k < pair_of.size() && pair_of[k] == q; ++k) {
       if (!in[k]) continue;
-      const Eigen::Matrix<double, 2, 3> Jk = flow(k);
-      N += Jk.transpose() * Jk, b += Jk.transpose() * rk(k);
+      const PairFlow Jk = flow(k);
+      N.selfadjointView<Eigen::Upper>().rankUpdate(Jk.transpose());
+      b += Jk.transpose() * rk(k);
     }
-    pairs[q].N = N, B.middleRows<3>(3 * q) = b;
+    pairs[q].N = N.selfadjointView<Eigen::Upper>(), B.middleRows<kW>(kW * q) = b;
   }
 }
 
@@ -133,14 +157,14 @@ void pair_sums(std::vector<PairSums>& pairs, Eigen::MatrixXd& B, const std::vect
 // explains the inliers' residuals given the translations U: r - f = (g . xn) f, f = J u per
 // observation, linear in g. A light ridge keeps g at zero where the translation shows none.
 template <class Residual>
-Eigen::Vector2d scene_slope(const std::vector<Eigen::Matrix<double, 2, 3>>& J, const std::vector<Eigen::Vector2d>& xn,
+Eigen::Vector2d scene_slope(const std::vector<PairFlow>& J, const std::vector<Eigen::Vector2d>& xn,
                             const std::vector<int>& pair_of, const Eigen::MatrixXd& U, const std::vector<bool>& in,
                             const Residual& r) {
   Eigen::Matrix2d N = Eigen::Matrix2d::Zero();
   Eigen::Vector2d b = Eigen::Vector2d::Zero();
   for (size_t k = 0; k < J.size(); ++k) {
     if (!in[k]) continue;
-    const Eigen::Vector2d f = J[k] * U.middleRows<3>(3 * pair_of[k]);
+    const Eigen::Vector2d f = J[k] * U.middleRows<kW>(kW * pair_of[k]);
     const Eigen::Matrix2d A = f * xn[k].transpose();  // d(flow)/dg
     N += A.transpose() * A, b += A.transpose() * (r(k) - f);
   }
@@ -226,6 +250,25 @@ std::vector<PairSums> pairs_at(const DiagnosisModel& m, const std::vector<int>& 
   return pairs;
 }
 
+// Each grouped observation's flow per unit w (world axes, the plane's depth factor left out):
+// its pair's turn, of the velocity at its rows' mean time, delta after the pair's (row_timing
+// of `tm`), u(t) + delta u'(t). Over the frames' time apart still: the time between the
+// match's rows differs from it by the rows it moved times the line delay, a percent or less,
+// and taken in, it let the line delay shape the translation's flow: a forward flight past a
+// scene the plane cannot describe (the suite's drone) had its line delay 10% off, from 1.4%.
+std::vector<PairFlow> match_flows(const DiagnosisModel& m, const std::vector<int>& idx, const PairGroups& s,
+                                  const std::vector<PairSums>& pairs, const TimeModel& tm) {
+  const RowTiming rt = row_timing(tm, m.recording().nominal.cam.height);
+  std::vector<PairFlow> J(s.position.size());
+  for (size_t k = 0; k < J.size(); ++k) {
+    const int i = idx[s.position[k]];
+    const double row_a = rt.row_time(m.observed_a(i).y()), row_b = rt.row_time(m.observed(i).y());
+    const Eigen::Matrix<double, 2, 3> F = s.unit[k] * pairs[s.pair_of[k]].turn;
+    J[k] << F, (0.5 * (row_a + row_b)) * F;
+  }
+  return J;
+}
+
 Spline spline_over(const std::vector<PairSums>& pairs, double knot_s) {
   double t_lo = pairs.front().t, t_hi = t_lo;
   for (const PairSums& p : pairs) t_lo = std::min(t_lo, p.t), t_hi = std::max(t_hi, p.t);
@@ -247,27 +290,27 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
   const Spline sp = spline_over(pairs, knot_s);
   const size_t n = s.position.size();
-  std::vector<Eigen::Matrix<double, 2, 3>> J(n);  // per unit u, world axes
-  std::vector<Eigen::Vector2d> rk(n);             // the residuals in pair order
-  for (size_t k = 0; k < n; ++k) J[k] = s.unit[k] * pairs[s.pair_of[k]].turn, rk[k] = r[s.position[k]];
+  const std::vector<PairFlow> J = match_flows(m, idx, s, pairs, tm);  // per unit w, world axes
+  std::vector<Eigen::Vector2d> rk(n);                                // the residuals in pair order
+  for (size_t k = 0; k < n; ++k) rk[k] = r[s.position[k]];
   // Four passes from no translation over a flat scene: the inliers are the residuals within 4
   // robust scales of the current fit (one scale for the whole set: the noise does not depend on
   // the pair, and a pair with a handful of observations is judged as well as one with
   // hundreds). From the second on, the scene's slope too (scene_slope): one plane's inverse
   // depth is affine in the normalised image coordinates, and a ground ahead of a forward-flying
   // drone or a car leaves, at one depth, pixels of parallax growing towards the image's bottom.
-  Eigen::MatrixXd U = Eigen::MatrixXd::Zero(3 * static_cast<Eigen::Index>(pairs.size()), 1), B;
+  Eigen::MatrixXd U = Eigen::MatrixXd::Zero(kW * static_cast<Eigen::Index>(pairs.size()), 1), B;
   std::vector<double> len(n);
   fit.in.assign(n, false);
   auto depth_factor = [&](size_t k) { return 1.0 + fit.slope.dot(s.xn[k]); };
-  auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * (J[k] * U.middleRows<3>(3 * s.pair_of[k]))); };
+  auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * (J[k] * U.middleRows<kW>(kW * s.pair_of[k]))); };
   auto left = [&](size_t k) { return Eigen::Vector2d(rk[k] - flow(k)); };
   for (int pass = 0; pass < 4; ++pass) {
     for (size_t k = 0; k < n; ++k) len[k] = left(k).norm();
     const double limit = 4 * std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6);
     for (size_t k = 0; k < n; ++k) fit.in[k] = len[k] <= limit;
     if (pass >= 1) fit.slope = scene_slope(J, s.xn, s.pair_of, U, fit.in, [&](size_t k) { return rk[k]; });
-    pair_sums(pairs, B, s.pair_of, fit.in, [&](size_t k) { return Eigen::Matrix<double, 2, 3>(depth_factor(k) * J[k]); },
+    pair_sums(pairs, B, s.pair_of, fit.in, [&](size_t k) { return PairFlow(depth_factor(k) * J[k]); },
               [&](size_t k) { return rk[k]; });
     U = pair_velocities(sp, pairs, B);
   }
@@ -288,13 +331,12 @@ void remove_fitted_translation(const DiagnosisModel& m, const std::vector<int>& 
   std::vector<bool> in = fit.state->in;
   for (size_t k = 0; k < in.size(); ++k) in[k] = in[k] && r[s.position[k]].allFinite();
   const Eigen::Vector2d slope = fit.state->slope;
-  auto flow = [&](size_t k) {
-    return Eigen::Matrix<double, 2, 3>((1.0 + slope.dot(s.xn[k])) * (s.unit[k] * pairs[s.pair_of[k]].turn));
-  };
+  const std::vector<PairFlow> J = match_flows(m, idx, s, pairs, tm);
+  auto flow = [&](size_t k) { return PairFlow((1.0 + slope.dot(s.xn[k])) * J[k]); };
   Eigen::MatrixXd B;
   pair_sums(pairs, B, s.pair_of, in, flow, [&](size_t k) { return r[s.position[k]]; });
   const Eigen::MatrixXd U = pair_velocities(sp, pairs, B);
-  for (size_t k = 0; k < s.position.size(); ++k) r[s.position[k]] -= flow(k) * U.middleRows<3>(3 * s.pair_of[k]);
+  for (size_t k = 0; k < s.position.size(); ++k) r[s.position[k]] -= flow(k) * U.middleRows<kW>(kW * s.pair_of[k]);
 }
 
 void remove_fitted_translation_from_columns(const DiagnosisModel& m, const std::vector<int>& idx, Eigen::MatrixXd& cols,
@@ -309,16 +351,16 @@ void remove_fitted_translation_from_columns(const DiagnosisModel& m, const std::
   std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
   const Spline sp = spline_over(pairs, knot_s);
   auto rows = [&](size_t k) { return cols.middleRows<2>(2 * static_cast<Eigen::Index>(s.position[k])); };
-  std::vector<Eigen::Matrix<double, 2, 3>> F(s.position.size());
-  for (size_t k = 0; k < F.size(); ++k) F[k] = (1.0 + slope.dot(s.xn[k])) * (s.unit[k] * pairs[s.pair_of[k]].turn);
-  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3 * static_cast<Eigen::Index>(pairs.size()), cols.cols());
+  std::vector<PairFlow> F = match_flows(m, idx, s, pairs, tm);
+  for (size_t k = 0; k < F.size(); ++k) F[k] *= 1.0 + slope.dot(s.xn[k]);
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(kW * static_cast<Eigen::Index>(pairs.size()), cols.cols());
   for (size_t k = 0; k < F.size(); ++k) {
     if (!in[k] || !rows(k).allFinite()) continue;
     const int q = s.pair_of[k];
-    pairs[q].N += F[k].transpose() * F[k], B.middleRows<3>(3 * q) += F[k].transpose() * rows(k);
+    pairs[q].N += F[k].transpose() * F[k], B.middleRows<kW>(kW * q) += F[k].transpose() * rows(k);
   }
   const Eigen::MatrixXd U = pair_velocities(sp, pairs, B);
-  for (size_t k = 0; k < F.size(); ++k) rows(k) -= F[k] * U.middleRows<3>(3 * s.pair_of[k]);
+  for (size_t k = 0; k < F.size(); ++k) rows(k) -= F[k] * U.middleRows<kW>(kW * s.pair_of[k]);
 }
 
 double translation_knot_spacing(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p) {

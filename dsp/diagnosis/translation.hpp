@@ -38,10 +38,12 @@ inline constexpr std::array<double, 3> kTranslationKnotsS = {kTranslationKnotS, 
 inline constexpr double kFinerKnotsGain = 0.10;
 
 // Removes from `r` (residuals of the observations `idx`, NaN for failed predictions) the flow of
-// the camera's translation: per frame pair, the flow over one plane (translation_flow,
-// parallax.hpp, times the plane's inverse depth 1 + g . (x, y) at the normalised image
-// coordinates) of u(t) dt turned into camera axes, u(t) = v(t) / depth a cubic B-spline in world
-// axes fitted to the inliers of every pair at once (four passes; an inlier lies within 4 robust
+// the camera's translation: per match, the flow over one plane (translation_flow, parallax.hpp,
+// times the plane's inverse depth 1 + g . (x, y) at the normalised image coordinates) of
+// u dt turned into camera axes by its pair's turn, dt the frames' time apart and u(t) =
+// v(t) / depth at the mean time of the match's two rows (to first order about the pair's:
+// u(t) + delta u'(t), the readout spreading a pair's matches over 25 ms of a shake), a cubic
+// B-spline in world axes fitted to the inliers of every pair at once (four passes; an inlier lies within 4 robust
 // scales of the current fit), the slope g (one for the recording: a ground ahead of a vehicle)
 // from the second pass on. A pair needs no minimum of observations: the spline pools its
 // neighbours. The camera's orientation at frame time T is
@@ -82,8 +84,8 @@ void remove_fitted_translation(const DiagnosisModel& m, const std::vector<int>& 
 // column of `cols` (2 x idx.size() rows: observation k's in rows 2k and 2k + 1) with one
 // factorisation: the velocity spline fitted to each column as to residuals, with `fit`'s inliers
 // and slope, at the pairs' turns of `track`, `tm`, `mount_t`. A Jacobian column by a parameter
-// that does not move the turns (the line delay, the intrinsics, the lens: not the clock's
-// offset or drift, the mount, the gyro) is so the column of remove_fitted_translation's
+// that moves neither the turns nor the matches' times (the intrinsics, the lens: not the line
+// delay, the clock's offset or drift, the mount, the gyro) is so the column of remove_fitted_translation's
 // residuals, exactly (fit.cpp). An observation whose column has a NaN is left out of the fit;
 // nothing without `fit`'s state. Throws std::invalid_argument when idx or `cols` is not of the
 // size `fit` was fitted to.
