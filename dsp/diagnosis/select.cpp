@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <optional>
 #include <sstream>
 
@@ -55,14 +56,28 @@ std::string refusal(const Selector& sel, const State& s, const State& richer, co
          ") and predicts the held-out frames worse than without it";
 }
 
+// What a round judged of a candidate's refit at one state: its BIC drop, and once asked, its
+// held-out drop and why it is refused ("" when it is not). A round that names nothing leaves
+// the state as it was, and the next round (which asks every candidate again, select.cpp's
+// forward) would judge the same refits the same way: under a hand-held shake's parallax four
+// refusals a round, each with its checks on every fitting observation.
+struct Verdict {
+  double drop = 0;
+  std::optional<double> held_drop;
+  std::string refused;
+};
+using Verdicts = std::map<Effect, Verdict>;
+
 // One forward round: every candidate screened on the subsample; those whose projected drop is
 // near the best (near-degenerate hypotheses, e.g. a lever arm along the optical axis and a
 // focal length, which the subsample cannot tell apart) are refitted on all fitting
 // observations and the lowest BIC there wins. A winner the held-out frames refuse leaves the
 // round (`out.refused`) and the next best is asked, from the same screening, so that a stand-in
 // that wins on the fitting frames does not hide an effect the data hold. Returns false when
-// nothing (left) clears the threshold.
-bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, State& s, RoundResult& out) {
+// nothing (left) clears the threshold. `judged` holds the verdicts at s of earlier rounds that
+// named nothing (Verdict), and gains this round's.
+bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, State& s, RoundResult& out,
+                   Verdicts& judged) {
   out.refused.clear();
   const State here = sel.on_screen(s);
   struct Candidate {
@@ -111,7 +126,10 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
       if (c != best && c->refitted->bic - best->refitted->bic < sel.opt_.min_bic_drop) out.rivals.push_back(c->added);
     // The winner by BIC; accepted by the drop with the design effect (which is itself noisy
     // by a few percent, too much to rank near-degenerate candidates by).
-    out.drop = sel.drop(s, *best->refitted);
+    auto known = judged.find(best->added);
+    if (known == judged.end()) known = judged.emplace(best->added, Verdict{sel.drop(s, *best->refitted), {}, ""}).first;
+    Verdict& v = known->second;
+    out.drop = v.drop;
     if (out.drop < sel.opt_.min_bic_drop) {
       // The strongest group falling short on the full set ends the round: the data hold
       // nothing stronger. After a refusal, though, the group is what is left of the refused
@@ -134,8 +152,12 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
     // lens the held-out frames do not have), and the round goes on to the next best.
     const std::string name = effect_name(best->added);
     const std::string beyond = beyond_hardware_because(best->refitted->params, best->added, sel.m_);
-    out.held_drop = sel.heldout_drop(s, *best->refitted);
-    const std::string refused = refusal(sel, s, *best->refitted, {best->added}, out.drop, out.held_drop);
+    if (!v.held_drop) {
+      v.held_drop = sel.heldout_drop(s, *best->refitted);
+      v.refused = refusal(sel, s, *best->refitted, {best->added}, out.drop, *v.held_drop);
+    }
+    out.held_drop = *v.held_drop;
+    const std::string refused = v.refused;
     if (refused.empty()) {
       s = std::move(*best->refitted);
       return true;
@@ -215,12 +237,13 @@ std::vector<SelectedEffect> forward(const Selector& sel, const std::vector<Effec
   // and the rounds end only after one that asked every candidate, so an effect that another's
   // naming makes acceptable is named a round later, not lost.
   std::vector<Effect> sitting_out;
+  Verdicts judged;  // at s: forgotten when an effect is named
   while (true) {
     const State before = s;
     std::vector<Effect> asked;
     for (Effect e : candidates)
       if (std::find(sitting_out.begin(), sitting_out.end(), e) == sitting_out.end()) asked.push_back(e);
-    bool named = forward_round(sel, asked, s, r);
+    bool named = forward_round(sel, asked, s, r, judged);
     remember();
     if (!named && !sitting_out.empty()) {
       sitting_out.clear();
@@ -233,6 +256,7 @@ std::vector<SelectedEffect> forward(const Selector& sel, const std::vector<Effec
       return steps;
     }
     sitting_out.clear();
+    judged.clear();
     for (const auto& f : r.refused)
       if (!s.has(f.first)) sitting_out.push_back(f.first);
     const double rms = sel.rms(s.params);
