@@ -111,7 +111,9 @@ std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, cons
       if (const auto k = param_by_name(p.name); k && !follows(*k, n) && p.text.empty() &&
                                                  std::find(free.begin(), free.end(), *k) == free.end())
         free.push_back(*k);
-  const std::optional<Eigen::VectorXd> var = parameter_variances(m, fitted, free, fit);
+  std::optional<Eigen::VectorXd> var = parameter_variances(m, fitted, free, fit);
+  if (var && fitted.translation_nuisance)
+    if (const auto blocks = parameter_variances(m, fitted, free, fit, kNuisanceClusterFrames)) var = var->cwiseMax(*blocks);
   auto sigma_of = [&](Param p) -> std::optional<double> {
     double factor = 1.0;
     if (const std::optional<Follows> f = follows(p, n)) p = f->leader, factor = f->factor;
