@@ -111,9 +111,15 @@ std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, cons
       if (const auto k = param_by_name(p.name); k && !follows(*k, n) && p.text.empty() &&
                                                  std::find(free.begin(), free.end(), *k) == free.end())
         free.push_back(*k);
-  std::optional<Eigen::VectorXd> var = parameter_variances(m, fitted, free, fit);
-  if (var && fitted.translation_nuisance)
-    if (const auto blocks = parameter_variances(m, fitted, free, fit, kNuisanceClusterFrames)) var = var->cwiseMax(*blocks);
+  // One Jacobian for both clusterings (under the nuisance each column refits the spline).
+  std::optional<Eigen::VectorXd> var;
+  if (!free.empty()) {
+    const FitInliers f = fit_inliers(m, fitted, fit);
+    const Eigen::MatrixXd J = residual_jacobian(m, fitted, free, f.idx);
+    var = variances(m, J, f, 1);
+    if (var && fitted.translation_nuisance)
+      if (const auto blocks = variances(m, J, f, kNuisanceClusterFrames)) var = var->cwiseMax(*blocks);
+  }
   auto sigma_of = [&](Param p) -> std::optional<double> {
     double factor = 1.0;
     if (const std::optional<Follows> f = follows(p, n)) p = f->leader, factor = f->factor;

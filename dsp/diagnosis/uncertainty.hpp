@@ -30,9 +30,10 @@ bool held_out(const DiagnosisModel& m, int i, int heldout_every);
 // Under the translation nuisance the sandwich is taken clustered by blocks of this many
 // consecutive frames too (about a third of a second at 30 fps; when the recording has at least
 // 20 of them), and the larger taken: the velocity spline is shared by the pairs its knots span,
-// and what it takes of their errors (the gyro's, its own misfit) is shared with them. Fits of the suite's walk (`outside: parallax +
-// phone`) from the truth on eight seeds scattered by 0.30% in focal length; the sigma clustered
-// by frame pair said 0.16-0.27%, by blocks of 8 and 15 frames 0.22-0.37% and 0.19-0.38%.
+// and what it takes of their errors (the gyro's, its own misfit) is shared with them. Fits of
+// the suite's walk (`outside: parallax + phone`) from the truth on eight seeds scattered by
+// 0.30% in focal length; the sigma clustered by frame pair said 0.16-0.27%, by blocks of 8 and
+// 15 frames 0.22-0.37% and 0.19-0.38%.
 inline constexpr int kNuisanceClusterFrames = 10;
 
 // Uncertainties of every named effect's parameters at the fit: numeric Jacobian (central

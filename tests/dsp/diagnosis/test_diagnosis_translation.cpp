@@ -251,7 +251,7 @@ TEST(Translation, UnderTheNuisanceTheSigmaIsClusteredByBlocksOfFramesToo) {
       if (u.param == "fx" && u.sigma) return *u.sigma;
     return std::nan("");
   };
-  const auto by_pair = parameter_variances(m, p, {Param::Fx}, all), by_block = parameter_variances(m, p, {Param::Fx}, all, 10);
+  const auto by_pair = parameter_variances(m, p, {Param::Fx}, all), by_block = parameter_variances(m, p, {Param::Fx}, all, kNuisanceClusterFrames);
   ASSERT_TRUE(by_pair && by_block);
   EXPECT_GT((*by_block)[0], 1.2 * (*by_pair)[0]);
   EXPECT_NEAR(reported(p), std::sqrt((*by_block)[0]), 1e-9 * f);
