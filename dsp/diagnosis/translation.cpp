@@ -146,10 +146,13 @@ void pair_sums(std::vector<PairSums>& pairs, Eigen::MatrixXd& B, const std::vect
     for (; k < pair_of.size() && pair_of[k] == q; ++k) {
       if (!in[k]) continue;
       const PairFlow Jk = flow(k);
-      N.selfadjointView<Eigen::Upper>().rankUpdate(Jk.transpose());
+      // The whole 6 x 6 by fixed-size products: a rank update of the upper half alone takes
+      // Eigen's blocked matrix-product path, whose packing costs more than the 72 products (the
+      // walking phone's minute under parallax: 15% of its diagnosis).
+      N.noalias() += Jk.transpose() * Jk;
       b += Jk.transpose() * rk(k);
     }
-    pairs[q].N = N.selfadjointView<Eigen::Upper>(), B.middleRows<kW>(kW * q) = b;
+    pairs[q].N = N, B.middleRows<kW>(kW * q) = b;
   }
 }
 
@@ -164,7 +167,7 @@ Eigen::Vector2d scene_slope(const std::vector<PairFlow>& J, const std::vector<Ei
   Eigen::Vector2d b = Eigen::Vector2d::Zero();
   for (size_t k = 0; k < J.size(); ++k) {
     if (!in[k]) continue;
-    const Eigen::Vector2d f = J[k] * U.middleRows<kW>(kW * pair_of[k]);
+    const Eigen::Vector2d f = J[k] * U.block<kW, 1>(kW * pair_of[k], 0);
     const Eigen::Matrix2d A = f * xn[k].transpose();  // d(flow)/dg
     N += A.transpose() * A, b += A.transpose() * (r(k) - f);
   }
@@ -303,7 +306,7 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   std::vector<double> len(n);
   fit.in.assign(n, false);
   auto depth_factor = [&](size_t k) { return 1.0 + fit.slope.dot(s.xn[k]); };
-  auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * (J[k] * U.middleRows<kW>(kW * s.pair_of[k]))); };
+  auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * (J[k] * U.block<kW, 1>(kW * s.pair_of[k], 0))); };
   auto left = [&](size_t k) { return Eigen::Vector2d(rk[k] - flow(k)); };
   for (int pass = 0; pass < 4; ++pass) {
     for (size_t k = 0; k < n; ++k) len[k] = left(k).norm();
@@ -336,7 +339,7 @@ void remove_fitted_translation(const DiagnosisModel& m, const std::vector<int>& 
   Eigen::MatrixXd B;
   pair_sums(pairs, B, s.pair_of, in, flow, [&](size_t k) { return r[s.position[k]]; });
   const Eigen::MatrixXd U = pair_velocities(sp, pairs, B);
-  for (size_t k = 0; k < s.position.size(); ++k) r[s.position[k]] -= flow(k) * U.middleRows<kW>(kW * s.pair_of[k]);
+  for (size_t k = 0; k < s.position.size(); ++k) r[s.position[k]] -= flow(k) * U.block<kW, 1>(kW * s.pair_of[k], 0);
 }
 
 void remove_fitted_translation_from_columns(const DiagnosisModel& m, const std::vector<int>& idx, Eigen::MatrixXd& cols,
