@@ -148,7 +148,7 @@ void pair_sums(std::vector<PairSums>& pairs, Eigen::MatrixXd& B, const std::vect
       const PairFlow Jk = flow(k);
       // The whole 6 x 6 by fixed-size products: a rank update of the upper half alone takes
       // Eigen's blocked matrix-product path, whose packing costs more than the 72 products (the
-      // walking phone's minute under parallax: 15% of its diagnosis).
+      // walking phone's minute under parallax: 14% of its profile).
       N.noalias() += Jk.transpose() * Jk;
       b += Jk.transpose() * rk(k);
     }
