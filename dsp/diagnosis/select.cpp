@@ -279,8 +279,10 @@ void forget(std::vector<SelectedEffect>& steps, Effect e) {
 
 // Drops any selected effect whose removal (with a refit of the rest) costs less BIC than
 // the selection threshold: an earlier pick that later ones made redundant. Screened on the
-// subsample, confirmed on the fitting set.
-void backward(const Selector& sel, State& s, std::vector<SelectedEffect>& steps) {
+// subsample, confirmed on the fitting set. What goes, and why, goes to `withheld` (the
+// progress said it was named: the walking phone's principal point, named at a drop of 23 before
+// the lens and the focal length came in, left the list without a word).
+void backward(const Selector& sel, State& s, std::vector<SelectedEffect>& steps, std::vector<std::string>& withheld) {
   bool changed = true;
   while (changed && s.effects.size() > 1) {
     changed = false;
@@ -289,7 +291,15 @@ void backward(const Selector& sel, State& s, std::vector<SelectedEffect>& steps)
       const double projected = projected_drop(sel, sel.remove(s, e, sel.screen_, sel.opt_.screen_iterations), here);
       if (projected >= sel.opt_.min_bic_drop + 30 + 0.05 * std::abs(projected)) continue;
       State c = sel.remove(s, e, sel.fit_, sel.opt_.max_iterations);
-      if (sel.drop(c, s) >= sel.opt_.min_bic_drop) continue;
+      const double drop = sel.drop(c, s);
+      if (drop >= sel.opt_.min_bic_drop) continue;
+      std::ostringstream why;
+      why << effect_name(e) << " not named: named in an earlier round, it adds too little once the effects named after "
+          << "it are in (";
+      if (drop < 0) why << "the BIC is " << std::lround(-drop) << " lower without it)";
+      else why << "BIC drop " << std::lround(drop) << ", under the threshold of " << std::lround(sel.opt_.min_bic_drop) << ")";
+      withheld.push_back(why.str());
+      if (sel.opt_.progress) sel.opt_.progress(withheld.back());
       s = std::move(c);
       forget(steps, e);
       changed = true;
@@ -383,7 +393,7 @@ Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, c
   State s = sel.initial();
   std::vector<std::string> withheld;
   std::vector<SelectedEffect> steps = forward(sel, applicable_effects(m), s, withheld);
-  backward(sel, s, steps);
+  backward(sel, s, steps, withheld);
   if (!opt.blocked_halves) return {steps, s.params, withheld};
   if (opt.progress && !steps.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
   const bool dropped = consistency(sel, s, steps);
