@@ -25,8 +25,15 @@ namespace {
 // rows' mean time after the frames' (docs/diagnosis.md, "Parallax"). Over a hand's shake the
 // velocity changes by up to a tenth across a 25 ms readout, a flow error that grows down the
 // image and that a principal point and a mount's pitch took up.
+//
+// A match's flow per unit w is d unit T (u + delta u'): d the plane's depth factor at it,
+// unit its flow per unit translation (camera axes, fixed by its pixel), T its pair's turn into
+// camera axes over the frames' time apart. What moves with the parameters is two scalars per
+// match (d with the scene's slope, delta with the line delay) and a 3 x 3 per pair, so a pair's
+// normal equations are T^T (sum of d^2 unit^T unit, weighted by 1, delta, delta^2) T, and a
+// match's 2 x 6 flow is never formed (it was a sixth of the walking phone's minute under
+// parallax, with the sums over it).
 constexpr int kW = 6;
-using PairFlow = Eigen::Matrix<double, 2, kW>;
 
 // One frame pair's share of the velocity fit: its time and the normal matrix of its inliers in
 // w (world axes), and how a velocity turns into its translation over depth (camera axes):
@@ -132,49 +139,6 @@ Eigen::MatrixXd pair_velocities(const Spline& sp, const std::vector<PairSums>& p
   return U;
 }
 
-// The pairs' normal equations over the inliers `in` (observations in pair order, flow(k) the
-// 2 x 6 flow of observation k per unit w, rk(k) its residual), summed in registers over each
-// pair's run of observations and stored once.
-template <class Flow, class Residual>
-void pair_sums(std::vector<PairSums>& pairs, Eigen::MatrixXd& B, const std::vector<int>& pair_of, const std::vector<bool>& in,
-               const Flow& flow, const Residual& rk) {
-  B.setZero(kW * static_cast<Eigen::Index>(pairs.size()), 1);
-  for (size_t k = 0; k < pair_of.size();) {
-    const int q = pair_of[k];
-    Eigen::Matrix<double, kW, kW> N = Eigen::Matrix<double, kW, kW>::Zero();
-    Eigen::Matrix<double, kW, 1> b = Eigen::Matrix<double, kW, 1>::Zero();
-    for (; k < pair_of.size() && pair_of[k] == q; ++k) {
-      if (!in[k]) continue;
-      const PairFlow Jk = flow(k);
-      // The whole 6 x 6 by fixed-size products: a rank update of the upper half alone takes
-      // Eigen's blocked matrix-product path, whose packing costs more than the 72 products (the
-      // walking phone's minute under parallax: 14% of its profile).
-      N.noalias() += Jk.transpose() * Jk;
-      b += Jk.transpose() * rk(k);
-    }
-    pairs[q].N = N, B.middleRows<kW>(kW * q) = b;
-  }
-}
-
-// The scene's slope g (inverse depth 1 + g . xn over the depth at the optical axis) that best
-// explains the inliers' residuals given the translations U: r - f = (g . xn) f, f = J u per
-// observation, linear in g. A light ridge keeps g at zero where the translation shows none.
-template <class Residual>
-Eigen::Vector2d scene_slope(const std::vector<PairFlow>& J, const std::vector<Eigen::Vector2d>& xn,
-                            const std::vector<int>& pair_of, const Eigen::MatrixXd& U, const std::vector<bool>& in,
-                            const Residual& r) {
-  Eigen::Matrix2d N = Eigen::Matrix2d::Zero();
-  Eigen::Vector2d b = Eigen::Vector2d::Zero();
-  for (size_t k = 0; k < J.size(); ++k) {
-    if (!in[k]) continue;
-    const Eigen::Vector2d f = J[k] * U.block<kW, 1>(kW * pair_of[k], 0);
-    const Eigen::Matrix2d A = f * xn[k].transpose();  // d(flow)/dg
-    N += A.transpose() * A, b += A.transpose() * (r(k) - f);
-  }
-  N.diagonal().array() += 1e-3 * N.trace() + 1e-12;
-  return N.ldlt().solve(b);
-}
-
 }  // namespace
 
 // The observations of one set of residuals, grouped by frame pair (frame_a's rank and frame_b's
@@ -187,6 +151,7 @@ struct PairGroups {
   std::vector<size_t> position;  // per observation taken, in pair order: its place in idx
   std::vector<int> pair_of;      // its pair
   std::vector<Eigen::Matrix<double, 2, 3>> unit;  // its flow per unit translation, camera axes
+  std::vector<double> mean_row;     // the mean of its two rows (the rows' mean time is affine in it)
   std::vector<Eigen::Vector2d> xn;  // its normalised image coordinates
   std::vector<size_t> pair_first;   // each pair's first observation (position in idx)
   bool same(const std::vector<int>& of, const std::vector<Eigen::Vector2d>& r) const {
@@ -234,6 +199,7 @@ std::shared_ptr<const PairGroups> group_by_pair(const DiagnosisModel& m, const s
     s->position.push_back(at);
     s->pair_of.push_back(static_cast<int>(s->pair_first.size()) - 1);
     s->unit.push_back(translation_flow(cam, px));
+    s->mean_row.push_back(0.5 * (m.observed_a(idx[at]).y() + px.y()));
     s->xn.emplace_back((px.x() - cam.cx) / cam.fx, (px.y() - cam.cy) / cam.fy);
   }
   return s;
@@ -253,23 +219,94 @@ std::vector<PairSums> pairs_at(const DiagnosisModel& m, const std::vector<int>& 
   return pairs;
 }
 
-// Each grouped observation's flow per unit w (world axes, the plane's depth factor left out):
-// its pair's turn, of the velocity at its rows' mean time, delta after the pair's (row_timing
-// of `tm`), u(t) + delta u'(t). Over the frames' time apart still: the time between the
+// Each grouped observation's rows' mean time after its pair's (row_timing of `tm`): the delta
+// of its velocity u(t) + delta u'(t). Over the frames' time apart still: the time between the
 // match's rows differs from it by the rows it moved times the line delay, a percent or less,
 // and taken in, it let the line delay shape the translation's flow: a forward flight past a
 // scene the plane cannot describe (the suite's drone) had its line delay 10% off, from 1.4%.
-std::vector<PairFlow> match_flows(const DiagnosisModel& m, const std::vector<int>& idx, const PairGroups& s,
-                                  const std::vector<PairSums>& pairs, const TimeModel& tm) {
+std::vector<double> row_delays(const DiagnosisModel& m, const PairGroups& s, const TimeModel& tm) {
   const RowTiming rt = row_timing(tm, m.recording().nominal.cam.height);
-  std::vector<PairFlow> J(s.position.size());
-  for (size_t k = 0; k < J.size(); ++k) {
-    const int i = idx[s.position[k]];
-    const double row_a = rt.row_time(m.observed_a(i).y()), row_b = rt.row_time(m.observed(i).y());
-    const Eigen::Matrix<double, 2, 3> F = s.unit[k] * pairs[s.pair_of[k]].turn;
-    J[k] << F, (0.5 * (row_a + row_b)) * F;
+  const double v0 = rt.v0(), per_row = 1.0 / rt.r();  // row_time(v) = (v + v0) / r
+  std::vector<double> delta(s.position.size());
+  for (size_t k = 0; k < delta.size(); ++k) delta[k] = (s.mean_row[k] + v0) * per_row;
+  return delta;
+}
+
+// The pairs' normal equations in w (PairSums::N) and their right-hand sides B (rows 6q..6q+5
+// pair q's, `columns` columns) over the inliers `in` of the grouped observations, in pair order:
+// depth(k) is observation k's depth factor, delta[k] its rows' time after its pair's, rk(k) its
+// residuals (2 x Cols). A pair's run of observations is summed before its turn T is applied:
+// with F = d unit T, F^T F = d^2 T^T (unit^T unit) T and F^T r = d T^T (unit^T r).
+template <int Cols, class Depth, class Residual>
+void pair_sums(std::vector<PairSums>& pairs, Eigen::MatrixXd& B, Eigen::Index columns, const PairGroups& s,
+               const std::vector<double>& delta, const std::vector<bool>& in, const Depth& depth, const Residual& rk) {
+  B.setZero(kW * static_cast<Eigen::Index>(pairs.size()), columns);
+  Eigen::Matrix<double, 3, Cols> c0(3, columns), c1(3, columns), g(3, columns);
+  // unit^T unit is symmetric: its six distinct entries, weighted by d^2 (1, delta, delta^2).
+  auto symmetric = [](const Eigen::Matrix<double, 6, 1>& u) {
+    return (Eigen::Matrix3d() << u[0], u[1], u[2], u[1], u[3], u[4], u[2], u[4], u[5]).finished();
+  };
+  for (size_t k = 0; k < s.pair_of.size();) {
+    const int q = s.pair_of[k];
+    Eigen::Matrix<double, 6, 3> S = Eigen::Matrix<double, 6, 3>::Zero();
+    c0.setZero(), c1.setZero();
+    for (; k < s.pair_of.size() && s.pair_of[k] == q; ++k) {
+      if (!in[k]) continue;
+      const double d = depth(k), e = delta[k], d2 = d * d;
+      const Eigen::Matrix<double, 2, 3>& a = s.unit[k];
+      const Eigen::Matrix<double, 6, 1> G = (Eigen::Matrix<double, 6, 1>() << a.col(0).squaredNorm(), a.col(0).dot(a.col(1)),
+                                             a.col(0).dot(a.col(2)), a.col(1).squaredNorm(), a.col(1).dot(a.col(2)),
+                                             a.col(2).squaredNorm()).finished();
+      S.noalias() += G * Eigen::RowVector3d(d2, d2 * e, d2 * e * e);
+      g.noalias() = a.transpose() * rk(k);
+      c0 += d * g, c1 += (d * e) * g;
+    }
+    const Eigen::Matrix3d T = pairs[q].turn, Tt = T.transpose();
+    Eigen::Matrix<double, kW, kW>& N = pairs[q].N;
+    const Eigen::Matrix3d N00 = Tt * symmetric(S.col(0)) * T, N01 = Tt * symmetric(S.col(1)) * T,
+                          N11 = Tt * symmetric(S.col(2)) * T;
+    N << N00, N01, N01.transpose(), N11;
+    B.middleRows<3>(kW * q).noalias() = Tt * c0, B.middleRows<3>(kW * q + 3).noalias() = Tt * c1;
   }
-  return J;
+}
+
+// The pairs' velocities U (world axes, rows 6q..6q+5 pair q's u and u') turned into camera axes
+// over the frames' time apart, in place: T u and T u', a match's flow then d unit (T u + delta T u').
+Eigen::MatrixXd in_camera_axes(const std::vector<PairSums>& pairs, Eigen::MatrixXd U) {
+  for (size_t q = 0; q < pairs.size(); ++q)
+    for (int h = 0; h < kW; h += 3)
+      for (Eigen::Index c = 0; c < U.cols(); ++c) {
+        const Eigen::Vector3d u = U.block<3, 1>(kW * q + h, c);
+        U.block<3, 1>(kW * q + h, c) = pairs[q].turn * u;
+      }
+  return U;
+}
+
+// Observation k's flow at depth factor one for pair velocities V in camera axes (in_camera_axes),
+// one column of them.
+inline Eigen::Vector2d unit_depth_flow(const PairGroups& s, const std::vector<double>& delta, const Eigen::MatrixXd& V,
+                                size_t k, Eigen::Index column = 0) {
+  const Eigen::Index at = kW * static_cast<Eigen::Index>(s.pair_of[k]);
+  return s.unit[k] * (V.block<3, 1>(at, column) + delta[k] * V.block<3, 1>(at + 3, column));
+}
+
+// The scene's slope g (inverse depth 1 + g . xn over the depth at the optical axis) that best
+// explains the inliers' residuals given the pairs' velocities V (camera axes): r - f = (g . xn) f,
+// f the flow at depth factor one, linear in g. A light ridge keeps g at zero where the
+// translation shows none.
+template <class Residual>
+Eigen::Vector2d scene_slope(const PairGroups& s, const std::vector<double>& delta, const Eigen::MatrixXd& V,
+                            const std::vector<bool>& in, const Residual& r) {
+  Eigen::Matrix2d N = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d b = Eigen::Vector2d::Zero();
+  for (size_t k = 0; k < s.position.size(); ++k) {
+    if (!in[k]) continue;
+    const Eigen::Vector2d f = unit_depth_flow(s, delta, V, k);
+    const Eigen::Matrix2d A = f * s.xn[k].transpose();  // d(flow)/dg
+    N += A.transpose() * A, b += A.transpose() * (r(k) - f);
+  }
+  N.diagonal().array() += 1e-3 * N.trace() + 1e-12;
+  return N.ldlt().solve(b);
 }
 
 Spline spline_over(const std::vector<PairSums>& pairs, double knot_s) {
@@ -293,8 +330,8 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
   const Spline sp = spline_over(pairs, knot_s);
   const size_t n = s.position.size();
-  const std::vector<PairFlow> J = match_flows(m, idx, s, pairs, tm);  // per unit w, world axes
-  std::vector<Eigen::Vector2d> rk(n);                                // the residuals in pair order
+  const std::vector<double> delta = row_delays(m, s, tm);
+  std::vector<Eigen::Vector2d> rk(n);  // the residuals in pair order
   for (size_t k = 0; k < n; ++k) rk[k] = r[s.position[k]];
   // Four passes from no translation over a flat scene: the inliers are the residuals within 4
   // robust scales of the current fit (one scale for the whole set: the noise does not depend on
@@ -302,20 +339,19 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   // hundreds). From the second on, the scene's slope too (scene_slope): one plane's inverse
   // depth is affine in the normalised image coordinates, and a ground ahead of a forward-flying
   // drone or a car leaves, at one depth, pixels of parallax growing towards the image's bottom.
-  Eigen::MatrixXd U = Eigen::MatrixXd::Zero(kW * static_cast<Eigen::Index>(pairs.size()), 1), B;
+  Eigen::MatrixXd V = Eigen::MatrixXd::Zero(kW * static_cast<Eigen::Index>(pairs.size()), 1), B;  // camera axes
   std::vector<double> len(n);
   fit.in.assign(n, false);
   auto depth_factor = [&](size_t k) { return 1.0 + fit.slope.dot(s.xn[k]); };
-  auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * (J[k] * U.block<kW, 1>(kW * s.pair_of[k], 0))); };
-  auto left = [&](size_t k) { return Eigen::Vector2d(rk[k] - flow(k)); };
+  auto left = [&](size_t k) { return Eigen::Vector2d(rk[k] - depth_factor(k) * unit_depth_flow(s, delta, V, k)); };
+  auto residual = [&](size_t k) { return rk[k]; };
   for (int pass = 0; pass < 4; ++pass) {
     for (size_t k = 0; k < n; ++k) len[k] = left(k).norm();
     const double limit = 4 * std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6);
     for (size_t k = 0; k < n; ++k) fit.in[k] = len[k] <= limit;
-    if (pass >= 1) fit.slope = scene_slope(J, s.xn, s.pair_of, U, fit.in, [&](size_t k) { return rk[k]; });
-    pair_sums(pairs, B, s.pair_of, fit.in, [&](size_t k) { return PairFlow(depth_factor(k) * J[k]); },
-              [&](size_t k) { return rk[k]; });
-    U = pair_velocities(sp, pairs, B);
+    if (pass >= 1) fit.slope = scene_slope(s, delta, V, fit.in, residual);
+    pair_sums<1>(pairs, B, 1, s, delta, fit.in, depth_factor, residual);
+    V = in_camera_axes(pairs, pair_velocities(sp, pairs, B));
   }
   for (size_t k = 0; k < n; ++k) r[s.position[k]] = left(k);
   if (keep) keep->state = st;
@@ -334,12 +370,12 @@ void remove_fitted_translation(const DiagnosisModel& m, const std::vector<int>& 
   std::vector<bool> in = fit.state->in;
   for (size_t k = 0; k < in.size(); ++k) in[k] = in[k] && r[s.position[k]].allFinite();
   const Eigen::Vector2d slope = fit.state->slope;
-  const std::vector<PairFlow> J = match_flows(m, idx, s, pairs, tm);
-  auto flow = [&](size_t k) { return PairFlow((1.0 + slope.dot(s.xn[k])) * J[k]); };
+  const std::vector<double> delta = row_delays(m, s, tm);
+  auto depth_factor = [&](size_t k) { return 1.0 + slope.dot(s.xn[k]); };
   Eigen::MatrixXd B;
-  pair_sums(pairs, B, s.pair_of, in, flow, [&](size_t k) { return r[s.position[k]]; });
-  const Eigen::MatrixXd U = pair_velocities(sp, pairs, B);
-  for (size_t k = 0; k < s.position.size(); ++k) r[s.position[k]] -= flow(k) * U.block<kW, 1>(kW * s.pair_of[k], 0);
+  pair_sums<1>(pairs, B, 1, s, delta, in, depth_factor, [&](size_t k) { return r[s.position[k]]; });
+  const Eigen::MatrixXd V = in_camera_axes(pairs, pair_velocities(sp, pairs, B));
+  for (size_t k = 0; k < s.position.size(); ++k) r[s.position[k]] -= depth_factor(k) * unit_depth_flow(s, delta, V, k);
 }
 
 void remove_fitted_translation_from_columns(const DiagnosisModel& m, const std::vector<int>& idx, Eigen::MatrixXd& cols,
@@ -354,16 +390,15 @@ void remove_fitted_translation_from_columns(const DiagnosisModel& m, const std::
   std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
   const Spline sp = spline_over(pairs, knot_s);
   auto rows = [&](size_t k) { return cols.middleRows<2>(2 * static_cast<Eigen::Index>(s.position[k])); };
-  std::vector<PairFlow> F = match_flows(m, idx, s, pairs, tm);
-  for (size_t k = 0; k < F.size(); ++k) F[k] *= 1.0 + slope.dot(s.xn[k]);
-  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(kW * static_cast<Eigen::Index>(pairs.size()), cols.cols());
-  for (size_t k = 0; k < F.size(); ++k) {
-    if (!in[k] || !rows(k).allFinite()) continue;
-    const int q = s.pair_of[k];
-    pairs[q].N += F[k].transpose() * F[k], B.middleRows<kW>(kW * q) += F[k].transpose() * rows(k);
-  }
-  const Eigen::MatrixXd U = pair_velocities(sp, pairs, B);
-  for (size_t k = 0; k < F.size(); ++k) rows(k) -= F[k] * U.middleRows<kW>(kW * s.pair_of[k]);
+  const std::vector<double> delta = row_delays(m, s, tm);
+  auto depth_factor = [&](size_t k) { return 1.0 + slope.dot(s.xn[k]); };
+  std::vector<bool> taken(in.size());
+  for (size_t k = 0; k < in.size(); ++k) taken[k] = in[k] && rows(k).allFinite();
+  Eigen::MatrixXd B;
+  pair_sums<Eigen::Dynamic>(pairs, B, cols.cols(), s, delta, taken, depth_factor, rows);
+  const Eigen::MatrixXd V = in_camera_axes(pairs, pair_velocities(sp, pairs, B));
+  for (size_t k = 0; k < s.position.size(); ++k)
+    for (Eigen::Index c = 0; c < cols.cols(); ++c) rows(k).col(c) -= depth_factor(k) * unit_depth_flow(s, delta, V, k, c);
 }
 
 double translation_knot_spacing(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p) {
