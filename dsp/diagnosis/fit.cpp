@@ -339,9 +339,14 @@ class ObservationCost final : public ceres::CostFunction {
 }  // namespace
 
 ModelParams fit_params(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& start,
-                       const ParamMask& mask, double sigma, int max_iterations) {
+                       const ParamMask& mask, double sigma, int max_iterations, FitEnd* end) {
   const Coordinates c(m, start, mask);
-  if (c.free.empty() || idx.empty() || max_iterations <= 0) return c.start;
+  if (end) *end = {true, 0};  // nothing to iterate: any cap gives the same
+  if (c.free.empty() || idx.empty()) return c.start;
+  if (max_iterations <= 0) {
+    if (end) end->converged = false;
+    return c.start;
+  }
   const int k = static_cast<int>(c.free.size());
   std::vector<double> x(k, 0.0);
   BulkEvaluator bulk(m, idx, c, sigma);
@@ -387,6 +392,7 @@ ModelParams fit_params(const DiagnosisModel& m, const std::vector<int>& idx, con
   so.minimizer_progress_to_stdout = false;
   ceres::Solver::Summary summary;
   ceres::Solve(so, &pb, &summary);
+  if (end) *end = {summary.termination_type == ceres::CONVERGENCE, static_cast<int>(summary.iterations.size()) - 1};
   return c.at(x.data());
 }
 

@@ -41,8 +41,15 @@ double design_effect(const DiagnosisModel& m, const ModelParams& p, const std::v
 // offset inside the motion data, focal lengths within a factor two, |k| <= 1, ...).
 std::pair<double, double> param_bounds(Param p, const DiagnosisModel& m);
 
+// How a fit ended, when asked (fit_params's `end`): whether it converged, so that a larger
+// max_iterations from the same start gives the same fit (the cap is the only thing it changes),
+// and the iterations it took.
+struct FitEnd {
+  bool converged = false;
+  int iterations = 0;
+};
 ModelParams fit_params(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& start,
-                       const ParamMask& free, double sigma_px, int max_iterations = 30);
+                       const ParamMask& free, double sigma_px, int max_iterations = 30, FitEnd* end = nullptr);
 
 // Global search of the time offset (others held at `p`): a coarse scan over the offsets that
 // keep the frames inside the motion data (at most +-1 s around p's), then a fine one.

@@ -81,14 +81,15 @@ class Selector {
   // nothing is followed by one that asks every candidate again, the same ones from the same
   // state (under a hand-held shake's parallax a tenth of the diagnosis).
   State screen_add(const State& s, Effect e) const {
-    return remembered(FitKind::Add, s, e, &screen_, opt_.screen_iterations, [&] { return fit_add(s, e); });
+    return remembered(FitKind::Add, s, e, &screen_, opt_.screen_iterations, [&](FitEnd& end) { return fit_add(s, e, end); });
   }
 
   // s without e, fitted on idx from s's values. Remembered: the blocked halves and the held-out
   // check ask for the same states of the same selection (each a refit on every fitting
   // observation, a third of a diagnosis under the translation nuisance).
   State remove(const State& s, Effect e, const std::vector<int>& idx, int iterations) const {
-    return remembered(FitKind::Remove, s, e, &idx, iterations, [&] { return fit_remove(s, e, idx, iterations); });
+    return remembered(FitKind::Remove, s, e, &idx, iterations,
+                      [&](FitEnd& end) { return fit_remove(s, e, idx, iterations, end); });
   }
 
   // s without e, for the checks that judge e given the others (the blocked halves, the held-out
@@ -117,8 +118,9 @@ class Selector {
 
   // A screened hypothesis refitted on every fitting observation. Remembered, as screen_add.
   State refit_all(const State& screened) const {
-    return remembered(FitKind::Refit, screened, Effect{}, &fit_, opt_.max_iterations, [&] {
-      const ModelParams p = fit_params(m_, fit_, screened.params, mask_of(screened.effects, lens_), sigma_, opt_.max_iterations);
+    return remembered(FitKind::Refit, screened, Effect{}, &fit_, opt_.max_iterations, [&](FitEnd& end) {
+      const ModelParams p =
+          fit_params(m_, fit_, screened.params, mask_of(screened.effects, lens_), sigma_, opt_.max_iterations, &end);
       return State{screened.effects, p, bic(p, screened.effects, fit_)};
     });
   }
@@ -205,7 +207,7 @@ class Selector {
 
  private:
   // screen_add's and remove's fits.
-  State fit_add(const State& s, Effect e) const {
+  State fit_add(const State& s, Effect e, FitEnd& end) const {
     std::vector<Effect> effects = s.effects;
     effects.push_back(e);
     ModelParams p = s.params;
@@ -219,10 +221,10 @@ class Selector {
       if (!s.has(Effect::RollingShutter) && nominal_[Param::LineDelay] == 0) effects.push_back(Effect::RollingShutter);
     }
     if (e == Effect::TimeOffset) p[Param::TimeOffset] = refine_time_offset(m_, screen_, p, sigma_);
-    p = fit_params(m_, screen_, p, mask_of(effects, lens_), sigma_, opt_.screen_iterations);
+    p = fit_params(m_, screen_, p, mask_of(effects, lens_), sigma_, opt_.screen_iterations, &end);
     return {effects, p, bic(p, effects, screen_)};
   }
-  State fit_remove(const State& s, Effect e, const std::vector<int>& idx, int iterations) const {
+  State fit_remove(const State& s, Effect e, const std::vector<int>& idx, int iterations, FitEnd& end) const {
     std::vector<Effect> effects;
     for (Effect f : s.effects)
       if (f != e) effects.push_back(f);
@@ -233,7 +235,7 @@ class Selector {
       if (drop[k]) set_param(p, static_cast<Param>(k), nominal_.v[k], m_.recording().nominal);
     if (e == Effect::ReadoutDirection) p.flip_readout = false;
     if (e == Effect::LensModel) p.other_lens = false;
-    p = fit_params(m_, idx, p, mask_of(effects, lens_), sigma_, iterations);
+    p = fit_params(m_, idx, p, mask_of(effects, lens_), sigma_, iterations, &end);
     return {effects, p, bic(p, effects, idx)};
   }
   static bool same(const ModelParams& a, const ModelParams& b) {
@@ -262,17 +264,25 @@ class Selector {
     Effect e;
     const std::vector<int>* idx;
     int iterations;
+    FitEnd end;
     State to;
   };
   mutable std::vector<Remembered> remembered_;
+  // A fit from the same start that converged in fewer iterations than asked is the same fit (FitEnd): the
+  // judging removal's quick refit (without_for_judging) converges in 2-4 iterations mostly, and
+  // the whole one after it was the same fit again (three of the walking phone's five effects:
+  // a refit on every fitting observation each).
   template <class Fit>
   State remembered(FitKind kind, const State& from, Effect e, const std::vector<int>* idx, int iterations, const Fit& fit) const {
-    for (const Remembered& r : remembered_)
-      if (r.kind == kind && r.e == e && r.idx == idx && r.iterations == iterations && r.from.effects == from.effects &&
+    for (const Remembered& r : remembered_) {
+      const bool as_asked = r.iterations == iterations || (r.end.converged && r.end.iterations < iterations);
+      if (r.kind == kind && r.e == e && r.idx == idx && as_asked && r.from.effects == from.effects &&
           same(r.from.params, from.params))
         return r.to;
-    State to = fit();
-    remembered_.push_back({kind, from, e, idx, iterations, to});
+    }
+    FitEnd end;
+    State to = fit(end);
+    remembered_.push_back({kind, from, e, idx, iterations, end, to});
     return to;
   }
 };

@@ -82,3 +82,28 @@ TEST(Fit, EndsAtTheRobustCostsMinimumFromFarAway) {
     EXPECT_LT(std::abs(vertex), 0.05) << param_name(p);
   }
 }
+
+// FitEnd's contract, which the selection's memory of fits relies on (selector.hpp,
+// `remembered`): a fit that converged in fewer iterations than its cap is the fit any larger cap
+// gives from the same start, to the bit; one stopped by its cap says so.
+TEST(Fit, AConvergedFitIsTheFitOfAnyLargerCap) {
+  const Case k = far_start();
+  const DiagnosisModel m(k.sim.rec);
+  const double sigma_px = std::sqrt(2.0) * 0.5;
+  const ModelParams start = nominal_params(k.sim.rec.nominal);
+  FitEnd capped, whole, wider;
+  const ModelParams two = fit_params(m, k.all, start, k.free, sigma_px, 2, &capped);
+  EXPECT_FALSE(capped.converged);  // tens of sigmas away: two steps do not get there
+  EXPECT_EQ(capped.iterations, 2);
+  const ModelParams fitted = fit_params(m, k.all, start, k.free, sigma_px, 50, &whole);
+  ASSERT_TRUE(whole.converged);
+  ASSERT_LT(whole.iterations, 50);
+  EXPECT_NE(two.v, fitted.v);
+  const ModelParams again = fit_params(m, k.all, start, k.free, sigma_px, whole.iterations + 1, &wider);
+  EXPECT_TRUE(wider.converged);
+  EXPECT_EQ(wider.iterations, whole.iterations);
+  EXPECT_EQ(again.v, fitted.v);  // bit for bit
+  FitEnd none;
+  fit_params(m, k.all, start, ParamMask{}, sigma_px, 1, &none);
+  EXPECT_TRUE(none.converged);  // nothing free: any cap gives the start
+}
