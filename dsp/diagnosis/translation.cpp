@@ -357,6 +357,31 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   if (keep) keep->state = st;
 }
 
+namespace {
+
+// remove_fitted_translation's linear part, on `columns` columns of residuals: rows(k) is
+// observation k's 2 x Cols block (in pair order), written in place. An observation `fit` had
+// whose block holds a NaN here is left out of the velocity fit (and stays NaN).
+template <int Cols, class Rows>
+void subtract_fitted(const DiagnosisModel& m, const std::vector<int>& idx, Eigen::Index columns, const Rows& rows,
+                     const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s,
+                     const TranslationFit::State& fit) {
+  const PairGroups& s = *fit.groups;
+  std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
+  const Spline sp = spline_over(pairs, knot_s);
+  const std::vector<double> delta = row_delays(m, s, tm);
+  auto depth_factor = [&](size_t k) { return 1.0 + fit.slope.dot(s.xn[k]); };
+  std::vector<bool> taken(fit.in.size());
+  for (size_t k = 0; k < taken.size(); ++k) taken[k] = fit.in[k] && rows(k).allFinite();
+  Eigen::MatrixXd B;
+  pair_sums<Cols>(pairs, B, columns, s, delta, taken, depth_factor, rows);
+  const Eigen::MatrixXd V = in_camera_axes(pairs, pair_velocities(sp, pairs, B));
+  for (size_t k = 0; k < s.position.size(); ++k)
+    for (Eigen::Index c = 0; c < columns; ++c) rows(k).col(c) -= depth_factor(k) * unit_depth_flow(s, delta, V, k, c);
+}
+
+}  // namespace
+
 void remove_fitted_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
                                const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s,
                                const TranslationFit& fit) {
@@ -364,18 +389,8 @@ void remove_fitted_translation(const DiagnosisModel& m, const std::vector<int>& 
   const PairGroups& s = *fit.state->groups;
   if (r.size() != s.idx.size() || idx.size() != s.idx.size())
     throw std::invalid_argument("remove_fitted_translation: residuals of other observations than the fit's");
-  std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
-  const Spline sp = spline_over(pairs, knot_s);
-  // An observation the fit had whose prediction fails here is left out of it (and stays NaN).
-  std::vector<bool> in = fit.state->in;
-  for (size_t k = 0; k < in.size(); ++k) in[k] = in[k] && r[s.position[k]].allFinite();
-  const Eigen::Vector2d slope = fit.state->slope;
-  const std::vector<double> delta = row_delays(m, s, tm);
-  auto depth_factor = [&](size_t k) { return 1.0 + slope.dot(s.xn[k]); };
-  Eigen::MatrixXd B;
-  pair_sums<1>(pairs, B, 1, s, delta, in, depth_factor, [&](size_t k) { return r[s.position[k]]; });
-  const Eigen::MatrixXd V = in_camera_axes(pairs, pair_velocities(sp, pairs, B));
-  for (size_t k = 0; k < s.position.size(); ++k) r[s.position[k]] -= depth_factor(k) * unit_depth_flow(s, delta, V, k);
+  auto rows = [&](size_t k) -> Eigen::Vector2d& { return r[s.position[k]]; };
+  subtract_fitted<1>(m, idx, 1, rows, track, tm, mount_t, knot_s, *fit.state);
 }
 
 void remove_fitted_translation_from_columns(const DiagnosisModel& m, const std::vector<int>& idx, Eigen::MatrixXd& cols,
@@ -383,22 +398,10 @@ void remove_fitted_translation_from_columns(const DiagnosisModel& m, const std::
                                             double knot_s, const TranslationFit& fit) {
   if (!fit.state || cols.cols() == 0) return;
   const PairGroups& s = *fit.state->groups;
-  const std::vector<bool>& in = fit.state->in;
-  const Eigen::Vector2d slope = fit.state->slope;
   if (static_cast<size_t>(cols.rows()) != 2 * s.idx.size() || idx.size() != s.idx.size())
     throw std::invalid_argument("remove_fitted_translation_from_columns: columns of other observations than the fit's");
-  std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
-  const Spline sp = spline_over(pairs, knot_s);
   auto rows = [&](size_t k) { return cols.middleRows<2>(2 * static_cast<Eigen::Index>(s.position[k])); };
-  const std::vector<double> delta = row_delays(m, s, tm);
-  auto depth_factor = [&](size_t k) { return 1.0 + slope.dot(s.xn[k]); };
-  std::vector<bool> taken(in.size());
-  for (size_t k = 0; k < in.size(); ++k) taken[k] = in[k] && rows(k).allFinite();
-  Eigen::MatrixXd B;
-  pair_sums<Eigen::Dynamic>(pairs, B, cols.cols(), s, delta, taken, depth_factor, rows);
-  const Eigen::MatrixXd V = in_camera_axes(pairs, pair_velocities(sp, pairs, B));
-  for (size_t k = 0; k < s.position.size(); ++k)
-    for (Eigen::Index c = 0; c < cols.cols(); ++c) rows(k).col(c) -= depth_factor(k) * unit_depth_flow(s, delta, V, k, c);
+  subtract_fitted<Eigen::Dynamic>(m, idx, cols.cols(), rows, track, tm, mount_t, knot_s, *fit.state);
 }
 
 double translation_knot_spacing(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p) {
