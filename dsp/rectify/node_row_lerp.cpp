@@ -17,14 +17,19 @@ void lerp_node_row_simd(const double* top, const double* bot, double w, int n, d
   const hn::ScalableTag<double> d;
   const hn::Rebind<std::int32_t, decltype(d)> di;
   const auto vw = hn::Set(d, w), scale = hn::Set(d, kFix), half = hn::Set(d, 0.5);
+  const auto limit = hn::Set(d, kLimit), sentinel = hn::Set(d, kSentinel / kFix);
   const int lanes = static_cast<int>(hn::Lanes(d));
   int i = 0;
   for (; i + lanes <= n; i += lanes) {
     const auto a = hn::LoadU(d, top + i);
     const auto v = hn::Add(a, hn::Mul(vw, hn::Sub(hn::LoadU(d, bot + i), a)));
     hn::StoreU(v, d, out + i);
-    // to_fixed: v 2^16 + copysign(0.5, v), truncated (DemoteTo truncates towards zero).
-    if (fixed) hn::StoreU(hn::DemoteTo(di, hn::Add(hn::Mul(v, scale), hn::CopySign(half, v))), di, fixed + i);
+    // to_fixed: v 2^16 + copysign(0.5, v), truncated (DemoteTo truncates towards zero); a NaN
+    // or a value past kLimit becomes kSentinel first (DemoteTo of it is undefined on some targets).
+    if (fixed) {
+      const auto f = hn::IfThenElse(hn::Le(hn::Abs(v), limit), v, sentinel);
+      hn::StoreU(hn::DemoteTo(di, hn::Add(hn::Mul(f, scale), hn::CopySign(half, f))), di, fixed + i);
+    }
   }
   lerp_node_row_scalar(top + i, bot + i, w, n - i, out + i, fixed ? fixed + i : nullptr);
 }

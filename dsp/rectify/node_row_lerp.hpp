@@ -8,9 +8,10 @@
 namespace rsd::dsp::rectify_detail {
 
 // out[i] = top[i] + w (bot[i] - top[i]) for i in [0, n), and, when fixed is not null,
-// fixed[i] = to_fixed(out[i]) (fixed_point.hpp: 16.16, half away from zero). Every target
-// computes the same doubles as the scalar reference below (no fused multiply-add: the file is
-// compiled with -ffp-contract=off), so the map does not depend on the instruction set.
+// fixed[i] = to_fixed(out[i]) (fixed_point.hpp: 16.16, half away from zero; kSentinel for a NaN
+// or a value past kLimit). Every target computes the same doubles and fixed values as the scalar
+// reference below (no fused multiply-add: the file is compiled with -ffp-contract=off), so the
+// map does not depend on the instruction set.
 void lerp_node_row(const double* top, const double* bot, double w, int n, double* out, std::int32_t* fixed);
 
 // The scalar reference, for tests.

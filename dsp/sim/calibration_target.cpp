@@ -4,6 +4,7 @@
 #include <random>
 
 #include "dsp/sim/aprilgrid.hpp"
+#include "dsp/sim/random_draws.hpp"
 
 namespace rsd::dsp {
 
@@ -53,7 +54,9 @@ Target points(const TargetSpec& s) {
   std::mt19937 rng(s.seed);
   std::uniform_real_distribution<double> xy(-s.extent_m, s.extent_m), z(s.depth_min_m, s.depth_max_m);
   for (int i = 0; i < s.count; ++i) {
-    const Eigen::Vector3d X(xy(rng), xy(rng), z(rng));
+    const double depth = z(rng);  // first: the order of random_draws.hpp, depth then y then x
+    const Eigen::Vector2d across = draw(xy, xy, rng);
+    const Eigen::Vector3d X(across.x(), across.y(), depth);
     t.landmarks.push_back({i, X});
     t.scene.points.push_back(X);
   }

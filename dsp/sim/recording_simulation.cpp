@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "dsp/geometry/camera_motion.hpp"
+#include "dsp/sim/random_draws.hpp"
 #include "dsp/sim/smooth_motion.hpp"
 
 namespace rsd::dsp {
@@ -144,8 +145,9 @@ class BodyMotion {
 };
 
 Eigen::Vector2d noisy(const Eigen::Vector2d& p, double sigma, std::mt19937& rng) {
+  if (!(sigma > 0)) return p;
   std::normal_distribution<double> n(0, sigma);
-  return sigma > 0 ? Eigen::Vector2d(p.x() + n(rng), p.y() + n(rng)) : p;
+  return p + draw<2>(n, rng);
 }
 
 void simulate_landmarks(const SimConfig& c, const TrueModel& m, SimulatedRecording& out, std::mt19937& rng) {
@@ -185,7 +187,7 @@ std::vector<GyroSample> sample_gyro(const SimConfig& c, const BodyMotion& imu, c
     const double dt = 1.0 / (g.rate_min_hz + (g.rate_max_hz - g.rate_min_hz) * u(rng));
     // What the gyro reads for the IMU's true rate: w_true = diag(s) (w_measured - b).
     const Eigen::Vector3d w_true = imu.body_rate(t);
-    Eigen::Vector3d w = w_true.cwiseQuotient(m.gyro_scale) + m.gyro_bias + g.noise_rad_s * Eigen::Vector3d(n(rng), n(rng), n(rng));
+    Eigen::Vector3d w = w_true.cwiseQuotient(m.gyro_scale) + m.gyro_bias + g.noise_rad_s * draw<3>(n, rng);
     if (const double sat = c.unmodelled.gyro_saturation_rad_s; sat > 0) w = w.cwiseMax(-sat).cwiseMin(sat);
     double stamp = t + g.jitter_s * n(rng);
     if (!out.empty() && u(rng) < g.repeat_probability) stamp = out.back().t;
@@ -274,11 +276,11 @@ void simulate_matches(const SimConfig& c, const TrueModel& m, SimulatedRecording
   for (size_t k = 0; k + 1 < r.frames.size(); ++k) {
     const FrameStamp &fa = r.frames[k], &fb = r.frames[k + 1];
     for (int i = 0; i < c.matches_per_pair; ++i) {
-      const Eigen::Vector2d a(u(rng), v(rng));
+      const Eigen::Vector2d a = draw(u, v, rng);
       const auto b = near ? near->predict(fa.t, a, fb.t) : predict_match(setup, truth, fa.t, a, fb.t);
       if (!b || !m.cam.contains(b->pixel, 0.0)) continue;
       const bool outlier = flip(rng) < c.outlier_fraction;
-      const Eigen::Vector2d pb = outlier ? Eigen::Vector2d(u(rng), v(rng)) : noisy(b->pixel, c.noise_px, rng);
+      const Eigen::Vector2d pb = outlier ? draw(u, v, rng) : noisy(b->pixel, c.noise_px, rng);
       r.matches.push_back({fa.frame, noisy(a, c.noise_px, rng), fb.frame, pb});
       out.match_outlier.push_back(outlier);
     }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "dsp/rectify/bilinear_sampling.hpp"
+#include "dsp/rectify/fixed_point.hpp"
 #include "dsp/rectify/node_row_lerp.hpp"
 #include "tests/dsp/rectify/simd_targets.hpp"
 
@@ -47,9 +48,7 @@ TEST_F(EveryTarget, ComputesTheReferenceDoublesAndFixedValues) {
       for (int i = 0; i < n; ++i) {
         const std::string where = target_name(target) + " n " + std::to_string(n) + " node " + std::to_string(i);
         EXPECT_EQ(std::memcmp(&got[i], &want[i], sizeof(double)), 0) << where << ": " << got[i] << " vs " << want[i];
-        if (std::isfinite(want[i])) {
-          EXPECT_EQ(gfix[i], wfix[i]) << where;
-        }
+        EXPECT_EQ(gfix[i], wfix[i]) << where;  // the NaN's too: kSentinel on every target
       }
       EXPECT_EQ(got[n], -7) << "wrote past the row";
       EXPECT_EQ(gfix[n], 99) << "wrote past the row";
@@ -77,6 +76,10 @@ TEST(Reference, IsTheLinearInterpolationRoundedHalfAwayFromZero) {
   }
   EXPECT_EQ(fix[1], -3);  // -2.5 / 65536 px: half away from zero
   EXPECT_EQ(fix[2], 8);
+  EXPECT_EQ(fix[4], kSentinel);  // the unsolved node: no 16.16 value (a NaN cast to int is undefined)
+  EXPECT_EQ(to_fixed(kLimit), static_cast<std::int32_t>(kLimit * kFix));
+  EXPECT_EQ(to_fixed(-kLimit - 1), kSentinel);
+  EXPECT_EQ(to_fixed(1e300), kSentinel);
 }
 
 }  // namespace
