@@ -19,8 +19,8 @@ enum CellMode : std::uint8_t { kZero, kPlane, kInfinite, kKink };
 
 // Round to nearest (half away from zero) by truncation: inline, unlike lrint without -fno-math-errno.
 // A NaN (a node without a solution) or a position past kLimit has no 16.16 value, and converting
-// it to int would be undefined behaviour: it becomes kSentinel, which no sample reads (the SIMD
-// kernels' DemoteTo gives such lanes a value of its own, equally unread).
+// it to int would be undefined behaviour: it becomes kSentinel (all four taps outside, as the
+// node's cells are), the same on every SIMD target (node_row_lerp.cpp).
 inline std::int32_t to_fixed(double v) {
   if (!(std::abs(v) <= kLimit)) return kSentinel;
   return static_cast<std::int32_t>(v * kFix + std::copysign(0.5, v));
