@@ -73,6 +73,12 @@ struct Spline {
   }
 };
 
+// Where a pair's time falls on the spline (Spline::first), found once per solve.
+struct SplineAt {
+  int first = 0;
+  std::array<double, 4> w{}, dw{};
+};
+
 // The band of the velocity spline's normal matrix: a pair touches four control points of three.
 constexpr int kBand = 3 * 4 - 1;
 
@@ -80,28 +86,34 @@ constexpr int kBand = 3 * 4 - 1;
 // (u(t) and u'(t) both linear in the control points) and a light penalty on the second difference of the control points (it decides only where
 // the data leave a direction free: a stretch without pairs, a component no pair shows). A
 // pair's time touches four consecutive control points and the penalty three, so it is banded
-// (kBand scalars either side of the diagonal), gathered and factorised as a band.
-BandCholesky velocity_normal(const Spline& sp, const std::vector<PairSums>& pairs) {
-  const int n = 3 * sp.controls();
+// (kBand scalars either side of the diagonal), gathered and factorised as a band. The pairs'
+// 3 x 3 blocks are summed as blocks, each from the four N W_c, and written into the band once
+// (formed term by term and scattered entry by entry, they were the largest share of a diagnosis
+// under parallax: the walking phone's minute).
+BandCholesky velocity_normal(const Spline& sp, const std::vector<PairSums>& pairs, const std::vector<SplineAt>& at) {
+  const int controls = sp.controls(), n = 3 * controls;
+  // blocks[k][o]: the block of control points k and k + o (o = 0..3), rows k's, columns k + o's.
+  std::vector<std::array<Eigen::Matrix3d, 4>> blocks(controls);
+  for (auto& b : blocks) b.fill(Eigen::Matrix3d::Zero());
+  double trace = 0;
+  for (size_t q = 0; q < pairs.size(); ++q) {
+    const PairSums& p = pairs[q];
+    const auto& [j, w, dw] = at[q];
+    // Control points a and c: W_a^T N W_c, W_a = (w_a I; dw_a I), from the four N W_c.
+    std::array<Eigen::Matrix<double, kW, 3>, 4> NW;
+    for (int c = 0; c < 4; ++c) NW[c].noalias() = w[c] * p.N.leftCols<3>() + dw[c] * p.N.rightCols<3>();
+    for (int a = 0; a < 4; ++a)
+      for (int c = a; c < 4; ++c) blocks[j + a][c - a] += w[a] * NW[c].topRows<3>() + dw[a] * NW[c].bottomRows<3>();
+    trace += p.N.topLeftCorner<3, 3>().trace();
+  }
   Eigen::MatrixXd band = Eigen::MatrixXd::Zero(kBand + 1, n);  // band(i - j + kBand, j) = A(i, j), i <= j
+  for (int k = 0; k < controls; ++k)
+    for (int o = 0; o < 4 && k + o < controls; ++o)  // the blocks on the diagonal: their upper half
+      for (int y = 0; y < 3; ++y)
+        for (int x = 0; x < (o == 0 ? y + 1 : 3); ++x) band(kBand - 3 * o + x - y, 3 * (k + o) + y) = blocks[k][o](x, y);
   auto add = [&](int i, int j, double v) {
     if (i <= j) band(i - j + kBand, j) += v;
   };
-  double trace = 0;
-  for (const PairSums& p : pairs) {
-    std::array<double, 4> w, dw;
-    const int j = sp.first(p.t, w, dw);
-    // Control points a and c: W_a^T N W_c, W_a = (w_a I; dw_a I); its upper triangle, the
-    // blocks above the diagonal whole, those on it half.
-    const auto N00 = p.N.topLeftCorner<3, 3>(), N01 = p.N.topRightCorner<3, 3>(), N11 = p.N.bottomRightCorner<3, 3>();
-    for (int a = 0; a < 4; ++a)
-      for (int c = a; c < 4; ++c) {
-        const Eigen::Matrix3d M = w[a] * w[c] * N00 + w[a] * dw[c] * N01 + dw[a] * w[c] * N01.transpose() + dw[a] * dw[c] * N11;
-        for (int y = 0; y < 3; ++y)
-          for (int x = 0; x < (a == c ? y + 1 : 3); ++x) band(kBand + 3 * (a - c) + x - y, 3 * (j + c) + y) += M(x, y);
-      }
-    trace += N00.trace();
-  }
   const double lambda = 1e-4 * trace / n, ridge = 1e-9 * trace / n + 1e-12;
   for (int k = 0; k + 2 < sp.controls(); ++k) {
     const std::array<double, 3> d = {1, -2, 1};
@@ -119,23 +131,28 @@ BandCholesky velocity_normal(const Spline& sp, const std::vector<PairSums>& pair
 // the same pairs; zero where the normal matrix is not positive definite.
 Eigen::MatrixXd pair_velocities(const Spline& sp, const std::vector<PairSums>& pairs, const Eigen::MatrixXd& B) {
   Eigen::MatrixXd U = Eigen::MatrixXd::Zero(B.rows(), B.cols());
-  const BandCholesky normal = velocity_normal(sp, pairs);
+  std::vector<SplineAt> at(pairs.size());
+  for (size_t q = 0; q < pairs.size(); ++q) at[q].first = sp.first(pairs[q].t, at[q].w, at[q].dw);
+  const BandCholesky normal = velocity_normal(sp, pairs, at);
   if (!normal.ok()) return U;
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(normal.size(), B.cols());
-  std::array<double, 4> w, dw;
-  for (size_t q = 0; q < pairs.size(); ++q) {
-    const int j = sp.first(pairs[q].t, w, dw);
-    for (int a = 0; a < 4; ++a)
-      c.middleRows<3>(3 * (j + a)) += w[a] * B.middleRows<3>(kW * q) + dw[a] * B.middleRows<3>(kW * q + 3);
-  }
-  normal.solve(c);
-  for (size_t q = 0; q < pairs.size(); ++q) {
-    const int j = sp.first(pairs[q].t, w, dw);
-    for (int a = 0; a < 4; ++a) {
-      U.middleRows<3>(kW * q) += w[a] * c.middleRows<3>(3 * (j + a));
-      U.middleRows<3>(kW * q + 3) += dw[a] * c.middleRows<3>(3 * (j + a));
+  for (Eigen::Index col = 0; col < B.cols(); ++col)
+    for (size_t q = 0; q < pairs.size(); ++q) {
+      const auto& [j, w, dw] = at[q];
+      const Eigen::Index r = kW * static_cast<Eigen::Index>(q);
+      for (int a = 0; a < 4; ++a)
+        c.block<3, 1>(3 * (j + a), col) += w[a] * B.block<3, 1>(r, col) + dw[a] * B.block<3, 1>(r + 3, col);
     }
-  }
+  normal.solve(c);
+  for (Eigen::Index col = 0; col < B.cols(); ++col)
+    for (size_t q = 0; q < pairs.size(); ++q) {
+      const auto& [j, w, dw] = at[q];
+      const Eigen::Index r = kW * static_cast<Eigen::Index>(q);
+      for (int a = 0; a < 4; ++a) {
+        U.block<3, 1>(r, col) += w[a] * c.block<3, 1>(3 * (j + a), col);
+        U.block<3, 1>(r + 3, col) += dw[a] * c.block<3, 1>(3 * (j + a), col);
+      }
+    }
   return U;
 }
 
