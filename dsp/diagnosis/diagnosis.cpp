@@ -240,6 +240,14 @@ struct ObservationSets {
 // refits on every fitting observation, and a minute's walk has 200 000.
 constexpr size_t kTranslationBudgetFactor = 3;
 
+// A matches recording's fitting frames are chosen in runs of this many consecutive pairs (about
+// a second at 30 fps, a fifth held out): when the budget leaves out frames (past about 100 s at
+// 30 fps), frames chosen one by one spread thinly (ten minutes: four pairs a second), and the
+// translation nuisance's spline, which needs two pairs a knot interval, could then not follow a
+// hand's shake (0.5 s knots: the ten-minute walk lost its lens and its focal length went 1% off).
+// Within a run the pairs are as dense as the recording's.
+constexpr size_t kMatchesRunFrames = 24;
+
 // The named effects' values fitted again on `wide` (under the translation nuisance more fitting
 // observations than the selection decided on), from the selection's.
 Selection refit_on(const DiagnosisModel& m, const std::vector<int>& wide, double sigma_px, const SelectionOptions& so,
@@ -355,13 +363,19 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   const size_t budget = static_cast<size_t>(std::max(opt.fit_observations, 0));
   auto split_usable = [&] {
     use_all = usable(m, d.gross, all), use_fit = usable(m, d.gross, fit), use_held = usable(m, d.gross, held);
-    sets.fit = choose_observations(m, use_fit, d.gross, every, {budget});
+    ObservationChoice fit_choice{budget};
+    if (m.kind() == ObservationKind::Matches) fit_choice.run = kMatchesRunFrames;
+    sets.fit = choose_observations(m, use_fit, d.gross, every, fit_choice);
     sets.held = choose_observations(m, use_held, d.gross, every, {budget / 4});
     sets.screen = subsample(sets.fit, n_screen);
     wide.reset();
   };
   const std::function<const std::vector<int>&()> under_translation = [&]() -> const std::vector<int>& {
-    if (!wide) wide = choose_observations(m, use_fit, d.gross, every, {kTranslationBudgetFactor * budget});
+    if (!wide) {
+      ObservationChoice wide_choice{kTranslationBudgetFactor * budget};
+      wide_choice.run = kMatchesRunFrames;
+      wide = choose_observations(m, use_fit, d.gross, every, wide_choice);
+    }
     return *wide;
   };
   const std::vector<int>&fit_set = sets.fit, &screen = sets.screen;

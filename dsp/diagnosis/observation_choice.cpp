@@ -165,25 +165,39 @@ std::vector<int> choose_observations(const DiagnosisModel& m, const std::vector<
       for (int i : evenly(f, per)) out.push_back(i);
     return out;
   }
-  // Frames by information: a pool of leverage_pool times as many frames as are kept, evenly
-  // spread, each frame's information (the sum of its observations' leverage) estimated from
-  // 2 x per of its observations, so that ten minutes cost what one does.
-  const std::vector<std::vector<int>> pool = evenly(frames, std::max<size_t>(1, choice.leverage_pool) * n_frames);
+  // Runs of consecutive frames by information: a pool of leverage_pool times as many runs as are
+  // kept, evenly spread, each frame's information (the sum of its observations' leverage)
+  // estimated from 2 x per of its observations, so that ten minutes cost what one does; a run's
+  // is its frames' sum.
+  const size_t run = std::max<size_t>(1, choice.run);
+  std::vector<std::vector<size_t>> runs;  // frames' places in `frames`
+  for (size_t f = 0; f < frames.size(); f += run) {
+    runs.emplace_back();
+    for (size_t g = f; g < std::min(f + run, frames.size()); ++g) runs.back().push_back(g);
+  }
+  const size_t n_runs = std::max<size_t>(1, n_frames / run);
+  const std::vector<std::vector<size_t>> pool = evenly(runs, std::max<size_t>(1, choice.leverage_pool) * n_runs);
   std::vector<int> sampled;
   std::vector<size_t> begin;
-  for (const auto& f : pool) {
-    begin.push_back(sampled.size());
-    for (int i : evenly(f, 2 * per)) sampled.push_back(i);
-  }
+  for (const auto& r : pool)
+    for (size_t f : r) {
+      begin.push_back(sampled.size());
+      for (int i : evenly(frames[f], 2 * per)) sampled.push_back(i);
+    }
   begin.push_back(sampled.size());
   const std::vector<double> h = observation_leverage(m, sampled, at, mask);
-  std::vector<double> frame_info(pool.size(), 0.0);
-  for (size_t f = 0; f < pool.size(); ++f) {
-    for (size_t k = begin[f]; k < begin[f + 1]; ++k) frame_info[f] += h[k];
-    frame_info[f] *= static_cast<double>(pool[f].size()) / static_cast<double>(std::max<size_t>(1, begin[f + 1] - begin[f]));
-  }
-  for (size_t f : systematic_choice(mixed(frame_info), n_frames))
-    for (int i : evenly(pool[f], per)) out.push_back(i);
+  std::vector<double> run_info(pool.size(), 0.0);
+  for (size_t r = 0, k = 0; r < pool.size(); ++r)
+    for (size_t f : pool[r]) {
+      double info = 0;
+      for (size_t j = begin[k]; j < begin[k + 1]; ++j) info += h[j];
+      run_info[r] += info * static_cast<double>(frames[f].size()) /
+                     static_cast<double>(std::max<size_t>(1, begin[k + 1] - begin[k]));
+      ++k;
+    }
+  for (size_t r : systematic_choice(mixed(run_info), n_runs))
+    for (size_t f : pool[r])
+      for (int i : evenly(frames[f], per)) out.push_back(i);
   std::sort(out.begin(), out.end());
   return out;
 }

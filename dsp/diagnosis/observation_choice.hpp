@@ -28,10 +28,15 @@ struct ObservationChoice {
   size_t budget = 0;            // at most this many observations (0: all)
   size_t per_frame_min = 12;    // a chosen frame keeps at least this many (when it has them)
   size_t leverage_pool = 2;     // frames are chosen from a pool of this many times as many, evenly spread
+  // Frames are chosen in runs of this many consecutive ones (1: each on its own). The translation
+  // nuisance's velocity spline needs its pairs close in time: frames chosen one by one over ten
+  // minutes are four pairs a second, too few for knots that follow a hand's shake.
+  size_t run = 1;
 };
 
-// At most `choice.budget` of `idx` (DiagnosisModel order, ascending): frames by the leverage of
-// their observations for the parameters in `mask` at `at`, an even share within each. `idx`
+// At most `choice.budget` of `idx` (DiagnosisModel order, ascending): frames (in runs of
+// `choice.run` consecutive ones) by the leverage of their observations for the parameters in
+// `mask` at `at`, an even share within each. `idx`
 // itself when it is within the budget. The result is in ascending order.
 std::vector<int> choose_observations(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& at,
                                      const ParamMask& mask, const ObservationChoice& choice);

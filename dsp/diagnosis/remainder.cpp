@@ -18,6 +18,7 @@ namespace {
 constexpr double kClearZ = 4.0;           // "statistically clear"
 constexpr double kMaterialShare = 0.2;    // structured variance over the noise variance
 constexpr int kMaxPerFrame = 200;         // nearest neighbours are searched among these
+constexpr size_t kMaxObservations = 20000;  // the remainder is assessed on at most these
 
 // One frame's inlier observations: their predicted pixels and their residuals.
 struct Frame {
@@ -57,6 +58,31 @@ std::vector<Frame> frames_of(const DiagnosisModel& m, const std::vector<int>& id
     }
     out.push_back(std::move(f));
   }
+  return out;
+}
+
+// At most kMaxObservations of idx. The tests compare each observation with its neighbours in its
+// frame and each frame's mean with the next frame's, so a frame needs several: an even share of
+// the observations keeps every frame while that leaves each eight or more (up to 2 500 frames,
+// about 80 s at 30 fps); past that it left ten minutes of a walk one or two a frame, too few to
+// compare (a residual three times the noise was called noise), and whole runs of 24 consecutive
+// frames are taken instead, evenly over the recording, 16 observations of each.
+std::vector<int> assessed_observations(const DiagnosisModel& m, const std::vector<int>& idx) {
+  constexpr size_t kMinPerFrame = 8, kPerFrame = 16, kRun = 24;
+  if (idx.size() <= kMaxObservations) return idx;
+  std::map<int, std::vector<int>> by_rank;
+  for (int i : idx) by_rank[m.frame_rank(i)].push_back(i);
+  if (by_rank.size() * kMinPerFrame <= kMaxObservations) return subsample(idx, kMaxObservations);
+  std::vector<const std::vector<int>*> frames;
+  for (const auto& [rank, obs] : by_rank) frames.push_back(&obs);
+  const size_t runs = (frames.size() + kRun - 1) / kRun, kept = std::max<size_t>(1, kMaxObservations / (kPerFrame * kRun));
+  std::vector<int> out;
+  for (size_t j = 0; j < std::min(kept, runs); ++j) {
+    const size_t run = j * runs / std::min(kept, runs);
+    for (size_t f = run * kRun; f < std::min((run + 1) * kRun, frames.size()); ++f)
+      for (int i : subsample(*frames[f], kPerFrame)) out.push_back(i);
+  }
+  std::sort(out.begin(), out.end());
   return out;
 }
 
@@ -184,7 +210,7 @@ Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& p, const 
   Remainder r;
   ModelParams fitted = p;
   fitted.translation_nuisance = false;  // the residual the model leaves, parallax and all
-  const std::vector<int> idx = subsample(idx_all, 20000);
+  const std::vector<int> idx = assessed_observations(m, idx_all);
   const auto res = m.residuals(fitted, idx);
   r.rms_px = robust_stats(res).rms_px;
   r.stated_noise_px = noise_floor_px;

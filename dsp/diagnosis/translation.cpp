@@ -422,17 +422,28 @@ void remove_fitted_translation_from_columns(const DiagnosisModel& m, const std::
 }
 
 double translation_knot_spacing(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p) {
-  std::vector<int> ranks;
-  double t_lo = std::numeric_limits<double>::infinity(), t_hi = -t_lo;
-  for (int i : idx) ranks.push_back(m.frame_rank(i)), t_lo = std::min(t_lo, m.frame_time(i)), t_hi = std::max(t_hi, m.frame_time(i));
-  std::sort(ranks.begin(), ranks.end());
-  const double pairs = static_cast<double>(std::unique(ranks.begin(), ranks.end()) - ranks.begin());
+  std::vector<std::pair<int, double>> pair_times;  // each observation's pair (frame_a's rank) and its time
+  double t_lo = std::numeric_limits<double>::infinity();
+  for (int i : idx) pair_times.emplace_back(m.frame_rank(i), m.frame_time(i)), t_lo = std::min(t_lo, m.frame_time(i));
+  std::sort(pair_times.begin(), pair_times.end());
+  pair_times.erase(std::unique(pair_times.begin(), pair_times.end(),
+                               [](const auto& a, const auto& b) { return a.first == b.first; }),
+                   pair_times.end());
+  const double pairs = static_cast<double>(pair_times.size());
+  // The knot intervals that hold a pair: frames chosen in runs leave the spline's intervals
+  // between runs empty, where the penalty alone decides and no pair is fitted.
+  auto occupied = [&](double knot_s) {
+    std::vector<long> at;
+    for (const auto& pt : pair_times) at.push_back(static_cast<long>(std::floor((pt.second - t_lo) / knot_s)));
+    std::sort(at.begin(), at.end());
+    return static_cast<double>(std::unique(at.begin(), at.end()) - at.begin());
+  };
   ModelParams q = p;
   q.translation_nuisance = true;
   q.translation_knot_s = kTranslationKnotsS[0];
   double scale = robust_stats(m.residuals(q, idx)).scale_px;
   for (size_t k = 1; k < kTranslationKnotsS.size(); ++k) {
-    if (pairs < 2 * (t_hi - t_lo) / kTranslationKnotsS[k]) break;
+    if (pairs < 2 * occupied(kTranslationKnotsS[k])) break;
     ModelParams finer = q;
     finer.translation_knot_s = kTranslationKnotsS[k];
     const double s = robust_stats(m.residuals(finer, idx)).scale_px;

@@ -97,7 +97,8 @@ void remove_fitted_translation_from_columns(const DiagnosisModel& m, const std::
 // rotation fit, every applicable effect free, so that a finer spline is not asked to take what an
 // effect explains) on the observations idx: kTranslationKnotsS in turn while the finer spline
 // lowers the robust scale of the residuals by more than kFinerKnotsGain, and while the frame
-// pairs hold it, two pairs per interval on average (a spline finer than its pairs is a free
+// pairs hold it, two pairs per interval on average over the intervals that hold any (frames
+// chosen in runs leave intervals between runs empty; a spline finer than its pairs is a free
 // translation per pair, which takes up what a rotation error leaves: a clock offset, a focal length).
 double translation_knot_spacing(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p);
 

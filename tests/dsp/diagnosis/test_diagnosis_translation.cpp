@@ -12,6 +12,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <stdexcept>
 
 #include "dsp/diagnosis/diagnosis.hpp"
@@ -229,6 +230,28 @@ TEST(Translation, AShakeFasterThanTheKnotsGetsFinerKnotsAndAFlightKeepsItsOwn) {
   const SimulatedRecording flight = simulate_recording(forward_flight(8, 15.0));
   const DiagnosisModel m(flight.rec);
   EXPECT_EQ(translation_knot_spacing(m, every_observation(m), with_offset(flight, 0, true)), kTranslationKnotS);
+}
+
+// The knots need two pairs an interval where there are pairs: the same number of a shake's frame
+// pairs (75 of 600) chosen one in eight, four a second, cannot hold knots finer than the default
+// (a spline finer than its pairs is a free translation per pair), in three runs of 25
+// consecutive pairs they hold the finer knots the shake needs (the penalty bridges the gaps).
+TEST(Translation, FramesInRunsHoldFinerKnotsThanAsManySpreadOneByOne) {
+  const SimulatedRecording sim = simulate_recording(hand_held_shake(kShakeSeeds[0]));
+  const DiagnosisModel m(sim.rec);
+  ModelParams truth = nominal_params(sim.rec.nominal);
+  truth.translation_nuisance = true;
+  std::vector<int> spread, runs;
+  std::set<int> spread_pairs, run_pairs;
+  for (int i : every_observation(m)) {
+    const int rank = m.frame_rank(i);
+    if (rank % 8 == 0 && rank < 600) spread.push_back(i), spread_pairs.insert(rank);
+    if (rank % 250 < 25) runs.push_back(i), run_pairs.insert(rank);
+  }
+  ASSERT_EQ(spread_pairs.size(), 75u);
+  ASSERT_EQ(run_pairs.size(), 75u);
+  EXPECT_EQ(translation_knot_spacing(m, spread, truth), kTranslationKnotS);
+  EXPECT_LT(translation_knot_spacing(m, runs, truth), kTranslationKnotS);
 }
 
 // Under the nuisance a focal length's sigma is the sandwich's clustered by blocks of ten frames

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <map>
 #include <numeric>
+#include <set>
 
 #include "dsp/diagnosis/diagnosis.hpp"
 #include "dsp/diagnosis/effects.hpp"
@@ -144,6 +145,50 @@ TEST(ChooseObservations, KeepsMoreInformationThanAnEvenChoiceOfTheSameSize) {
   // Within the budget the observations are the input itself.
   choice.budget = all.size();
   EXPECT_EQ(choose_observations(m, all, at, mask, choice), all);
+}
+
+// In runs (ObservationChoice::run, a matches recording's fitting frames under the translation
+// nuisance's spline): every chosen frame comes with the run of consecutive frames it belongs
+// to, as many frames as one by one, the same share of each.
+TEST(ChooseObservations, ChoosesWholeRunsOfConsecutiveFrames) {
+  SimConfig c = phone(12, 6.0);
+  const SimulatedRecording sim = simulate_recording(c);
+  const DiagnosisModel m(sim.rec);
+  const std::vector<int> all = rsd::test::every_observation(m);
+  const ModelParams at = nominal_params(sim.rec.nominal);
+  const ParamMask mask = params({Param::LineDelay, Param::TimeOffset, Param::BiasX, Param::BiasY, Param::BiasZ, Param::Fx});
+  ObservationChoice choice;
+  choice.budget = 720;  // 60 frames of about 180
+  choice.run = 6;
+  const std::vector<int> chosen = choose_observations(m, all, at, mask, choice);
+  ASSERT_LE(chosen.size(), choice.budget);
+  EXPECT_TRUE(std::is_sorted(chosen.begin(), chosen.end()));
+  std::vector<int> ranks;  // every frame's, in time order
+  for (int i : all) ranks.push_back(m.frame_rank(i));
+  std::sort(ranks.begin(), ranks.end());
+  ranks.erase(std::unique(ranks.begin(), ranks.end()), ranks.end());
+  std::map<int, int> per_frame;
+  for (int i : chosen) ++per_frame[m.frame_rank(i)];
+  EXPECT_EQ(per_frame.size(), 60u);
+  for (const auto& [rank, n] : per_frame) {
+    EXPECT_EQ(n, static_cast<int>(choice.per_frame_min)) << "frame " << rank;
+    const size_t at_place = static_cast<size_t>(std::lower_bound(ranks.begin(), ranks.end(), rank) - ranks.begin());
+    const size_t first = at_place / choice.run * choice.run;
+    for (size_t k = first; k < std::min(first + choice.run, ranks.size()); ++k)
+      EXPECT_TRUE(per_frame.count(ranks[k])) << "frame " << rank << " without frame " << ranks[k] << " of its run";
+  }
+  // One by one (run 1, the default) the frames are not in runs of six.
+  choice.run = 1;
+  std::set<int> single;
+  for (int i : choose_observations(m, all, at, mask, choice)) single.insert(m.frame_rank(i));
+  EXPECT_EQ(single.size(), 60u);
+  size_t whole_runs = 0;  // of the 30 runs of six
+  for (size_t first = 0; first + 6 <= ranks.size(); first += 6) {
+    bool all_in = true;
+    for (size_t k = first; k < first + 6; ++k) all_in = all_in && single.count(ranks[k]);
+    whole_runs += all_in;
+  }
+  EXPECT_LT(whole_runs, 10u);
 }
 
 TEST(ChooseObservations, ADiagnosisOnAFractionFindsTheTruthWithAnHonestUncertainty) {
