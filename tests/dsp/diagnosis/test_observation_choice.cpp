@@ -110,13 +110,22 @@ TEST(ObservationLeverage, IsTheHatMatrixDiagonal) {
   EXPECT_NEAR(sum, 6.0, 1e-6);  // the trace: six parameters, all seen
 }
 
-TEST(ChooseObservations, KeepsMoreInformationThanAnEvenChoiceOfTheSameSize) {
-  SimConfig c = phone(12, 6.0);
-  const SimulatedRecording sim = simulate_recording(c);
-  const DiagnosisModel m(sim.rec);
+namespace {
+
+// A phone's 6 s (180 frames of about 60 matches) and the parameters the choices weigh.
+struct ChoiceCase {
+  const SimulatedRecording sim = simulate_recording(phone(12, 6.0));
+  const DiagnosisModel m{sim.rec};  // after sim: it keeps a reference to the recording
   const std::vector<int> all = rsd::test::every_observation(m);
   const ModelParams at = nominal_params(sim.rec.nominal);
   const ParamMask mask = params({Param::LineDelay, Param::TimeOffset, Param::BiasX, Param::BiasY, Param::BiasZ, Param::Fx});
+};
+
+}  // namespace
+
+TEST(ChooseObservations, KeepsMoreInformationThanAnEvenChoiceOfTheSameSize) {
+  const ChoiceCase k;
+  const auto& [sim, m, all, at, mask] = k;
   // 720 of about 10 000: 12 in each of 60 of the 180 frames, chosen from 120 by information.
   ObservationChoice choice;
   choice.budget = 720;
@@ -151,12 +160,8 @@ TEST(ChooseObservations, KeepsMoreInformationThanAnEvenChoiceOfTheSameSize) {
 // nuisance's spline): every chosen frame comes with the run of consecutive frames it belongs
 // to, as many frames as one by one, the same share of each.
 TEST(ChooseObservations, ChoosesWholeRunsOfConsecutiveFrames) {
-  SimConfig c = phone(12, 6.0);
-  const SimulatedRecording sim = simulate_recording(c);
-  const DiagnosisModel m(sim.rec);
-  const std::vector<int> all = rsd::test::every_observation(m);
-  const ModelParams at = nominal_params(sim.rec.nominal);
-  const ParamMask mask = params({Param::LineDelay, Param::TimeOffset, Param::BiasX, Param::BiasY, Param::BiasZ, Param::Fx});
+  const ChoiceCase k;
+  const auto& [sim, m, all, at, mask] = k;
   ObservationChoice choice;
   choice.budget = 720;  // 60 frames of about 180
   choice.run = 6;
