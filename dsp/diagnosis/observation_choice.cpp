@@ -169,7 +169,7 @@ std::vector<int> choose_observations(const DiagnosisModel& m, const std::vector<
   // kept, evenly spread, each frame's information (the sum of its observations' leverage)
   // estimated from 2 x per of its observations, so that ten minutes cost what one does; a run's
   // is its frames' sum.
-  const size_t run = std::max<size_t>(1, choice.run);
+  const size_t run = std::clamp<size_t>(choice.run, 1, n_frames);  // a run longer than the budget's frames would pass it
   std::vector<std::vector<size_t>> runs;  // frames' places in `frames`
   for (size_t f = 0; f < frames.size(); f += run) {
     runs.emplace_back();

@@ -182,7 +182,13 @@ TEST(ChooseObservations, ChoosesWholeRunsOfConsecutiveFrames) {
     for (size_t k = first; k < std::min(first + choice.run, ranks.size()); ++k)
       EXPECT_TRUE(per_frame.count(ranks[k])) << "frame " << rank << " without frame " << ranks[k] << " of its run";
   }
+  // A budget of fewer frames than a run: one run as long as the budget allows, not past it.
+  choice.budget = 36;
+  const std::vector<int> few = choose_observations(m, all, at, mask, choice);
+  EXPECT_LE(few.size(), 36u);
+  EXPECT_GE(few.size(), 24u);
   // One by one (run 1, the default) the frames are not in runs of six.
+  choice.budget = 720;
   choice.run = 1;
   std::set<int> single;
   for (int i : choose_observations(m, all, at, mask, choice)) single.insert(m.frame_rank(i));
