@@ -32,6 +32,16 @@ std::vector<std::vector<int>> by_frame(const DiagnosisModel& m, const std::vecto
   return out;
 }
 
+// The places of `frames` in runs of `run` consecutive ones (the last may be shorter).
+std::vector<std::vector<size_t>> in_runs(size_t frames, size_t run) {
+  std::vector<std::vector<size_t>> runs;
+  for (size_t f = 0; f < frames; f += run) {
+    runs.emplace_back();
+    for (size_t g = f; g < std::min(f + run, frames); ++g) runs.back().push_back(g);
+  }
+  return runs;
+}
+
 // `count` of the items of v, evenly spread.
 template <class T>
 std::vector<T> evenly(const std::vector<T>& v, size_t count) {
@@ -170,11 +180,7 @@ std::vector<int> choose_observations(const DiagnosisModel& m, const std::vector<
   // estimated from 2 x per of its observations, so that ten minutes cost what one does; a run's
   // is its frames' sum.
   const size_t run = std::clamp<size_t>(choice.run, 1, n_frames);  // a run longer than the budget's frames would pass it
-  std::vector<std::vector<size_t>> runs;  // frames' places in `frames`
-  for (size_t f = 0; f < frames.size(); f += run) {
-    runs.emplace_back();
-    for (size_t g = f; g < std::min(f + run, frames.size()); ++g) runs.back().push_back(g);
-  }
+  const std::vector<std::vector<size_t>> runs = in_runs(frames.size(), run);
   const size_t n_runs = std::max<size_t>(1, n_frames / run);
   const std::vector<std::vector<size_t>> pool = evenly(runs, std::max<size_t>(1, choice.leverage_pool) * n_runs);
   std::vector<int> sampled;
@@ -198,6 +204,17 @@ std::vector<int> choose_observations(const DiagnosisModel& m, const std::vector<
   for (size_t r : systematic_choice(mixed(run_info), n_runs))
     for (size_t f : pool[r])
       for (int i : evenly(frames[f], per)) out.push_back(i);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<int> evenly_in_runs(const DiagnosisModel& m, const std::vector<int>& idx, size_t runs, size_t run,
+                                size_t per_frame) {
+  const std::vector<std::vector<int>> frames = by_frame(m, idx);
+  std::vector<int> out;
+  for (const auto& r : evenly(in_runs(frames.size(), std::max<size_t>(1, run)), runs))
+    for (size_t f : r)
+      for (int i : evenly(frames[f], per_frame)) out.push_back(i);
   std::sort(out.begin(), out.end());
   return out;
 }

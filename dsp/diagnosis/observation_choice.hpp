@@ -41,6 +41,12 @@ struct ObservationChoice {
 std::vector<int> choose_observations(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& at,
                                      const ParamMask& mask, const ObservationChoice& choice);
 
+// Whole runs of `run` consecutive frames of `idx` (DiagnosisModel order), `runs` of them evenly over
+// the recording, `per_frame` of each frame's observations (an even share); ascending. For what
+// needs each frame's neighbours in time and several observations a frame (the remainder's tests).
+std::vector<int> evenly_in_runs(const DiagnosisModel& m, const std::vector<int>& idx, size_t runs, size_t run,
+                                size_t per_frame);
+
 // Leverage of each observation of `idx` for the parameters in `mask` at `at` (sum = the rank of
 // the information, at most the number of free parameters). A failed prediction has none.
 std::vector<double> observation_leverage(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& at,

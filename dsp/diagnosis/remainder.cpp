@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "dsp/diagnosis/fit.hpp"
+#include "dsp/diagnosis/observation_choice.hpp"
 #include "dsp/diagnosis/parallax.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
 
@@ -70,20 +71,12 @@ std::vector<Frame> frames_of(const DiagnosisModel& m, const std::vector<int>& id
 std::vector<int> assessed_observations(const DiagnosisModel& m, const std::vector<int>& idx) {
   constexpr size_t kMinPerFrame = 8, kPerFrame = 16, kRun = 24;
   if (idx.size() <= kMaxObservations) return idx;
-  std::map<int, std::vector<int>> by_rank;
-  for (int i : idx) by_rank[m.frame_rank(i)].push_back(i);
-  if (by_rank.size() * kMinPerFrame <= kMaxObservations) return subsample(idx, kMaxObservations);
-  std::vector<const std::vector<int>*> frames;
-  for (const auto& [rank, obs] : by_rank) frames.push_back(&obs);
-  const size_t runs = (frames.size() + kRun - 1) / kRun, kept = std::max<size_t>(1, kMaxObservations / (kPerFrame * kRun));
-  std::vector<int> out;
-  for (size_t j = 0; j < std::min(kept, runs); ++j) {
-    const size_t run = j * runs / std::min(kept, runs);
-    for (size_t f = run * kRun; f < std::min((run + 1) * kRun, frames.size()); ++f)
-      for (int i : subsample(*frames[f], kPerFrame)) out.push_back(i);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
+  std::vector<int> ranks;
+  for (int i : idx) ranks.push_back(m.frame_rank(i));
+  std::sort(ranks.begin(), ranks.end());
+  const auto frames = static_cast<size_t>(std::unique(ranks.begin(), ranks.end()) - ranks.begin());
+  if (frames * kMinPerFrame <= kMaxObservations) return subsample(idx, kMaxObservations);
+  return evenly_in_runs(m, idx, kMaxObservations / (kPerFrame * kRun), kRun, kPerFrame);
 }
 
 // The independent noise: differences between each observation and its nearest neighbour in

@@ -202,6 +202,30 @@ TEST(ChooseObservations, ChoosesWholeRunsOfConsecutiveFrames) {
   EXPECT_LT(whole_runs, 10u);
 }
 
+// Evenly in runs (the remainder's observations of a long recording): five whole runs of six
+// consecutive pairs, spread over the 30 runs, four observations of each pair.
+TEST(EvenlyInRuns, TakesWholeRunsSpreadOverTheRecording) {
+  const ChoiceCase k;
+  std::vector<int> ranks;
+  for (int i : k.all) ranks.push_back(k.m.frame_rank(i));
+  std::sort(ranks.begin(), ranks.end());
+  ranks.erase(std::unique(ranks.begin(), ranks.end()), ranks.end());
+  ASSERT_EQ(ranks.size(), 179u);  // pairs: 30 runs of six, the last of five
+  const std::vector<int> chosen = evenly_in_runs(k.m, k.all, 5, 6, 4);
+  EXPECT_TRUE(std::is_sorted(chosen.begin(), chosen.end()));
+  std::map<int, int> per_frame;
+  for (int i : chosen) ++per_frame[k.m.frame_rank(i)];
+  ASSERT_EQ(per_frame.size(), 30u);
+  std::set<size_t> runs;
+  for (const auto& [rank, n] : per_frame) {
+    EXPECT_EQ(n, 4) << "frame " << rank;
+    runs.insert(static_cast<size_t>(std::lower_bound(ranks.begin(), ranks.end(), rank) - ranks.begin()) / 6);
+  }
+  ASSERT_EQ(runs.size(), 5u);  // so each of the five is whole
+  EXPECT_LE(*runs.begin(), 5u);  // spread: one within each sixth of the recording
+  EXPECT_GE(*runs.rbegin(), 24u);
+}
+
 TEST(ChooseObservations, ADiagnosisOnAFractionFindsTheTruthWithAnHonestUncertainty) {
   RSD_SKIP_LONG_IN_SLOW_BUILD("ChooseObservations.KeepsMoreInformationThanAnEvenChoiceOfTheSameSize (the choice itself)");
   SimConfig c = phone(13, 8.0);
