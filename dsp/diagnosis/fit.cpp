@@ -196,9 +196,12 @@ class BulkEvaluator {
   // Residuals in sigma units; a failed prediction becomes a constant kFailSigmas residual. With
   // `near`, from what settled there: its fixed points as starts and, under the translation
   // nuisance, its translation held (DiagnosisModel::residuals_near: a Jacobian column's step).
+  // Without, the fixed points start from the solver's current point when it has one (a trial
+  // step's: two projections a match, not three) and the translation is fitted afresh.
   void evaluate(const double* x, Values& v, const Values* near = nullptr) const {
     v.x = Eigen::Map<const Eigen::VectorXd>(x, k_);
-    v.r = near ? m_.residuals_near(c_.at(x), idx_, near->settled) : m_.residuals(c_.at(x), idx_, v.settled);
+    const DiagnosisModel::Settled* current = jac_.x.size() == k_ && &v != &jac_ ? &jac_.settled : nullptr;
+    v.r = near ? m_.residuals_near(c_.at(x), idx_, near->settled) : m_.residuals(c_.at(x), idx_, v.settled, current);
     v.ok.assign(v.r.size(), false);
     for (size_t i = 0; i < v.r.size(); ++i) {
       v.ok[i] = v.r[i].allFinite();

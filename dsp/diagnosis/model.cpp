@@ -364,7 +364,7 @@ std::vector<Eigen::Vector2d> DiagnosisModel::rotation_residuals(const ModelParam
     return out;
   }
   if (near && near->rows.size() != idx.size())
-    throw std::invalid_argument("diagnosis: residuals_near on other observations than it settled on");
+    throw std::invalid_argument("diagnosis: fixed points settled on other observations than these");
   const GyroTrack& tr = track(bias_of(p), scale_of(p));
   const MatchSetup ms = match_setup(p);
   if (settled) settled->rows.assign(idx.size(), RowStart{});
@@ -386,8 +386,8 @@ std::vector<Eigen::Vector2d> DiagnosisModel::translation_out(const ModelParams& 
 }
 
 std::vector<Eigen::Vector2d> DiagnosisModel::residuals(const ModelParams& p, const std::vector<int>& idx,
-                                                       Settled& settled) const {
-  std::vector<Eigen::Vector2d> r = rotation_residuals(p, idx, &settled, nullptr);
+                                                       Settled& settled, const Settled* rows_from) const {
+  std::vector<Eigen::Vector2d> r = rotation_residuals(p, idx, &settled, rows_from);
   const bool nuisance = rec_.kind == ObservationKind::Matches && p.translation_nuisance;
   settled.rotation = nuisance ? r : std::vector<Eigen::Vector2d>{};
   // What settled there before is remove_translation's hint (its frame pairs' grouping).

@@ -111,8 +111,12 @@ class DiagnosisModel {
     std::vector<Eigen::Vector2d> rotation;
   };
   // As residuals(p, idx), and what they settled on goes to `settled` (what it held, settled on the
-  // same idx, speeds the translation up: remove_translation's hint).
-  std::vector<Eigen::Vector2d> residuals(const ModelParams& p, const std::vector<int>& idx, Settled& settled) const;
+  // same idx, speeds the translation up: remove_translation's hint). With `rows_from` (settled on
+  // the same idx at nearby parameters: a fit's trial step from its current point) each match's
+  // fixed point starts from its solution there, as residuals_near's do; the translation is taken
+  // out afresh. Throws std::invalid_argument when idx is not the size `rows_from` was settled on.
+  std::vector<Eigen::Vector2d> residuals(const ModelParams& p, const std::vector<int>& idx, Settled& settled,
+                                         const Settled* rows_from = nullptr) const;
   // As residuals(p, idx), at parameters near those `near` was settled at on the same idx: each
   // match's fixed point starts from its solution there (two projections, not three; the row
   // settles to the same 1e-6 px), and the translation is taken out as it settled there
