@@ -264,9 +264,10 @@ TEST(DiagnosisMatches, RepeatedStampsAndGapsNeverGiveNaN) {
 }
 
 // A fit's Jacobian step starts each match's rolling-shutter fixed point from its solution at the
-// point (DiagnosisModel::residuals_near): at a step in any parameter the residuals are those
-// computed afresh from the observed row (a different start: both settle the row to 1e-6 px, so
-// the pixels agree to well under that), and the step moves them far more than that.
+// point (DiagnosisModel::residuals_near), and so does its trial step (residuals with `rows_from`):
+// at a step in any parameter the residuals are those computed afresh from the observed row (a
+// different start: both settle the row to 1e-6 px, so the pixels agree to well under that), and
+// the step moves them far more than that.
 TEST(DiagnosisMatches, AStepFromTheSettledFixedPointsGivesTheResidualsComputedAfresh) {
   SimConfig c = phone(7);
   c.effects.line_delay_s = 6e-5;  // a 29 ms readout: the fixed point has the row to find
@@ -292,23 +293,32 @@ TEST(DiagnosisMatches, AStepFromTheSettledFixedPointsGivesTheResidualsComputedAf
                              std::pair{Param::BiasX, 1e-3}, std::pair{Param::Fx, 1.0}, std::pair{Param::K1, 1e-3}}) {
     ModelParams at = p;
     at[q] += h;
-    const auto near = m.residuals_near(at, all, settled), afresh = m.residuals(at, all);
-    double worst = 0, moved = 0;
+    DiagnosisModel::Settled trial;
+    const auto near = m.residuals_near(at, all, settled), afresh = m.residuals(at, all),
+               from_rows = m.residuals(at, all, trial, &settled);
+    double worst = 0, worst_trial = 0, moved = 0;
     int compared = 0;
     for (size_t k = 0; k < all.size(); ++k) {
-      if (!near[k].allFinite() || !afresh[k].allFinite()) {
+      if (!near[k].allFinite() || !afresh[k].allFinite() || !from_rows[k].allFinite()) {
         EXPECT_EQ(near[k].allFinite(), afresh[k].allFinite()) << k;
+        EXPECT_EQ(from_rows[k].allFinite(), afresh[k].allFinite()) << k;
         continue;
       }
       worst = std::max(worst, (near[k] - afresh[k]).norm()), moved = std::max(moved, (afresh[k] - base[k]).norm());
+      worst_trial = std::max(worst_trial, (from_rows[k] - afresh[k]).norm());
+      // What the trial settled on is its own solution, for the step after it.
+      EXPECT_NEAR(trial.rows[k].row, m.observed(all[k]).y() - from_rows[k].y(), 1e-6) << k;
       ++compared;
     }
     EXPECT_GT(compared, m.size() / 2) << param_name(q);
     EXPECT_LT(worst, 2e-7) << param_name(q);
+    EXPECT_LT(worst_trial, 2e-7) << param_name(q);
     EXPECT_GT(moved, 1e-3) << param_name(q);
   }
   const std::vector<int> fewer(all.begin(), all.end() - 1);
   EXPECT_THROW(m.residuals_near(p, fewer, settled), std::invalid_argument);
+  DiagnosisModel::Settled other;
+  EXPECT_THROW(m.residuals(p, fewer, other, &settled), std::invalid_argument);
 }
 
 TEST(DiagnosisMatches, RejectsRecordingsItCannotModel) {
