@@ -240,14 +240,6 @@ struct ObservationSets {
 // refits on every fitting observation, and a minute's walk has 200 000.
 constexpr size_t kTranslationBudgetFactor = 3;
 
-// A matches recording's fitting frames are chosen in runs of this many consecutive pairs (about
-// a second at 30 fps, a fifth held out): when the budget leaves out frames (past about 100 s at
-// 30 fps), frames chosen one by one spread thinly (ten minutes: four pairs a second), and the
-// translation nuisance's spline, which needs two pairs a knot interval, could then not follow a
-// hand's shake (0.5 s knots: the ten-minute walk lost its lens and its focal length went 1% off).
-// Within a run the pairs are as dense as the recording's.
-constexpr size_t kMatchesRunFrames = 24;
-
 // The named effects' values fitted again on `wide` (under the translation nuisance more fitting
 // observations than the selection decided on), from the selection's.
 Selection refit_on(const DiagnosisModel& m, const std::vector<int>& wide, double sigma_px, const SelectionOptions& so,

@@ -41,6 +41,15 @@ struct ObservationChoice {
 std::vector<int> choose_observations(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& at,
                                      const ParamMask& mask, const ObservationChoice& choice);
 
+// A matches recording's frames are chosen in runs of this many consecutive pairs (about a second
+// at 30 fps, a fifth held out) when the budget leaves frames out (past about 100 s at 30 fps):
+// chosen one by one they spread thinly (ten minutes: four pairs a second), and the translation
+// nuisance's spline, which needs two pairs a knot interval, could then not follow a hand's shake
+// (0.5 s knots: the ten-minute walk lost its lens and its focal length went 1% off); the
+// remainder's tests, which compare each frame with the next, need them too. Within a run the
+// pairs are as dense as the recording's.
+inline constexpr size_t kMatchesRunFrames = 24;
+
 // Whole runs of `run` consecutive frames of `idx` (DiagnosisModel order), `runs` of them evenly over
 // the recording, `per_frame` of each frame's observations (an even share); ascending. For what
 // needs each frame's neighbours in time and several observations a frame (the remainder's tests).

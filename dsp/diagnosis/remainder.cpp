@@ -66,10 +66,10 @@ std::vector<Frame> frames_of(const DiagnosisModel& m, const std::vector<int>& id
 // frame and each frame's mean with the next frame's, so a frame needs several: an even share of
 // the observations keeps every frame while that leaves each eight or more (up to 2 500 frames,
 // about 80 s at 30 fps); past that it left ten minutes of a walk one or two a frame, too few to
-// compare (a residual three times the noise was called noise), and whole runs of 24 consecutive
-// frames are taken instead, evenly over the recording, 16 observations of each.
+// compare (a residual three times the noise was called noise), and whole runs of kMatchesRunFrames
+// consecutive frames are taken instead, evenly over the recording, 16 observations of each.
 std::vector<int> assessed_observations(const DiagnosisModel& m, const std::vector<int>& idx) {
-  constexpr size_t kMinPerFrame = 8, kPerFrame = 16, kRun = 24;
+  constexpr size_t kMinPerFrame = 8, kPerFrame = 16, kRun = kMatchesRunFrames;
   if (idx.size() <= kMaxObservations) return idx;
   std::vector<int> ranks;
   for (int i : idx) ranks.push_back(m.frame_rank(i));
