@@ -463,14 +463,16 @@ ModelParams gross_start(const DiagnosisModel& m, const std::vector<int>& idx, co
                         const std::function<void(int, int)>& step) {
   const std::vector<int> sub = subsample(idx, p.translation_nuisance ? 600 : 150);
   const auto [lo, hi] = search_range(m, p[Param::TimeOffset]);
-  ModelParams best = p;
+  ModelParams start = p;
+  start.translation_pair_shifts = false;  // ModelParams: one observation a pair here
+  ModelParams best = start;
   double best_cost = std::numeric_limits<double>::infinity();
   // Nominal focal first, then outwards: a recording that does not see the focal length (a
   // flat cost) keeps the nominal one.
   constexpr int kScales[] = {0, -1, 1, -2, 2, -3, 3, -4, 4};
   int done = 0;
   for (int k : kScales) {
-    ModelParams q = p;
+    ModelParams q = start;
     q[Param::Fx] *= 1 + 0.05 * k;
     q[Param::Fy] *= 1 + 0.05 * k;
     const GridBest g = lo < hi ? best_offset(m, sub, q, lo, hi, 5e-3, coarse_width(m, sigma))
@@ -483,6 +485,7 @@ ModelParams gross_start(const DiagnosisModel& m, const std::vector<int>& idx, co
     if (step) step(++done, static_cast<int>(std::size(kScales)));
   }
   if (lo < hi) best[Param::TimeOffset] = refine_time_offset(m, sub, best, sigma);
+  best.translation_pair_shifts = p.translation_pair_shifts;
   return best;
 }
 

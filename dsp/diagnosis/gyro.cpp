@@ -153,6 +153,14 @@ const GyroTrack::Knot& GyroTrack::interval(double t, Eigen::Vector3d& phi, size_
   phi.setZero();
   if (t < knots_.front().t) return knots_.front();
   if (t >= knots_.back().t) return knots_.back();
+  locate(t, hint);
+  const Knot &a = knots_[hint], &b = knots_[hint + 1];
+  const double h = b.t - a.t;
+  phi = step(a.w, a.s, b.w, b.s, h, (t - a.t) / h);
+  return a;
+}
+
+void GyroTrack::locate(double t, size_t& hint) const {
   // knots_[hint].t <= t < knots_[hint + 1].t: walked to from the hint when it is a few
   // intervals off (the next observation's frame, mostly the same or the next), else searched.
   if (hint + 1 >= knots_.size()) hint = 0;
@@ -162,15 +170,23 @@ const GyroTrack::Knot& GyroTrack::interval(double t, Eigen::Vector3d& phi, size_
     auto hi = std::upper_bound(knots_.begin(), knots_.end(), t, [](double tt, const Knot& k) { return tt < k.t; });
     hint = static_cast<size_t>(hi - knots_.begin()) - 1;
   }
+}
+
+Eigen::Vector3d GyroTrack::rate_at(double t, size_t& hint) const {
+  if (!(t >= knots_.front().t && t < knots_.back().t)) return Eigen::Vector3d::Zero();
+  locate(t, hint);
   const Knot &a = knots_[hint], &b = knots_[hint + 1];
   const double h = b.t - a.t;
-  phi = step(a.w, a.s, b.w, b.s, h, (t - a.t) / h);
-  return a;
+  return imu_to_camera_ * hermite(a.w, a.s, b.w, b.s, h, (t - a.t) / h).rate;
 }
 
 Eigen::Matrix3d GyroTrack::camera_at(double t) const {
-  Eigen::Vector3d phi;
   size_t hint = 0;
+  return camera_at(t, hint);
+}
+
+Eigen::Matrix3d GyroTrack::camera_at(double t, size_t& hint) const {
+  Eigen::Vector3d phi;
   const Knot& a = interval(t, phi, hint);
   return a.R * exp_so3_fast(phi) * imu_to_camera_t_;
 }

@@ -42,8 +42,10 @@ class GyroTrack {
   GyroTrack(const std::vector<GyroSample>& gyro, const Eigen::Vector3d& bias, const Eigen::Matrix3d& imu_to_camera,
             double max_interval = std::numeric_limits<double>::infinity(),
             const Eigen::Vector3d& scale = Eigen::Vector3d::Ones());
-  // World-from-camera rotation R_c(t) on the motion clock; held at the ends.
+  // World-from-camera rotation R_c(t) on the motion clock; held at the ends. With `hint` as
+  // to_world's (below), for callers that walk through time.
   Eigen::Matrix3d camera_at(double t) const;
+  Eigen::Matrix3d camera_at(double t, size_t& hint) const;
   // R_c(t) v and R_c(t)^T d without forming R_c(t): the diagnosis turns one direction per call,
   // and three matrix products (the interval's rotation, its exponential, the axes) cost more
   // than Rodrigues' formula on the vector itself. Equal to camera_at to rounding.
@@ -60,6 +62,11 @@ class GyroTrack {
   // axes), the derivative of the track's own integration (knot by knot, through each step's
   // exponential), not of the continuous motion. The diagnosis's analytic Jacobian
   // (match_jacobian.hpp) uses both.
+  // The camera's rate at t (camera axes, bias- and scale-corrected): the Hermite rate through
+  // the knots, to first order in the turn since the interval's knot (camera_at's rate without
+  // the exponential's Jacobian and the Magnus term: cheaper, where a direction is all that is
+  // asked); zero outside the data. `hint` as to_world's.
+  Eigen::Vector3d rate_at(double t, size_t& hint) const;
   using ByGyro = Eigen::Matrix<double, 3, 6>;
   Eigen::Matrix3d camera_at(double t, size_t& hint, Eigen::Vector3d& rate, ByGyro* by_gyro = nullptr) const;
   const Eigen::Vector3d& bias() const { return bias_; }
@@ -83,6 +90,8 @@ class GyroTrack {
   // The knot whose interval holds t (knots_.front() before, knots_.back() after the data) and
   // the rotation vector from it to t (zero outside the data).
   const Knot& interval(double t, Eigen::Vector3d& phi, size_t& hint) const;
+  // The knot index k with knots_[k].t <= t < knots_[k + 1].t, for t inside the data, into `hint`.
+  void locate(double t, size_t& hint) const;
   static constexpr int kWalk = 8;  // intervals walked from the hint before a search
   std::vector<Knot> knots_;
   Eigen::Vector3d bias_, scale_;

@@ -381,7 +381,8 @@ std::vector<Eigen::Vector2d> DiagnosisModel::translation_out(const ModelParams& 
                                                              std::vector<Eigen::Vector2d> r, TranslationFit* keep) const {
   if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return r;
   const MatchSetup ms = match_setup(p);
-  remove_translation(*this, idx, r, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s, keep);
+  remove_translation(*this, idx, r, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s, keep,
+                     p.translation_pair_shifts);
   return r;
 }
 

@@ -55,6 +55,10 @@ struct ModelParams {
   bool translation_nuisance = false;
   // The knot spacing of its velocity spline (s; translation.hpp).
   double translation_knot_s = kTranslationKnotS;
+  // With it, each frame pair's time shift under the gyro stamps' remaining error (translation.hpp,
+  // pair_shifts); the gross search goes without (gross_start: one observation a pair under a
+  // truncated cost, where a shift per pair would cost a rate per observation and decide nothing).
+  bool translation_pair_shifts = true;
   double& operator[](Param p) { return v[static_cast<int>(p)]; }
   double operator[](Param p) const { return v[static_cast<int>(p)]; }
 };

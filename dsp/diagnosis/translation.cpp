@@ -43,7 +43,23 @@ struct PairSums {
   double t = 0;
   Eigen::Matrix3d turn = Eigen::Matrix3d::Zero();
   Eigen::Matrix<double, kW, kW> N = Eigen::Matrix<double, kW, kW>::Zero();
+  // The pair's time shift (PairShift below): the rotation a shift of one second turns the pair
+  // by (camera axes, the rate's change over the pair), and what eliminating it leaves for w:
+  // the shift is gain (b_s - coupling w), b_s its right-hand side.
+  Eigen::Vector3d shift_axis = Eigen::Vector3d::Zero();
+  double shift_gain = 0;
+  Eigen::Matrix<double, 1, kW> shift_coupling = Eigen::Matrix<double, 1, kW>::Zero();
 };
+
+}  // namespace
+
+double pair_shift_sd(const DiagnosisModel& m) {
+  const StampSpread& s = m.gyro_stamps();
+  const double sd = std::sqrt(std::max(0.0, s.jitter_s * s.jitter_s - s.moved_rms_s * s.moved_rms_s));
+  return sd < kMinPairShiftS ? 0.0 : sd;
+}
+
+namespace {
 
 // Uniform cubic B-spline: the weights of the four control points at fraction u of an interval.
 std::array<double, 4> cubic_weights(double u) {
@@ -168,6 +184,7 @@ struct PairGroups {
   std::vector<size_t> position;  // per observation taken, in pair order: its place in idx
   std::vector<int> pair_of;      // its pair
   std::vector<Eigen::Matrix<double, 2, 3>> unit;  // its flow per unit translation, camera axes
+  bool shifts = false;               // whether the pairs shift in time (pair_shift_sd)
   std::vector<double> mean_row;     // the mean of its two rows (the rows' mean time is affine in it)
   std::vector<Eigen::Vector2d> xn;  // its normalised image coordinates
   std::vector<size_t> pair_first;   // each pair's first observation (position in idx)
@@ -183,6 +200,7 @@ struct TranslationFit::State {
   std::shared_ptr<const PairGroups> groups;
   std::vector<bool> in;  // after the passes: whether each grouped observation was an inlier of the last
   Eigen::Vector2d slope = Eigen::Vector2d::Zero();  // after the passes: the scene's slope
+  double shift_rho = 0;  // the pairs' shift prior, noise^2 / shift sd^2 at the last pass; 0: no shifts
 };
 
 namespace {
@@ -190,8 +208,9 @@ namespace {
 // The observations of `r` that have a residual, by pair: `prior`'s when it grouped the same.
 std::shared_ptr<const PairGroups> group_by_pair(const DiagnosisModel& m, const std::vector<int>& idx,
                                                 const std::vector<Eigen::Vector2d>& r,
-                                                const std::shared_ptr<const PairGroups>& prior) {
-  if (prior && prior->same(idx, r)) return prior;
+                                                const std::shared_ptr<const PairGroups>& prior, bool with_shifts) {
+  const bool shifts = with_shifts && pair_shift_sd(m) > 0;
+  if (prior && prior->shifts == shifts && prior->same(idx, r)) return prior;
   struct Member {
     int rank;
     double t_b;
@@ -206,6 +225,7 @@ std::shared_ptr<const PairGroups> group_by_pair(const DiagnosisModel& m, const s
   std::sort(by_pair.begin(), by_pair.end());
   auto s = std::make_shared<PairGroups>();
   const CameraModel& cam = m.recording().nominal.cam;
+  s->shifts = shifts;
   s->idx = idx;
   s->finite.resize(r.size());
   for (size_t k = 0; k < r.size(); ++k) s->finite[k] = r[k].allFinite();
@@ -227,11 +247,21 @@ std::shared_ptr<const PairGroups> group_by_pair(const DiagnosisModel& m, const s
 std::vector<PairSums> pairs_at(const DiagnosisModel& m, const std::vector<int>& idx, const PairGroups& s,
                                const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t) {
   std::vector<PairSums> pairs(s.pair_first.size());
+  // Pairs in frame order: each lookup walks on from the last one's knot. The rate at frame_b is
+  // mostly the next pair's at its frame_a (consecutive frames).
+  size_t hint_a = 0, hint_b = 0;
+  Eigen::Vector3d w_a = Eigen::Vector3d::Zero();
   for (size_t q = 0; q < pairs.size(); ++q) {
     const int i = idx[s.pair_first[q]];
-    pairs[q].t = 0.5 * (m.frame_time(i) + m.frame_time_b(i));
-    const Eigen::Matrix3d world_from_camera = track.camera_at(tm.motion_time(m.frame_time(i))) * mount_t;
-    pairs[q].turn = (m.frame_time_b(i) - m.frame_time(i)) * world_from_camera.transpose();
+    const double t_a = m.frame_time(i), t_b = m.frame_time_b(i);
+    pairs[q].t = 0.5 * (t_a + t_b);
+    const Eigen::Matrix3d world_from_camera = track.camera_at(tm.motion_time(t_a), hint_a) * mount_t;
+    pairs[q].turn = (t_b - t_a) * world_from_camera.transpose();
+    if (!s.shifts) continue;
+    if (q == 0 || t_a != m.frame_time_b(idx[s.pair_first[q - 1]])) w_a = track.rate_at(tm.motion_time(t_a), hint_a);
+    const Eigen::Vector3d w_b = track.rate_at(tm.motion_time(t_b), hint_b);
+    pairs[q].shift_axis = mount_t.transpose() * (w_b - w_a);
+    w_a = w_b;
   }
   return pairs;
 }
@@ -254,11 +284,20 @@ std::vector<double> row_delays(const DiagnosisModel& m, const PairGroups& s, con
 // depth(k) is observation k's depth factor, delta[k] its rows' time after its pair's, rk(k) its
 // residuals (2 x Cols). A pair's run of observations is summed before its turn T is applied:
 // with F = d unit T, F^T F = d^2 T^T (unit^T unit) T and F^T r = d T^T (unit^T r).
+//
+// With `shift_rho` > 0 each pair also shifts in time (pair_shift_sd): observation k's flow per
+// second of it is flows[k] = s_k (shift_flows), and the shift, one scalar under the prior shift_rho, is
+// eliminated beside w: N - c^T c / (s.s + rho) and B - c^T b_s / (s.s + rho), c = sum s_k^T F_k
+// its coupling to w, b_s = sum s_k^T r_k its right-hand side (rows of `Bs`, one per pair).
 template <int Cols, class Depth, class Residual>
-void pair_sums(std::vector<PairSums>& pairs, Eigen::MatrixXd& B, Eigen::Index columns, const PairGroups& s,
-               const std::vector<double>& delta, const std::vector<bool>& in, const Depth& depth, const Residual& rk) {
+void pair_sums(std::vector<PairSums>& pairs, Eigen::MatrixXd& B, Eigen::MatrixXd& Bs, Eigen::Index columns,
+               const PairGroups& s, const std::vector<double>& delta, const std::vector<bool>& in, const Depth& depth,
+               const Residual& rk, const std::vector<Eigen::Vector2d>& flows, double shift_rho) {
   B.setZero(kW * static_cast<Eigen::Index>(pairs.size()), columns);
+  const bool shifts = shift_rho > 0 && !flows.empty();
+  Bs.setZero(shifts ? static_cast<Eigen::Index>(pairs.size()) : 0, columns);
   Eigen::Matrix<double, 3, Cols> c0(3, columns), c1(3, columns), g(3, columns);
+  Eigen::Matrix<double, 1, Cols> bs(1, columns);
   // unit^T unit is symmetric: its six distinct entries, weighted by d^2 (1, delta, delta^2).
   auto symmetric = [](const Eigen::Matrix<double, 6, 1>& u) {
     return (Eigen::Matrix3d() << u[0], u[1], u[2], u[1], u[3], u[4], u[2], u[4], u[5]).finished();
@@ -266,7 +305,9 @@ void pair_sums(std::vector<PairSums>& pairs, Eigen::MatrixXd& B, Eigen::Index co
   for (size_t k = 0; k < s.pair_of.size();) {
     const int q = s.pair_of[k];
     Eigen::Matrix<double, 6, 3> S = Eigen::Matrix<double, 6, 3>::Zero();
-    c0.setZero(), c1.setZero();
+    c0.setZero(), c1.setZero(), bs.setZero();
+    double ss = 0;
+    Eigen::RowVector3d p0 = Eigen::RowVector3d::Zero(), p1 = Eigen::RowVector3d::Zero();
     for (; k < s.pair_of.size() && s.pair_of[k] == q; ++k) {
       if (!in[k]) continue;
       const double d = depth(k), e = delta[k], d2 = d * d;
@@ -277,14 +318,60 @@ void pair_sums(std::vector<PairSums>& pairs, Eigen::MatrixXd& B, Eigen::Index co
       S.noalias() += G * Eigen::RowVector3d(d2, d2 * e, d2 * e * e);
       g.noalias() = a.transpose() * rk(k);
       c0 += d * g, c1 += (d * e) * g;
+      if (!shifts) continue;
+      const Eigen::Vector2d& sk = flows[k];
+      const Eigen::RowVector3d su = sk.transpose() * a;
+      ss += sk.squaredNorm(), p0 += d * su, p1 += (d * e) * su;
+      bs.noalias() += sk.transpose() * rk(k);
     }
-    const Eigen::Matrix3d T = pairs[q].turn, Tt = T.transpose();
-    Eigen::Matrix<double, kW, kW>& N = pairs[q].N;
+    PairSums& p = pairs[q];
+    const Eigen::Matrix3d T = p.turn, Tt = T.transpose();
+    Eigen::Matrix<double, kW, kW>& N = p.N;
     const Eigen::Matrix3d N00 = Tt * symmetric(S.col(0)) * T, N01 = Tt * symmetric(S.col(1)) * T,
                           N11 = Tt * symmetric(S.col(2)) * T;
     N << N00, N01, N01.transpose(), N11;
     B.middleRows<3>(kW * q).noalias() = Tt * c0, B.middleRows<3>(kW * q + 3).noalias() = Tt * c1;
+    if (!shifts) continue;
+    p.shift_coupling << p0 * T, p1 * T;
+    p.shift_gain = 1.0 / (ss + shift_rho);
+    N.noalias() -= p.shift_gain * p.shift_coupling.transpose() * p.shift_coupling;
+    B.middleRows<kW>(kW * q).noalias() -= p.shift_gain * p.shift_coupling.transpose() * bs;
+    Bs.row(q) = bs;
   }
+}
+
+// Each grouped observation's flow per second of its pair's time shift, s_k = turn_k axis (camera
+// axes), at the pairs' axes; empty without shifts.
+std::vector<Eigen::Vector2d> shift_flows(const DiagnosisModel& m, const PairGroups& s, const std::vector<PairSums>& pairs) {
+  if (!s.shifts) return {};
+  const CameraModel& cam = m.recording().nominal.cam;
+  std::vector<Eigen::Vector2d> flow(s.xn.size());
+  for (size_t k = 0; k < flow.size(); ++k) {
+    const Eigen::Vector3d& w = pairs[static_cast<size_t>(s.pair_of[k])].shift_axis;
+    const double x = s.xn[k].x(), y = s.xn[k].y();  // rotation_flow (parallax.hpp) at xn, times w
+    flow[k] = {cam.fx * (x * y * w.x() - (1 + x * x) * w.y() + y * w.z()),
+               cam.fy * ((1 + y * y) * w.x() - x * y * w.y() - x * w.z())};
+  }
+  return flow;
+}
+
+// Each pair's time shift (rows of pairs, a column per column of U) given the velocities U
+// (world axes) it was eliminated beside: gain (b_s - coupling w). Empty without shifts.
+Eigen::MatrixXd pair_shifts(const std::vector<PairSums>& pairs, const Eigen::MatrixXd& Bs, const Eigen::MatrixXd& U) {
+  Eigen::MatrixXd shift = Bs;
+  for (Eigen::Index q = 0; q < Bs.rows(); ++q) {
+    const PairSums& p = pairs[static_cast<size_t>(q)];
+    for (Eigen::Index c = 0; c < Bs.cols(); ++c)
+      shift(q, c) = p.shift_gain * (Bs(q, c) - p.shift_coupling.dot(U.block<kW, 1>(kW * q, c)));
+  }
+  return shift;
+}
+
+// Observation k's flow from its pair's time shift, one column of them (zero without shifts).
+inline Eigen::Vector2d shift_flow(const PairGroups& s, const std::vector<Eigen::Vector2d>& flows,
+                                  const Eigen::MatrixXd& shift, size_t k, Eigen::Index column = 0) {
+  if (shift.rows() == 0) return Eigen::Vector2d::Zero();
+  return flows[k] * shift(s.pair_of[k], column);
 }
 
 // The pairs' velocities U (world axes, rows 6q..6q+5 pair q's u and u') turned into camera axes
@@ -336,11 +423,11 @@ Spline spline_over(const std::vector<PairSums>& pairs, double knot_s) {
 
 void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
                         const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s,
-                        TranslationFit* keep) {
+                        TranslationFit* keep, bool with_shifts) {
   std::shared_ptr<const TranslationFit::State> prior;
   if (keep) prior = std::move(keep->state), keep->state.reset();
   auto st = std::make_shared<TranslationFit::State>();
-  st->groups = group_by_pair(m, idx, r, prior ? prior->groups : nullptr);
+  st->groups = group_by_pair(m, idx, r, prior ? prior->groups : nullptr, with_shifts);
   TranslationFit::State& fit = *st;
   const PairGroups& s = *fit.groups;
   if (s.position.empty()) return;
@@ -356,19 +443,29 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   // hundreds). From the second on, the scene's slope too (scene_slope): one plane's inverse
   // depth is affine in the normalised image coordinates, and a ground ahead of a forward-flying
   // drone or a car leaves, at one depth, pixels of parallax growing towards the image's bottom.
-  Eigen::MatrixXd V = Eigen::MatrixXd::Zero(kW * static_cast<Eigen::Index>(pairs.size()), 1), B;  // camera axes
+  //
+  // With the pairs' time shifts (pair_shift_sd), their prior is the noise's variance (the
+  // pass's robust scale) over the shift's: a pair's shift follows its matches as far as they
+  // hold it above the gyro's stamps' own error. The slope is fitted to what the shifts leave.
+  Eigen::MatrixXd V = Eigen::MatrixXd::Zero(kW * static_cast<Eigen::Index>(pairs.size()), 1), B, Bs, shift;  // camera axes
   std::vector<double> len(n);
   fit.in.assign(n, false);
+  const double shift_sd = s.shifts ? pair_shift_sd(m) : 0.0;
   auto depth_factor = [&](size_t k) { return 1.0 + fit.slope.dot(s.xn[k]); };
-  auto left = [&](size_t k) { return Eigen::Vector2d(rk[k] - depth_factor(k) * unit_depth_flow(s, delta, V, k)); };
+  const std::vector<Eigen::Vector2d> flows = shift_flows(m, s, pairs);
+  auto unshifted = [&](size_t k) { return Eigen::Vector2d(rk[k] - shift_flow(s, flows, shift, k)); };
+  auto left = [&](size_t k) { return Eigen::Vector2d(unshifted(k) - depth_factor(k) * unit_depth_flow(s, delta, V, k)); };
   auto residual = [&](size_t k) { return rk[k]; };
   for (int pass = 0; pass < 4; ++pass) {
     for (size_t k = 0; k < n; ++k) len[k] = left(k).norm();
-    const double limit = 4 * std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6);
+    const double scale = std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6), limit = 4 * scale;
     for (size_t k = 0; k < n; ++k) fit.in[k] = len[k] <= limit;
-    if (pass >= 1) fit.slope = scene_slope(s, delta, V, fit.in, residual);
-    pair_sums<1>(pairs, B, 1, s, delta, fit.in, depth_factor, residual);
-    V = in_camera_axes(pairs, pair_velocities(sp, pairs, B));
+    if (pass >= 1) fit.slope = scene_slope(s, delta, V, fit.in, unshifted);
+    if (shift_sd > 0) fit.shift_rho = scale * scale / (shift_sd * shift_sd);
+    pair_sums<1>(pairs, B, Bs, 1, s, delta, fit.in, depth_factor, residual, flows, fit.shift_rho);
+    const Eigen::MatrixXd U = pair_velocities(sp, pairs, B);
+    shift = pair_shifts(pairs, Bs, U);
+    V = in_camera_axes(pairs, U);
   }
   for (size_t k = 0; k < n; ++k) r[s.position[k]] = left(k);
   if (keep) keep->state = st;
@@ -390,11 +487,14 @@ void subtract_fitted(const DiagnosisModel& m, const std::vector<int>& idx, Eigen
   auto depth_factor = [&](size_t k) { return 1.0 + fit.slope.dot(s.xn[k]); };
   std::vector<bool> taken(fit.in.size());
   for (size_t k = 0; k < taken.size(); ++k) taken[k] = fit.in[k] && rows(k).allFinite();
-  Eigen::MatrixXd B;
-  pair_sums<Cols>(pairs, B, columns, s, delta, taken, depth_factor, rows);
-  const Eigen::MatrixXd V = in_camera_axes(pairs, pair_velocities(sp, pairs, B));
+  Eigen::MatrixXd B, Bs;
+  const std::vector<Eigen::Vector2d> flows = shift_flows(m, s, pairs);
+  pair_sums<Cols>(pairs, B, Bs, columns, s, delta, taken, depth_factor, rows, flows, fit.shift_rho);
+  const Eigen::MatrixXd U = pair_velocities(sp, pairs, B), shift = pair_shifts(pairs, Bs, U);
+  const Eigen::MatrixXd V = in_camera_axes(pairs, U);
   for (size_t k = 0; k < s.position.size(); ++k)
-    for (Eigen::Index c = 0; c < columns; ++c) rows(k).col(c) -= depth_factor(k) * unit_depth_flow(s, delta, V, k, c);
+    for (Eigen::Index c = 0; c < columns; ++c)
+      rows(k).col(c) -= depth_factor(k) * unit_depth_flow(s, delta, V, k, c) + shift_flow(s, flows, shift, k, c);
 }
 
 }  // namespace

@@ -37,6 +37,21 @@ inline constexpr std::array<double, 3> kTranslationKnotsS = {kTranslationKnotS, 
 // percent.
 inline constexpr double kFinerKnotsGain = 0.10;
 
+// A gyro's stamps that the rates corrected (gyro_stamps.hpp) keep an error of their own: what
+// the estimate could not take out, sqrt(jitter^2 - moved^2) for an estimate under a Gaussian
+// spread (0.28-0.34 ms from 0.5 ms on test_gyro_stamps' hand's shake, whose measured errors after
+// correction are 0.34-0.40 ms). The rotation between a pair's frames then errs by the rate's
+// change over the pair times a shift of its own (measured on that shake, 85-89% of a pair's
+// rotation error lies along the angular acceleration; a third without jitter). The velocity
+// spline cannot follow an error independent from pair to pair, and it diluted the focal column:
+// the walking phone's focal length came out 0.6% low on average over eight seeds
+// (docs/diagnosis.md, "Gyro timestamp jitter"). So each frame pair has a time shift, that spread
+// its prior, eliminated beside the velocity (remove_translation). Below kMinPairShiftS, the
+// estimate's own floor on a gyro sampled on time (0.04 ms), there are none, and nothing changes.
+inline constexpr double kMinPairShiftS = 5e-5;
+// The prior spread of each frame pair's time shift (s) for the matches of `m`; 0: no shifts.
+double pair_shift_sd(const DiagnosisModel& m);
+
 // Removes from `r` (residuals of the observations `idx`, NaN for failed predictions) the flow of
 // the camera's translation: per match, the flow over one plane (translation_flow, parallax.hpp,
 // times the plane's inverse depth 1 + g . (x, y) at the normalised image coordinates) of
@@ -50,13 +65,20 @@ inline constexpr double kFinerKnotsGain = 0.10;
 // track.camera_at(tm.motion_time(T)) mount_t, mount_t the transpose of the mount rotation
 // (model.cpp, "Matches").
 //
+// With a jittered gyro (pair_shift_sd above zero) and `with_shifts`, each frame pair's rotation
+// also shifts in time: per match the flow of the rotation (w_b - w_a) tau, w_a and w_b the
+// camera's rate at the pair's two frames and tau one scalar per pair under the prior
+// pair_shift_sd (against the noise the pass's robust scale gives), eliminated beside the
+// velocity per pair; the slope is fitted to what the shifts leave. The prior's term is not in
+// what is left (as the spline's penalty is not): the residual is the data's misfit alone.
+//
 // What it took out goes to `keep` when given (see TranslationFit). What `keep` held before is a
 // hint: its grouping of the observations by frame pair is taken again when it grouped the same
 // observations with the same residuals finite (a fit's trial points: a tenth of their time).
 struct TranslationFit;
 void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
                         const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t,
-                        double knot_s = kTranslationKnotS, TranslationFit* keep = nullptr);
+                        double knot_s = kTranslationKnotS, TranslationFit* keep = nullptr, bool with_shifts = true);
 
 // What remove_translation settled on for one set of residuals: its observations by frame pair,
 // the last pass's inliers and the scene's slope. remove_fitted_translation fits the velocity

@@ -12,10 +12,12 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <set>
 #include <stdexcept>
 
 #include "dsp/diagnosis/diagnosis.hpp"
+#include "dsp/diagnosis/fit.hpp"
 #include "dsp/diagnosis/gyro.hpp"
 #include "dsp/diagnosis/translation.hpp"
 #include "dsp/diagnosis/parallax.hpp"
@@ -207,6 +209,91 @@ TEST(Translation, TheHeldPassTakesAColumnThatLeavesThePairsTurnsLinearly) {
     EXPECT_TRUE(DiagnosisModel::moves_translation_pass(q)) << param_name(q);
   Eigen::MatrixXd wrong = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(all.size()) - 2, 1);
   EXPECT_THROW(m.translation_out_of_columns(p, all, wrong, taken), std::invalid_argument);
+}
+
+// A gyro sampled on time shows no stamps' spread: its pairs do not shift, and the residuals are
+// those without shifts, exactly.
+TEST(Translation, AGyroSampledOnTimeLeavesThePairsUnshifted) {
+  SimConfig c = forward_flight(8, 15.0);
+  c.effects.time_offset_s = 0.01;
+  const SimulatedRecording sim = simulate_recording(c);
+  const DiagnosisModel m(sim.rec);
+  EXPECT_EQ(pair_shift_sd(m), 0.0);
+  const auto all = every_observation(m);
+  ModelParams with = with_offset(sim, 0.01, true), without = with;
+  without.translation_pair_shifts = false;
+  const auto a = m.residuals(with, all), b = m.residuals(without, all);
+  for (size_t k = 0; k < all.size(); ++k) {
+    if (!a[k].allFinite() && !b[k].allFinite()) continue;
+    ASSERT_EQ(a[k], b[k]) << k;
+  }
+}
+
+// The hand-held shake's gyro, its stamps 0.5 ms off at random: the rates' corrections leave each
+// pair's rotation off by the rate's change over a shift of its own. Without the pixels' noise
+// and outliers, at the true model, what the jitter adds to the residual is measured against the
+// same recording with the stamps on time (the same draws of everything else: a different
+// simulation, not the model): the pairs' shifts take up most of it (a tenth to a third of a
+// jittered pair's rotation error lies off the angular acceleration, test_gyro_stamps), and on
+// time there are none. (They take up part of what is left on time too, the gyro's noise and the
+// spline's misfit of the shake where these lie along the rate's change: half of it here.)
+// The held pass with the shifts in stays linear in the residuals (the fits' Jacobian columns).
+TEST(Translation, AJitteredGyrosPairsShiftInTimeAndTakeUpWhatTheJitterAdds) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("Translation.AGyroSampledOnTimeLeavesThePairsUnshifted (the shifts' switch)");
+  auto mean_square = [](const SimConfig& c, bool shifts, double* sd) {
+    const SimulatedRecording sim = simulate_recording(c);
+    const DiagnosisModel m(sim.rec);
+    *sd = pair_shift_sd(m);
+    ModelParams p = nominal_params(sim.rec.nominal);
+    p.translation_nuisance = true, p.translation_knot_s = 0.125, p.translation_pair_shifts = shifts;
+    const double rms = robust_stats(m.residuals(p, every_observation(m))).rms_px;
+    return rms * rms;
+  };
+  for (unsigned seed : kShakeSeeds) {
+    SimConfig jittered = hand_held_shake(seed);
+    jittered.noise_px = 0, jittered.outlier_fraction = 0;
+    SimConfig on_time = jittered;
+    on_time.gyro.jitter_s = 0;
+    double sd = 0, sd_on_time = 0;
+    const double floor = mean_square(on_time, true, &sd_on_time), plain = mean_square(jittered, false, &sd),
+                 shifted = mean_square(jittered, true, &sd);
+    std::printf("seed %u: shift sd %.3f ms (on time %.3f); mean square on time %.5f, jittered %.5f, with shifts %.5f px^2\n",
+                seed, 1e3 * sd, 1e3 * sd_on_time, floor, plain, shifted);
+    EXPECT_GT(sd, 0.2e-3);
+    EXPECT_LT(sd, 0.45e-3);
+    EXPECT_EQ(sd_on_time, 0.0);
+    ASSERT_GT(plain - floor, floor);  // the jitter shows
+    EXPECT_LT(shifted - floor, 0.35 * (plain - floor));
+  }
+  // The held pass: linear for a column that leaves the turns, with the shifts eliminated too.
+  const SimulatedRecording sim = simulate_recording(hand_held_shake(kShakeSeeds[0]));
+  const DiagnosisModel m(sim.rec);
+  const std::vector<int> all = every_observation(m);
+  ModelParams p = nominal_params(sim.rec.nominal);
+  p.translation_nuisance = true, p.translation_knot_s = 0.125;
+  DiagnosisModel::Settled taken;
+  const auto base = m.residuals(p, all, taken);
+  ModelParams p_plain = p;
+  p_plain.translation_nuisance = false;
+  const auto raw_p = m.residuals(p_plain, all);
+  for (Param q : {Param::Fx, Param::K1}) {
+    ModelParams at = p;
+    at[q] += q == Param::Fx ? 2.0 : 1e-3;
+    ModelParams at_plain = at;
+    at_plain.translation_nuisance = false;
+    const auto raw_q = m.residuals(at_plain, all), near = m.residuals_near(at, all, taken);
+    Eigen::MatrixXd cols = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(all.size()), 1);
+    for (size_t k = 0; k < all.size(); ++k) cols.block<2, 1>(2 * k, 0) = raw_q[k] - raw_p[k];
+    m.translation_out_of_columns(at, all, cols, taken);
+    double diff = 0, size = 0;
+    for (size_t k = 0; k < all.size(); ++k) {
+      if (!base[k].allFinite() || !near[k].allFinite() || !raw_q[k].allFinite()) continue;
+      const Eigen::Vector2d change = near[k] - base[k];
+      diff = std::max(diff, (cols.block<2, 1>(2 * k, 0) - change).norm()), size = std::max(size, change.norm());
+    }
+    ASSERT_GT(size, 1e-3) << param_name(q);
+    EXPECT_LT(diff, 1e-6 * size) << param_name(q);
+  }
 }
 
 TEST(Translation, AShakeFasterThanTheKnotsGetsFinerKnotsAndAFlightKeepsItsOwn) {
