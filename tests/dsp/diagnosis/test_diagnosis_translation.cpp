@@ -5,7 +5,8 @@
 // the default knots gets finer ones, a flight keeps the default; a phone's readout has each
 // match's velocity taken at its own rows' time; a Jacobian step with the
 // translation's inliers and slope held agrees with the translation fitted again, and is linear
-// for the parameters that leave the frame pairs' turns. Whole
+// for the parameters that leave the frame pairs' turns; a jittered gyro's frame pairs shift in
+// time and take up what the jitter adds, a gyro sampled on time's do not. Whole
 // diagnoses under it: test_translation_diagnoses.cpp.
 #include <gtest/gtest.h>
 
@@ -15,6 +16,7 @@
 #include <cstdio>
 #include <set>
 #include <stdexcept>
+#include <utility>
 
 #include "dsp/diagnosis/diagnosis.hpp"
 #include "dsp/diagnosis/fit.hpp"
@@ -168,6 +170,32 @@ TEST(Translation, AJacobianStepWithTheInliersHeldMatchesTheTranslationFittedAgai
                std::invalid_argument);
 }
 
+// The held pass's column for a step h of q (translation_out_of_columns of the rotation model's
+// change) against the change of residuals_near there: the largest difference over the
+// observations and the largest change, {diff, size}.
+std::pair<double, double> held_column_against_near(const DiagnosisModel& m, const std::vector<int>& all,
+                                                   const ModelParams& p, const DiagnosisModel::Settled& taken,
+                                                   const std::vector<Eigen::Vector2d>& base, Param q, double h) {
+  ModelParams p_plain = p;
+  p_plain.translation_nuisance = false;
+  const auto raw_p = m.residuals(p_plain, all);
+  ModelParams at = p;
+  at[q] += h;
+  ModelParams at_plain = at;
+  at_plain.translation_nuisance = false;
+  const auto raw_q = m.residuals(at_plain, all), near = m.residuals_near(at, all, taken);
+  Eigen::MatrixXd cols = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(all.size()), 1);
+  for (size_t k = 0; k < all.size(); ++k) cols.block<2, 1>(2 * k, 0) = raw_q[k] - raw_p[k];
+  m.translation_out_of_columns(at, all, cols, taken);
+  double diff = 0, size = 0;
+  for (size_t k = 0; k < all.size(); ++k) {
+    if (!base[k].allFinite() || !near[k].allFinite() || !raw_q[k].allFinite()) continue;
+    const Eigen::Vector2d change = near[k] - base[k];
+    diff = std::max(diff, (cols.block<2, 1>(2 * k, 0) - change).norm()), size = std::max(size, change.norm());
+  }
+  return {diff, size};
+}
+
 // Where a parameter leaves the frame pairs' turns (the line delay, the intrinsics, the lens), the
 // held translation pass is linear in the residuals: the change it makes of the rotation model's
 // change is the change of residuals_near, to the rolling-shutter rows' settling (1e-8 of it; the
@@ -176,29 +204,13 @@ TEST(Translation, AJacobianStepWithTheInliersHeldMatchesTheTranslationFittedAgai
 TEST(Translation, TheHeldPassTakesAColumnThatLeavesThePairsTurnsLinearly) {
   GroundFlight f;
   auto& [sim, m, all, p, taken, base] = f;
-  ModelParams p_plain = p;
-  p_plain.translation_nuisance = false;
-  const auto raw_p = m.residuals(p_plain, all);
   struct Step {
     Param q;
     double h;
   };
   for (const Step st : {Step{Param::LineDelay, 1e-7}, Step{Param::Fx, 2.0}, Step{Param::K1, 1e-3}, Step{Param::Cy, 2.0},
                         Step{Param::TimeOffset, 1e-3}}) {
-    ModelParams q = p;
-    q[st.q] += st.h;
-    ModelParams q_plain = q;
-    q_plain.translation_nuisance = false;
-    const auto raw_q = m.residuals(q_plain, all), near = m.residuals_near(q, all, taken);
-    Eigen::MatrixXd cols = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(all.size()), 1);
-    for (size_t k = 0; k < all.size(); ++k) cols.block<2, 1>(2 * k, 0) = raw_q[k] - raw_p[k];
-    m.translation_out_of_columns(q, all, cols, taken);
-    double diff = 0, size = 0;
-    for (size_t k = 0; k < all.size(); ++k) {
-      if (!base[k].allFinite() || !near[k].allFinite() || !raw_q[k].allFinite()) continue;
-      const Eigen::Vector2d change = near[k] - base[k];
-      diff = std::max(diff, (cols.block<2, 1>(2 * k, 0) - change).norm()), size = std::max(size, change.norm());
-    }
+    const auto [diff, size] = held_column_against_near(m, all, p, taken, base, st.q, st.h);
     ASSERT_GT(size, 1e-3) << param_name(st.q);
     if (DiagnosisModel::moves_translation_pass(st.q)) EXPECT_GT(diff, 1e-3 * size) << param_name(st.q);
     else EXPECT_LT(diff, 1e-6 * size) << param_name(st.q);
@@ -273,24 +285,8 @@ TEST(Translation, AJitteredGyrosPairsShiftInTimeAndTakeUpWhatTheJitterAdds) {
   p.translation_nuisance = true, p.translation_knot_s = 0.125;
   DiagnosisModel::Settled taken;
   const auto base = m.residuals(p, all, taken);
-  ModelParams p_plain = p;
-  p_plain.translation_nuisance = false;
-  const auto raw_p = m.residuals(p_plain, all);
   for (Param q : {Param::Fx, Param::K1}) {
-    ModelParams at = p;
-    at[q] += q == Param::Fx ? 2.0 : 1e-3;
-    ModelParams at_plain = at;
-    at_plain.translation_nuisance = false;
-    const auto raw_q = m.residuals(at_plain, all), near = m.residuals_near(at, all, taken);
-    Eigen::MatrixXd cols = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(all.size()), 1);
-    for (size_t k = 0; k < all.size(); ++k) cols.block<2, 1>(2 * k, 0) = raw_q[k] - raw_p[k];
-    m.translation_out_of_columns(at, all, cols, taken);
-    double diff = 0, size = 0;
-    for (size_t k = 0; k < all.size(); ++k) {
-      if (!base[k].allFinite() || !near[k].allFinite() || !raw_q[k].allFinite()) continue;
-      const Eigen::Vector2d change = near[k] - base[k];
-      diff = std::max(diff, (cols.block<2, 1>(2 * k, 0) - change).norm()), size = std::max(size, change.norm());
-    }
+    const auto [diff, size] = held_column_against_near(m, all, p, taken, base, q, q == Param::Fx ? 2.0 : 1e-3);
     ASSERT_GT(size, 1e-3) << param_name(q);
     EXPECT_LT(diff, 1e-6 * size) << param_name(q);
   }
