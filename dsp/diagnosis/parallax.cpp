@@ -13,7 +13,11 @@
 namespace rsd::dsp {
 
 Eigen::Matrix<double, 2, 3> rotation_flow(const CameraModel& cam, const Eigen::Vector2d& px) {
-  const double x = (px.x() - cam.cx) / cam.fx, y = (px.y() - cam.cy) / cam.fy;
+  return rotation_flow_at(cam, {(px.x() - cam.cx) / cam.fx, (px.y() - cam.cy) / cam.fy});
+}
+
+Eigen::Matrix<double, 2, 3> rotation_flow_at(const CameraModel& cam, const Eigen::Vector2d& xn) {
+  const double x = xn.x(), y = xn.y();
   Eigen::Matrix<double, 2, 3> J;
   J << cam.fx * x * y, -cam.fx * (1 + x * x), cam.fx * y,  //
       cam.fy * (1 + y * y), -cam.fy * x * y, -cam.fy * x;

@@ -19,6 +19,8 @@ class DiagnosisModel;
 // d(pixel) per unit rotation (columns: about x, y, z) and per unit translation over depth
 // (columns: along x, y, z), at `pixel`, in pixels.
 Eigen::Matrix<double, 2, 3> rotation_flow(const CameraModel& cam, const Eigen::Vector2d& pixel);
+// The same at normalised image coordinates xn = ((u - cx) / fx, (v - cy) / fy).
+Eigen::Matrix<double, 2, 3> rotation_flow_at(const CameraModel& cam, const Eigen::Vector2d& xn);
 Eigen::Matrix<double, 2, 3> translation_flow(const CameraModel& cam, const Eigen::Vector2d& pixel);
 
 // Matches: whether a translation of the camera between the two frames of each pair explains

@@ -43,9 +43,9 @@ struct PairSums {
   double t = 0;
   Eigen::Matrix3d turn = Eigen::Matrix3d::Zero();
   Eigen::Matrix<double, kW, kW> N = Eigen::Matrix<double, kW, kW>::Zero();
-  // The pair's time shift (PairShift below): the rotation a shift of one second turns the pair
-  // by (camera axes, the rate's change over the pair), and what eliminating it leaves for w:
-  // the shift is gain (b_s - coupling w), b_s its right-hand side.
+  // The pair's time shift (pair_shift_sd, translation.hpp): the rotation a shift of one second
+  // turns the pair by (camera axes, the rate's change over the pair), and what eliminating it
+  // leaves for w: the shift is gain (b_s - coupling w), b_s its right-hand side (pair_sums).
   Eigen::Vector3d shift_axis = Eigen::Vector3d::Zero();
   double shift_gain = 0;
   Eigen::Matrix<double, 1, kW> shift_coupling = Eigen::Matrix<double, 1, kW>::Zero();
@@ -346,12 +346,8 @@ std::vector<Eigen::Vector2d> shift_flows(const DiagnosisModel& m, const PairGrou
   if (!s.shifts) return {};
   const CameraModel& cam = m.recording().nominal.cam;
   std::vector<Eigen::Vector2d> flow(s.xn.size());
-  for (size_t k = 0; k < flow.size(); ++k) {
-    const Eigen::Vector3d& w = pairs[static_cast<size_t>(s.pair_of[k])].shift_axis;
-    const double x = s.xn[k].x(), y = s.xn[k].y();  // rotation_flow (parallax.hpp) at xn, times w
-    flow[k] = {cam.fx * (x * y * w.x() - (1 + x * x) * w.y() + y * w.z()),
-               cam.fy * ((1 + y * y) * w.x() - x * y * w.y() - x * w.z())};
-  }
+  for (size_t k = 0; k < flow.size(); ++k)
+    flow[k] = rotation_flow_at(cam, s.xn[k]) * pairs[static_cast<size_t>(s.pair_of[k])].shift_axis;
   return flow;
 }
 
