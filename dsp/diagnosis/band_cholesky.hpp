@@ -1,6 +1,6 @@
 // A symmetric positive-definite band matrix factorised once and solved for any number of
 // right-hand sides, by LAPACK (dpbtrf, dpbtrs): the translation nuisance's velocity spline
-// (translation.cpp) has a band of 11 either side of the diagonal over a few thousand unknowns,
+// (velocity_spline.cpp) has a band of 11 either side of the diagonal over a few thousand unknowns,
 // solved in every pass and for every column of the fits' Jacobian. Eigen's sparse Cholesky
 // analysed the band's pattern anew on every call (a tenth of the hand-held phone's diagnosis
 // under parallax); a band factorisation is n x kd^2 and analyses nothing.

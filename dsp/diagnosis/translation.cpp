@@ -2,18 +2,16 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <stdexcept>
-#include <tuple>
 
 #include "dsp/core/statistics.hpp"
-#include "dsp/diagnosis/band_cholesky.hpp"
 #include "dsp/diagnosis/model.hpp"
 #include "dsp/diagnosis/parallax.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
+#include "dsp/diagnosis/velocity_spline.hpp"
 
 namespace rsd::dsp {
 
@@ -33,7 +31,7 @@ namespace {
 // normal equations are T^T (sum of d^2 unit^T unit, weighted by 1, delta, delta^2) T, and a
 // match's 2 x 6 flow is never formed (it was a sixth of the walking phone's minute under
 // parallax, with the sums over it).
-constexpr int kW = 6;
+constexpr int kW = VelocitySpline::kUnknowns;
 
 // One frame pair's share of the velocity fit: its time and the normal matrix of its inliers in
 // w (world axes), and how a velocity turns into its translation over depth (camera axes):
@@ -58,121 +56,6 @@ double pair_shift_sd(const DiagnosisModel& m) {
   const double sd = std::sqrt(std::max(0.0, s.jitter_s * s.jitter_s - s.moved_rms_s * s.moved_rms_s));
   return sd < kMinPairShiftS ? 0.0 : sd;
 }
-
-namespace {
-
-// Uniform cubic B-spline: the weights of the four control points at fraction u of an interval.
-std::array<double, 4> cubic_weights(double u) {
-  const double u2 = u * u, u3 = u2 * u, v = 1 - u;
-  return {v * v * v / 6, (3 * u3 - 6 * u2 + 4) / 6, (-3 * u3 + 3 * u2 + 3 * u + 1) / 6, u3 / 6};
-}
-
-// Their derivatives by time, over a knot spacing of one.
-std::array<double, 4> cubic_slopes(double u) {
-  const double v = 1 - u;
-  return {-v * v / 2, (3 * u * u - 4 * u) / 2, (-3 * u * u + 2 * u + 1) / 2, u * u / 2};
-}
-
-// The velocity spline over [t0, t0 + intervals x knot_s]: a time's first control point, the
-// weights of the four and their derivatives by time (what gives u and u' there).
-struct Spline {
-  double t0, knot;
-  int intervals;
-  int controls() const { return intervals + 3; }
-  int first(double t, std::array<double, 4>& w, std::array<double, 4>& dw) const {
-    const double s = (t - t0) / knot;
-    const int j = std::clamp(static_cast<int>(std::floor(s)), 0, intervals - 1);
-    const double u = std::clamp(s - j, 0.0, 1.0);
-    w = cubic_weights(u), dw = cubic_slopes(u);
-    for (double& d : dw) d /= knot;
-    return j;
-  }
-};
-
-// Where a pair's time falls on the spline (Spline::first), found once per solve.
-struct SplineAt {
-  int first = 0;
-  std::array<double, 4> w{}, dw{};
-};
-
-// The band of the velocity spline's normal matrix: a pair touches four control points of three.
-constexpr int kBand = 3 * 4 - 1;
-
-// The normal matrix of the spline's control points: the pairs' N through the spline's weights
-// (u(t) and u'(t) both linear in the control points) and a light penalty on the second difference of the control points (it decides only where
-// the data leave a direction free: a stretch without pairs, a component no pair shows). A
-// pair's time touches four consecutive control points and the penalty three, so it is banded
-// (kBand scalars either side of the diagonal), gathered and factorised as a band. The pairs'
-// 3 x 3 blocks are summed as blocks, each from the four N W_c, and written into the band once
-// (formed term by term and scattered entry by entry, they were the largest share of a diagnosis
-// under parallax: the walking phone's minute).
-BandCholesky velocity_normal(const Spline& sp, const std::vector<PairSums>& pairs, const std::vector<SplineAt>& at) {
-  const int controls = sp.controls(), n = 3 * controls;
-  // blocks[k][o]: the block of control points k and k + o (o = 0..3), rows k's, columns k + o's.
-  std::vector<std::array<Eigen::Matrix3d, 4>> blocks(controls);
-  for (auto& b : blocks) b.fill(Eigen::Matrix3d::Zero());
-  double trace = 0;
-  for (size_t q = 0; q < pairs.size(); ++q) {
-    const PairSums& p = pairs[q];
-    const auto& [j, w, dw] = at[q];
-    // Control points a and c: W_a^T N W_c, W_a = (w_a I; dw_a I), from the four N W_c.
-    std::array<Eigen::Matrix<double, kW, 3>, 4> NW;
-    for (int c = 0; c < 4; ++c) NW[c].noalias() = w[c] * p.N.leftCols<3>() + dw[c] * p.N.rightCols<3>();
-    for (int a = 0; a < 4; ++a)
-      for (int c = a; c < 4; ++c) blocks[j + a][c - a] += w[a] * NW[c].topRows<3>() + dw[a] * NW[c].bottomRows<3>();
-    trace += p.N.topLeftCorner<3, 3>().trace();
-  }
-  Eigen::MatrixXd band = Eigen::MatrixXd::Zero(kBand + 1, n);  // band(i - j + kBand, j) = A(i, j), i <= j
-  for (int k = 0; k < controls; ++k)
-    for (int o = 0; o < 4 && k + o < controls; ++o)  // the blocks on the diagonal: their upper half
-      for (int y = 0; y < 3; ++y)
-        for (int x = 0; x < (o == 0 ? y + 1 : 3); ++x) band(kBand - 3 * o + x - y, 3 * (k + o) + y) = blocks[k][o](x, y);
-  auto add = [&](int i, int j, double v) {
-    if (i <= j) band(i - j + kBand, j) += v;
-  };
-  const double lambda = 1e-4 * trace / n, ridge = 1e-9 * trace / n + 1e-12;
-  for (int k = 0; k + 2 < sp.controls(); ++k) {
-    const std::array<double, 3> d = {1, -2, 1};
-    for (int a = 0; a < 3; ++a)
-      for (int c = 0; c < 3; ++c)
-        for (int x = 0; x < 3; ++x) add(3 * (k + a) + x, 3 * (k + c) + x, lambda * d[a] * d[c]);
-  }
-  band.row(kBand).array() += ridge;
-  return BandCholesky(std::move(band));
-}
-
-// Each pair's w, its velocity over depth and that velocity's rate (world axes; rows 6q..6q+5
-// pair q's, a column per column of the right-hand sides B, laid out alike) from the spline's
-// control points minimising the pairs' squared residuals (their N and B), velocity_normal of
-// the same pairs; zero where the normal matrix is not positive definite.
-Eigen::MatrixXd pair_velocities(const Spline& sp, const std::vector<PairSums>& pairs, const Eigen::MatrixXd& B) {
-  Eigen::MatrixXd U = Eigen::MatrixXd::Zero(B.rows(), B.cols());
-  std::vector<SplineAt> at(pairs.size());
-  for (size_t q = 0; q < pairs.size(); ++q) at[q].first = sp.first(pairs[q].t, at[q].w, at[q].dw);
-  const BandCholesky normal = velocity_normal(sp, pairs, at);
-  if (!normal.ok()) return U;
-  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(normal.size(), B.cols());
-  for (Eigen::Index col = 0; col < B.cols(); ++col)
-    for (size_t q = 0; q < pairs.size(); ++q) {
-      const auto& [j, w, dw] = at[q];
-      const Eigen::Index r = kW * static_cast<Eigen::Index>(q);
-      for (int a = 0; a < 4; ++a)
-        c.block<3, 1>(3 * (j + a), col) += w[a] * B.block<3, 1>(r, col) + dw[a] * B.block<3, 1>(r + 3, col);
-    }
-  normal.solve(c);
-  for (Eigen::Index col = 0; col < B.cols(); ++col)
-    for (size_t q = 0; q < pairs.size(); ++q) {
-      const auto& [j, w, dw] = at[q];
-      const Eigen::Index r = kW * static_cast<Eigen::Index>(q);
-      for (int a = 0; a < 4; ++a) {
-        U.block<3, 1>(r, col) += w[a] * c.block<3, 1>(3 * (j + a), col);
-        U.block<3, 1>(r + 3, col) += dw[a] * c.block<3, 1>(3 * (j + a), col);
-      }
-    }
-  return U;
-}
-
-}  // namespace
 
 // The observations of one set of residuals, grouped by frame pair (frame_a's rank and frame_b's
 // time: a frame may be matched to more than one other), with what their translation flow needs.
@@ -409,10 +292,18 @@ Eigen::Vector2d scene_slope(const PairGroups& s, const std::vector<double>& delt
   return N.ldlt().solve(b);
 }
 
-Spline spline_over(const std::vector<PairSums>& pairs, double knot_s) {
-  double t_lo = pairs.front().t, t_hi = t_lo;
-  for (const PairSums& p : pairs) t_lo = std::min(t_lo, p.t), t_hi = std::max(t_hi, p.t);
-  return {t_lo, knot_s, std::max(1, static_cast<int>(std::ceil((t_hi - t_lo) / knot_s)))};
+// The velocity spline over the pairs' times, knot_s apart.
+VelocitySpline spline_over(const std::vector<PairSums>& pairs, double knot_s) {
+  std::vector<double> t(pairs.size());
+  for (size_t q = 0; q < pairs.size(); ++q) t[q] = pairs[q].t;
+  return VelocitySpline(t, knot_s);
+}
+
+// Each pair's w from the spline (VelocitySpline::velocities) through the pairs' N.
+Eigen::MatrixXd pair_velocities(VelocitySpline& sp, const std::vector<PairSums>& pairs, const Eigen::MatrixXd& B) {
+  sp.clear();
+  for (size_t q = 0; q < pairs.size(); ++q) sp.add(q, pairs[q].N);
+  return sp.velocities(B);
 }
 
 }  // namespace
@@ -428,7 +319,7 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   const PairGroups& s = *fit.groups;
   if (s.position.empty()) return;
   std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
-  const Spline sp = spline_over(pairs, knot_s);
+  VelocitySpline sp = spline_over(pairs, knot_s);
   const size_t n = s.position.size();
   const std::vector<double> delta = row_delays(m, s, tm);
   std::vector<Eigen::Vector2d> rk(n);  // the residuals in pair order
@@ -478,7 +369,7 @@ void subtract_fitted(const DiagnosisModel& m, const std::vector<int>& idx, Eigen
                      const TranslationFit::State& fit) {
   const PairGroups& s = *fit.groups;
   std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
-  const Spline sp = spline_over(pairs, knot_s);
+  VelocitySpline sp = spline_over(pairs, knot_s);
   const std::vector<double> delta = row_delays(m, s, tm);
   auto depth_factor = [&](size_t k) { return 1.0 + fit.slope.dot(s.xn[k]); };
   std::vector<bool> taken(fit.in.size());
