@@ -101,6 +101,15 @@ struct Captured {
   size_t bad_pixels = 0, timeouts = 0, id_skews = 0;
 };
 
+// A run's frames for a failure's message: sequence, first-row stamp (ms) and arrival (ms).
+std::string describe(const Captured& run) {
+  std::ostringstream o;
+  for (size_t k = 0; k < run.sequence.size(); ++k)
+    o << " [" << run.sequence[k] << " " << run.first_row[k] / 1e6 << " " << run.arrival[k] / 1e6 << "]";
+  o << " bad " << run.bad_pixels << " timeouts " << run.timeouts << " id skews " << run.id_skews;
+  return o.str();
+}
+
 Captured capture_frames(AravisSource& src, int n, const Pixel& expected) {
   rsd::dsp::Image slot(src.format().width, src.format().height, src.format().format);
   Captured run;
@@ -270,10 +279,13 @@ TEST_F(AravisFake, RestartsAfterStop) {
   src.stop();
   src.start();
   const Captured second = capture_frames(src, 5, ours);
-  ASSERT_EQ(second.sequence.size(), 5u);
-  EXPECT_GT(second.sequence.front(), first.sequence.back());
-  EXPECT_GT(second.first_row.front(), first.first_row.back());
-  EXPECT_EQ(first.bad_pixels + second.bad_pixels, 0u);
+  const std::string runs = "first:" + describe(first) + "\nsecond:" + describe(second) +
+                           "\nclock resets " + std::to_string(src.stats().clock_resets);
+  ASSERT_EQ(first.sequence.size(), 5u) << runs;
+  ASSERT_EQ(second.sequence.size(), 5u) << runs;
+  EXPECT_GT(second.sequence.front(), first.sequence.back()) << runs;
+  EXPECT_GT(second.first_row.front(), first.first_row.back()) << runs;
+  EXPECT_EQ(first.bad_pixels + second.bad_pixels, 0u) << runs;
 }
 
 TEST_F(AravisFake, TimesOutWithoutHanging) {
