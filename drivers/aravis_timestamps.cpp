@@ -7,7 +7,6 @@
 #include <cstdlib>
 #include <ctime>
 #include <stdexcept>
-#include <string>
 
 namespace rsd::drivers {
 
@@ -56,8 +55,6 @@ int64_t ReceiptModel::first_row_ns(int64_t stamp_on_host_ns) const {
 
 CameraClockMapper::CameraClockMapper(ClockMapperOptions opt) : opt_(opt) {
   if (opt_.window < 2) throw std::invalid_argument("CameraClockMapper: window must be at least 2 frames");
-  if (!(opt_.max_slew >= 0 && opt_.max_slew < 1))
-    throw std::invalid_argument("CameraClockMapper: max_slew must be in [0, 1), not " + std::to_string(opt_.max_slew));
   x_.resize(opt_.window);
   y_.resize(opt_.window);
   hull_.reserve(opt_.window);
@@ -93,13 +90,7 @@ int64_t CameraClockMapper::add(int64_t camera_ns, int64_t host_bound_ns) {
   else
     head_ = (head_ + 1) % x_.size();  // the oldest frame made room
   refit();
-  int64_t stamp = to_host(camera_ns);
-  if (stamped_ && camera_ns > last_camera_) {
-    const auto advance = static_cast<double>(camera_ns - last_camera_) * (1 - opt_.max_slew);
-    stamp = std::max<int64_t>(stamp, last_stamp_ + std::llround(advance));
-  }
-  stamped_ = true, last_camera_ = camera_ns, last_stamp_ = stamp;
-  return stamp;
+  return to_host(camera_ns);
 }
 
 // Slope of the lower convex hull's edge above x (window coordinates relative to the refs).

@@ -68,12 +68,6 @@ struct ClockMapperOptions {
   double max_drift = 200e-6;      // bound on |rate error| (crystals: within ~1e-4)
   double reset_below_s = 0.005;   // a frame this far below the envelope: camera clock jumped
   double reset_above_s = 1.0;     // ... or this far above it
-  // Frames' stamps never go backwards: when the line drops (a frame reached the host sooner
-  // than any before it, as after the slow first frames of a loaded host), add() follows it by
-  // at most this share of the camera's time, so a stamp advances by at least (1 - max_slew) of
-  // the camera's time since the previous frame (a drop of up to max_slew x the frame period
-  // is followed at once).
-  double max_slew = 0.1;
 };
 
 // Maps camera-clock stamps to the host clock from pairs (camera stamp, host bound), where the
@@ -82,15 +76,12 @@ struct ClockMapperOptions {
 // lower convex hull's edge over the mean (the linear program of Moon, Skelly and Towsley,
 // "Estimation and removal of clock skew from network delay measurements", 1999), with b
 // bounded by max_drift and fixed at 0 until the window spans min_drift_span_s. Stamps going
-// backwards or far off the line restart the fit (camera reboot, clock reset). The stamps add()
-// returns advance with the camera's (max_slew) while its clock does. Memory is allocated once,
-// at construction. Not shared: one capture thread adds and reads.
+// backwards or far off the line restart the fit (camera reboot, clock reset). Memory is
+// allocated once, at construction.
 class CameraClockMapper {
  public:
   explicit CameraClockMapper(ClockMapperOptions opt = {});
-  // Adds a frame and returns its camera stamp on the host clock: the line's, or later by what
-  // max_slew has not yet let it drop (never before the previous frame's while the camera's
-  // clock advances).
+  // Adds a frame and returns its camera stamp on the host clock.
   int64_t add(int64_t camera_ns, int64_t host_bound_ns);
   int64_t to_host(int64_t camera_ns) const;  // valid once add() was called
   double drift() const { return slope_; }    // host s per camera s, minus 1
@@ -111,8 +102,6 @@ class CameraClockMapper {
   int64_t x_ref_ = 0, y_ref_ = 0;
   double slope_ = 0, x_mean_ = 0, y_at_mean_ = 0;  // relative to x_ref_, y_ref_
   uint64_t resets_ = 0;
-  bool stamped_ = false;                        // add() returned a stamp:
-  int64_t last_camera_ = 0, last_stamp_ = 0;    // the latest frame's camera stamp and its return
 };
 
 // The frame id as a counter that only grows. GigE Vision 1.x block ids are 16 bits and wrap

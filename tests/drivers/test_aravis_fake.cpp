@@ -284,7 +284,15 @@ TEST_F(AravisFake, RestartsAfterStop) {
   ASSERT_EQ(first.sequence.size(), 5u) << runs;
   ASSERT_EQ(second.sequence.size(), 5u) << runs;
   EXPECT_GT(second.sequence.front(), first.sequence.back()) << runs;
-  EXPECT_GT(second.first_row.front(), first.first_row.back()) << runs;
+  // A stamp is never after its frame's arrival. It follows the earliest arrivals seen: when the
+  // restarted stream's first frame reaches us more than a frame period sooner than the first
+  // run's did (their first frames late on a loaded host), the mapping restarts lower and the
+  // stamps may go back; without that restart they advance.
+  for (const Captured* run : {&first, &second})
+    for (size_t k = 0; k < run->first_row.size(); ++k) EXPECT_LE(run->first_row[k], run->arrival[k]) << runs;
+  if (src.stats().clock_resets == 0) {
+    EXPECT_GT(second.first_row.front(), first.first_row.back()) << runs;
+  }
   EXPECT_EQ(first.bad_pixels + second.bad_pixels, 0u) << runs;
 }
 
