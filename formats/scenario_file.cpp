@@ -101,6 +101,7 @@ void read_observations(YamlMap m, dsp::SimConfig& s) {
 
 void read_unmodelled(YamlMap m, dsp::Unmodelled& u) {
   u.scene_depth_m = m.number("scene_depth_m", u.scene_depth_m);
+  u.scene_fixed_in_world = m.boolean("scene_fixed_in_world", u.scene_fixed_in_world);
   u.gyro_saturation_rad_s = m.number("gyro_saturation_rad_s", u.gyro_saturation_rad_s);
   u.clock_jump_s = m.number("clock_jump_s", u.clock_jump_s);
   u.clock_jump_at_s = m.number("clock_jump_at_s", u.clock_jump_at_s);

@@ -56,6 +56,7 @@ void validate(const SimConfig& c) {
   require(!c.effects.gyro_scale || (c.effects.gyro_scale->minCoeff() > 0), "effects.gyro_scale sx, sy, sz must be positive");
   const Unmodelled& u = c.unmodelled;
   require(u.scene_depth_m >= 0, "unmodelled.scene_depth_m must not be negative");
+  require(!u.scene_fixed_in_world || u.scene_depth_m > 0, "unmodelled.scene_fixed_in_world needs a scene_depth_m");
   require(u.scene_depth_m == 0 || c.kind == ObservationKind::Matches,
           "unmodelled.scene_depth_m applies to matches (landmarks have their points)");
   require(u.scene_slope.allFinite(), "unmodelled.scene_slope must be finite");
@@ -199,7 +200,8 @@ std::vector<GyroSample> sample_gyro(const SimConfig& c, const BodyMotion& imu, c
 }
 
 // Matches of features on a plane `depth` along frame_a's optical axis (tilted by the slope of
-// its inverse depth), seen by a camera that translates with the body as well as turning:
+// its inverse depth), or on that plane as it lay at the recording's middle instant, fixed in the
+// world (Unmodelled::scene_fixed_in_world), seen by a camera that translates with the body as well as turning:
 // parallax, which the rotation-only model of matches cannot express. Returns frame_b's pixel of
 // the feature at pixel `a` of frame_a.
 class ParallaxScene {
@@ -207,19 +209,31 @@ class ParallaxScene {
   ParallaxScene(const SimConfig& c, const TrueModel& m, const BodyMotion& body, double t_begin, double t_end,
                 const Eigen::Matrix3d& imu_to_camera)
       : setup_{m.cam, m.time, Eigen::Vector3d::Zero(), imu_to_camera.transpose()}, depth_(c.unmodelled.scene_depth_m),
-        slope_(c.unmodelled.scene_slope), body_(samples(body, t_begin, t_end)) {}
+        slope_(c.unmodelled.scene_slope), body_(samples(body, t_begin, t_end)) {
+    if (!c.unmodelled.scene_fixed_in_world) return;
+    // The camera at the middle instant: the plane before it, in world axes.
+    const Eigen::Affine3d body_from_world = body_.at(0.5 * (t_begin + t_end));
+    const Eigen::Matrix3d R_wc = body_from_world.linear().transpose() * setup_.mount;
+    wall_ = Wall{R_wc * Eigen::Vector3d(slope_.x(), slope_.y(), 1.0),
+                 -body_from_world.linear().transpose() * body_from_world.translation()};
+  }
   std::optional<Prediction> predict(double T_a, const Eigen::Vector2d& a, double T_b) const {
     const auto ray = setup_.cam.ray(a);
     if (!ray || ray->z() <= 0) return std::nullopt;
-    const double inverse_depth = 1 + slope_.dot(ray->head<2>() / ray->z());  // over depth_'s
-    if (inverse_depth < 0.1) return std::nullopt;
+    const Eigen::Vector3d along = *ray / ray->z();  // camera axes, unit depth
+    const double inverse_depth = 1 + slope_.dot(along.head<2>());  // over depth_'s, before frame_a
+    if (!wall_ && inverse_depth < 0.1) return std::nullopt;
     const double t = setup_.time.motion_time(T_a + row_timing(setup_.time, setup_.cam.height).row_time(a.y()));
     // World from camera at the row's capture: the body's pose turned by the mount.
     const Eigen::Affine3d body_from_world = body_.at(t);
     const Eigen::Matrix3d R_wc = body_from_world.linear().transpose() * setup_.mount;
     const Eigen::Vector3d p_wc = -body_from_world.linear().transpose() * body_from_world.translation();
-    const Eigen::Vector3d X = p_wc + R_wc * (*ray / ray->z() * depth_ / inverse_depth);
-    return predict_landmark(setup_, body_, T_b, X);
+    if (!wall_) return predict_landmark(setup_, body_, T_b, p_wc + R_wc * (along * depth_ / inverse_depth));
+    // The world's plane n . (X - p) = depth_: where the ray meets it, in front of the camera.
+    const Eigen::Vector3d dir = R_wc * along;
+    const double along_depth = (depth_ - wall_->normal.dot(p_wc - wall_->point)) / wall_->normal.dot(dir);
+    if (!(along_depth > 0.1 * depth_ && along_depth < 10 * depth_)) return std::nullopt;
+    return predict_landmark(setup_, body_, T_b, p_wc + along_depth * dir);
   }
 
  private:
@@ -235,6 +249,10 @@ class ParallaxScene {
   double depth_;
   Eigen::Vector2d slope_;
   SampledTrajectory body_;
+  struct Wall {
+    Eigen::Vector3d normal, point;  // world axes: n . (X - point) = depth_ on the plane
+  };
+  std::optional<Wall> wall_;  // scene_fixed_in_world
 };
 
 // In-camera stabilisation: the orientation the pictures follow, smoothed by a first-order

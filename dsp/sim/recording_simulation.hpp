@@ -61,6 +61,12 @@ struct Unmodelled {
   // towards the image's bottom); no feature where the plane lies behind the camera or beyond
   // ten times the depth. Zero: the plane faces the camera.
   Eigen::Vector2d scene_slope = Eigen::Vector2d::Zero();
+  // The plane stays in the world where it lay before the camera at the recording's middle
+  // instant (a wall or the ground: its depth and slope in the camera change as the camera turns
+  // and moves) instead of lying the same way before every pair's frame_a, the translation
+  // nuisance's own model (docs/diagnosis.md, "Parallax"), which the latter thus meets by
+  // construction.
+  bool scene_fixed_in_world = false;
   double gyro_saturation_rad_s = 0;  // the gyro clips each axis at +- this (0: never)
   // The frame stamps jump by clock_jump_s from clock_jump_at_s after the first frame on.
   double clock_jump_s = 0;

@@ -56,8 +56,7 @@ TEST(Translation, AForwardFlightWithAPanYieldsItsClockOffset) {
 // a rolling shutter, hand-held 4 m from a wall (parallax in every pair). A free fy stood in for
 // the shutter's vertical stretch (fx and fy 5% apart, refused), and a gyro scale 8% off came
 // within 1% of the distortion and, winning, ended the selection: nothing named, 10 px left.
-TEST(Translation, AHandHeldPhoneUnderParallaxYieldsItsFocalLengthLensAndMount) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("Translation.AtTheTrueModelTheVelocitySplineLeavesTheNoise and TheVelocitySplineCannotTakeUpAClockOffset (the nuisance)");
+void expect_a_hand_held_phone_under_parallax(bool wall_fixed_in_world) {
   SimConfig c = simulation(ObservationKind::Matches, 5, 10.0, 1.5);
   c.nominal.cam.width = 1920, c.nominal.cam.height = 1080;
   c.nominal.cam.fx = c.nominal.cam.fy = 1330, c.nominal.cam.cx = 959.5, c.nominal.cam.cy = 539.5;
@@ -67,6 +66,7 @@ TEST(Translation, AHandHeldPhoneUnderParallaxYieldsItsFocalLengthLensAndMount) {
   c.matches_per_pair = 46, c.outlier_fraction = 0.05;
   c.gyro.noise_rad_s = 0.003, c.gyro.jitter_s = 0.0002;
   c.unmodelled.scene_depth_m = 4.0;
+  c.unmodelled.scene_fixed_in_world = wall_fixed_in_world;
   c.effects.line_delay_s = 0.022 / 1080;
   c.effects.time_offset_s = 0.03;
   c.effects.fxfy = Eigen::Vector2d(1510, 1510);
@@ -76,6 +76,8 @@ TEST(Translation, AHandHeldPhoneUnderParallaxYieldsItsFocalLengthLensAndMount) {
   const Diagnosis d = diagnose(DiagnosisModel(sim.rec));
   EXPECT_TRUE(d.parallax.clear());
   EXPECT_EQ(names(d), "focal_length lens_distortion mount_rotation rolling_shutter time_offset ");
+  std::printf("wall %s: fx %.2f px (truth 1510), held out %.3f px\n", wall_fixed_in_world ? "fixed in the world" : "before each frame_a",
+              param(find(d, "focal_length"), "fx"), d.heldout_final_rms_px);
   EXPECT_NEAR(param(find(d, "focal_length"), "fx"), 1510, 0.015 * 1510);
   EXPECT_DOUBLE_EQ(param(find(d, "focal_length"), "fx"), param(find(d, "focal_length"), "fy"));
   EXPECT_NEAR(param(find(d, "rolling_shutter"), "frame_readout_s"), 0.022, 0.002);
@@ -89,6 +91,19 @@ TEST(Translation, AHandHeldPhoneUnderParallaxYieldsItsFocalLengthLensAndMount) {
   // The parallax left is said, and the held-out frames are predicted near the noise.
   EXPECT_TRUE(d.remainder.significant);
   EXPECT_LT(d.heldout_final_rms_px, 1.15 * 1.5 * std::sqrt(2.0));
+}
+
+TEST(Translation, AHandHeldPhoneUnderParallaxYieldsItsFocalLengthLensAndMount) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("Translation.AtTheTrueModelTheVelocitySplineLeavesTheNoise and TheVelocitySplineCannotTakeUpAClockOffset (the nuisance)");
+  expect_a_hand_held_phone_under_parallax(false);
+}
+
+// The same before a wall fixed in the world, as a real one is: the nuisance's plane lies the
+// same way before every frame_a, the wall's tilt in the camera follows the camera's turns (up
+// to 0.15 rad here), so the nuisance does not meet it by construction.
+TEST(Translation, AHandHeldPhoneBeforeAWallFixedInTheWorldYieldsItsFocalLengthLensAndMount) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("Translation.AHandHeldPhoneUnderParallaxYieldsItsFocalLengthLensAndMount");
+  expect_a_hand_held_phone_under_parallax(true);
 }
 
 // The suite's hand-held phone (`outside: parallax + phone`), 12 s of it: its focal length 15%

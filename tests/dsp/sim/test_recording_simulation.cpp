@@ -181,4 +181,55 @@ TEST(RecordingSimulation, RejectsBadConfigNamingTheField) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("frame_rate_hz"), std::string::npos);
   }
+  SimConfig w = base(ObservationKind::Matches);
+  w.unmodelled.scene_fixed_in_world = true;  // a wall, and no depth for it
+  try {
+    simulate_recording(w);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("scene_fixed_in_world"), std::string::npos);
+  }
+}
+
+// A wall fixed in the world (Unmodelled::scene_fixed_in_world), approached along the optical
+// axis at v without turning, no rolling shutter: a feature at x_a in frame_a is at x_b = x_a
+// Z_a / (Z_a - v dt) in frame_b, so each pair's depth is Z_a = v dt r / (r - 1), r = x_b / x_a.
+// The wall stays put: Z_a + v t_a is the same for every pair (the depth falls as the camera
+// nears it). Before each frame_a instead, Z_a is the configured depth in every pair.
+TEST(RecordingSimulation, AWallFixedInTheWorldComesNearerAsTheCameraApproachesIt) {
+  const double v = 1.0, depth = 4.0;
+  for (bool fixed : {false, true}) {
+    SimConfig c = base(ObservationKind::Matches);
+    c.duration_s = 2.0;
+    c.nominal.time.line_delay_s = 0;
+    c.outlier_fraction = 0;
+    c.gyro = {200, 200, 0, 0, 0, 0};
+    c.motion_source = MotionSource::Constant;
+    c.constant_velocity = Vector3d(0, 0, v);
+    c.unmodelled.scene_depth_m = depth;
+    c.unmodelled.scene_fixed_in_world = fixed;
+    const SimulatedRecording s = simulate_recording(c);
+    const CameraModel& cam = s.rec.nominal.cam;
+    double lo = INFINITY, hi = -INFINITY, z_lo = INFINITY, z_hi = -INFINITY;
+    int n = 0;
+    for (const Match& m : s.rec.matches) {
+      const double xa = (m.a.x() - cam.cx) / cam.fx, xb = (m.b.x() - cam.cx) / cam.fx;
+      if (std::abs(xa) < 0.2) continue;  // the ratio is held by features off the axis
+      const double ta = s.rec.frames[m.frame_a].t, dt = s.rec.frames[m.frame_b].t - ta, r = xb / xa;
+      const double za = v * dt * r / (r - 1);
+      lo = std::min(lo, za + v * ta), hi = std::max(hi, za + v * ta);
+      z_lo = std::min(z_lo, za), z_hi = std::max(z_hi, za);
+      ++n;
+    }
+    ASSERT_GT(n, 100);
+    std::printf("wall %s: depth %.4f..%.4f m, depth + distance travelled %.4f..%.4f m\n",
+                fixed ? "fixed in the world" : "before each frame_a", z_lo, z_hi, lo, hi);
+    if (fixed) {
+      EXPECT_LT(hi - lo, 1e-4);
+      EXPECT_GT(z_hi - z_lo, 0.9 * v * c.duration_s);
+    } else {
+      EXPECT_NEAR(z_lo, depth, 1e-4);
+      EXPECT_NEAR(z_hi, depth, 1e-4);
+    }
+  }
 }
