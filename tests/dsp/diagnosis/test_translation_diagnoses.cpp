@@ -102,7 +102,7 @@ TEST(Translation, AHandHeldPhoneUnderParallaxYieldsItsFocalLengthLensAndMount) {
 // same way before every frame_a, the wall's tilt in the camera follows the camera's turns (up
 // to 0.15 rad here), so the nuisance does not meet it by construction.
 TEST(Translation, AHandHeldPhoneBeforeAWallFixedInTheWorldYieldsItsFocalLengthLensAndMount) {
-  RSD_SKIP_LONG_IN_SLOW_BUILD("Translation.AHandHeldPhoneUnderParallaxYieldsItsFocalLengthLensAndMount");
+  RSD_SKIP_LONG_IN_SLOW_BUILD("RecordingSimulation.AWallFixedInTheWorldComesNearerAsTheCameraApproachesIt (the wall) and Translation.AtTheTrueModelTheVelocitySplineLeavesTheNoise (the nuisance)");
   expect_a_hand_held_phone_under_parallax(true);
 }
 
