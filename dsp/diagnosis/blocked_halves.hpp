@@ -32,7 +32,8 @@ struct HalvesVerdict {
   // noise allows, in the worse direction (positive: it holds).
   double drop = 0;
   // How far apart the two halves put the parameters `richer` adds, in combined sigmas (the
-  // largest; 0 where a half cannot measure them).
+  // largest; 0 where a half cannot measure them). A lens's radial terms are compared as the
+  // curve they draw within the image's field, not term by term (terms of one lens trade).
   double apart_sigmas = 0;
 };
 // A hypothesis fitted on each half: on[0] on h.a, on[1] on h.b.

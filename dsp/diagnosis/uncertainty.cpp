@@ -53,12 +53,12 @@ FitInliers fit_inliers(const DiagnosisModel& m, const ModelParams& fitted, const
   return out;
 }
 
-// Per-parameter variances: the larger of the classic s^2 (J^T J)^-1 and the sandwich estimate
-// clustered by frame. Errors shared by a frame's observations (a matches recording's gyro
+// The classic s^2 (J^T J)^-1 and the sandwich estimate clustered by frames (or by blocks of
+// `cluster_frames` frames). Errors shared by a frame's observations (a matches recording's gyro
 // noise and stamp jitter move all of a frame pair's matches together) make the classic
 // estimate optimistic; the sandwich over per-frame score sums sees them. Empty if singular.
-std::optional<Eigen::VectorXd> variances(const DiagnosisModel& m, const Eigen::MatrixXd& J, const FitInliers& f,
-                                         int cluster_frames) {
+std::optional<ParameterCovariance> covariance(const DiagnosisModel& m, const Eigen::MatrixXd& J, const FitInliers& f,
+                                              int cluster_frames) {
   const Eigen::Index n = J.cols();
   if (n == 0 || J.rows() <= n) return std::nullopt;
   // Columns scaled to unit norm before the inverse: the parameters' units differ by ten orders
@@ -74,7 +74,7 @@ std::optional<Eigen::VectorXd> variances(const DiagnosisModel& m, const Eigen::M
   double sum2 = 0;
   for (const auto& r : f.r) sum2 += r.squaredNorm();
   const double s2 = sum2 / (2.0 * f.r.size());  // per-coordinate residual variance
-  Eigen::VectorXd v = s2 * B.diagonal();
+  ParameterCovariance c{s2 * B, {}};
   std::map<int, Eigen::VectorXd> score;
   for (size_t k = 0; k < f.idx.size(); ++k) {
     auto it = score.try_emplace(m.frame_rank(f.idx[k]) / cluster_frames, Eigen::VectorXd::Zero(n)).first;
@@ -85,19 +85,36 @@ std::optional<Eigen::VectorXd> variances(const DiagnosisModel& m, const Eigen::M
   if (g >= 20) {  // fewer clusters make the sandwich itself too noisy
     Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(n, n);
     for (const auto& [rank, sc] : score) meat += sc * sc.transpose();
-    v = v.cwiseMax((g / (g - 1) * B * meat * B).diagonal());
+    c.sandwich = g / (g - 1) * B * meat * B;
   }
-  return v;
+  return c;
 }
 
 }  // namespace
 
+double ParameterCovariance::variance_of(const Eigen::VectorXd& g) const {
+  const double v = g.dot(classic * g);
+  return sandwich.size() ? std::max(v, g.dot(sandwich * g)) : v;
+}
+
+Eigen::VectorXd ParameterCovariance::variances() const {
+  if (sandwich.size() == 0) return classic.diagonal();
+  return classic.diagonal().cwiseMax(sandwich.diagonal());
+}
+
+std::optional<ParameterCovariance> parameter_covariance(const DiagnosisModel& m, const ModelParams& fitted,
+                                                        const std::vector<Param>& free, const std::vector<int>& idx,
+                                                        int cluster_frames) {
+  if (free.empty()) return std::nullopt;
+  const FitInliers f = fit_inliers(m, fitted, idx);
+  return covariance(m, residual_jacobian(m, fitted, free, f.idx), f, std::max(cluster_frames, 1));
+}
+
 std::optional<Eigen::VectorXd> parameter_variances(const DiagnosisModel& m, const ModelParams& fitted,
                                                    const std::vector<Param>& free, const std::vector<int>& idx,
                                                    int cluster_frames) {
-  if (free.empty()) return std::nullopt;
-  const FitInliers f = fit_inliers(m, fitted, idx);
-  return variances(m, residual_jacobian(m, fitted, free, f.idx), f, std::max(cluster_frames, 1));
+  const auto c = parameter_covariance(m, fitted, free, idx, cluster_frames);
+  return c ? std::optional<Eigen::VectorXd>(c->variances()) : std::nullopt;
 }
 
 std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, const std::vector<NamedEffect>& effects,
@@ -116,9 +133,9 @@ std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, cons
   if (!free.empty()) {
     const FitInliers f = fit_inliers(m, fitted, fit);
     const Eigen::MatrixXd J = residual_jacobian(m, fitted, free, f.idx);
-    var = variances(m, J, f, 1);
+    if (const auto by_frame = covariance(m, J, f, 1)) var = by_frame->variances();
     if (var && fitted.translation_nuisance)
-      if (const auto blocks = variances(m, J, f, kNuisanceClusterFrames)) var = var->cwiseMax(*blocks);
+      if (const auto blocks = covariance(m, J, f, kNuisanceClusterFrames)) var = var->cwiseMax(blocks->variances());
   }
   auto sigma_of = [&](Param p) -> std::optional<double> {
     double factor = 1.0;

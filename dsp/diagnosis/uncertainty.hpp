@@ -48,6 +48,16 @@ inline constexpr int kNuisanceClusterFrames = 10;
 std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, const std::vector<NamedEffect>& effects,
                                                    const ModelParams& fitted, const std::vector<int>& fit);
 
+// The covariance of some fitted parameters, two ways (parameter_covariance): the classic
+// s^2 (J^T J)^-1 and the clustered sandwich (empty when there are too few clusters for it).
+struct ParameterCovariance {
+  Eigen::MatrixXd classic, sandwich;
+  // The variance of g . parameters: the larger of the two estimates'.
+  double variance_of(const Eigen::VectorXd& g) const;
+  // Each parameter's: the larger of the two estimates' diagonals.
+  Eigen::VectorXd variances() const;
+};
+
 // The variances of the parameters `free` at `fitted` (in their own units, the order of
 // `free`), from the inliers among observations idx, as effect_uncertainties computes them:
 // the larger of the classic and the frame-clustered sandwich estimate. nullopt when the
@@ -59,6 +69,12 @@ std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, cons
 std::optional<Eigen::VectorXd> parameter_variances(const DiagnosisModel& m, const ModelParams& fitted,
                                                    const std::vector<Param>& free, const std::vector<int>& idx,
                                                    int cluster_frames = 1);
+
+// The whole covariance behind parameter_variances (the same observations, clusters and rules),
+// for values that combine several parameters (a lens's radial curve).
+std::optional<ParameterCovariance> parameter_covariance(const DiagnosisModel& m, const ModelParams& fitted,
+                                                        const std::vector<Param>& free, const std::vector<int>& idx,
+                                                        int cluster_frames = 1);
 
 // d residual / d parameter (px per unit) of the observations idx at `at`: rows 2k, 2k + 1 are
 // idx[k]'s, a column per parameter of `free`. Central differences of a hundredth of the

@@ -4,7 +4,8 @@
 // halves put 3 ms apart, which the fits on each half, made here, confirm; a real effect seen
 // through a model that is not quite the camera's keeps its value within the block-clustered
 // sigmas; a gross offset the halves put a small share of it apart is kept; a short recording's
-// halves have no say on the value.
+// halves have no say on the value; a lens's terms that trade along the same curve agree, a
+// lens whose curve differs does not.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,6 +16,8 @@
 #include "dsp/diagnosis/blocked_halves.hpp"
 #include "dsp/diagnosis/fit.hpp"
 #include "dsp/diagnosis/uncertainty.hpp"
+#include "dsp/geometry/camera_model.hpp"
+#include "dsp/geometry/lens_model.hpp"
 #include "dsp/sim/recording_simulation.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
 #include "tests/dsp/diagnosis/diagnosis_lookup.hpp"
@@ -160,4 +163,80 @@ TEST(BlockedHalves, AShortRecordingsHalvesHaveNoSayOnTheValue) {
   const HalvesVerdict v = cross_check(s.m, s.h, {s.nominal, {}}, {s.nominal, only(Param::TimeOffset)}, s.sigma, 8);
   EXPECT_EQ(v.apart_sigmas, 0);
   EXPECT_LT(v.drop, 0);  // the stand-in still mispredicts the other half
+}
+
+namespace {
+
+// A barrel lens (k1 -0.06) on the two-motions recording (0.15 px of noise), and the halves' fits set apart by hand:
+// k1 of `a` and `b` dk1 each side of the truth, k2 by `dk2` each side of zero (the other way).
+struct LensHalves {
+  Split s;
+  ModelParams a, b;
+  ParamMask lens;
+  LensHalves(double dk1, double dk2) : s(simulate_recording(barrel())), a(s.nominal), b(s.nominal) {
+    a[Param::K1] = -0.06 + dk1, a[Param::K2] = -dk2;
+    b[Param::K1] = -0.06 - dk1, b[Param::K2] = dk2;
+    lens.set(static_cast<size_t>(Param::K1)), lens.set(static_cast<size_t>(Param::K2));
+  }
+  static SimConfig barrel() {
+    SimConfig c = two_motions(46, 0.25, 0.25);
+    c.effects.k1k2 = Eigen::Vector2d(-0.06, 0);
+    c.noise_px = 0.15;  // sigmas small enough that k2 alone is clearly apart
+    return c;
+  }
+  // How far apart the halves put k2 alone, in its block-clustered sigmas (the term-by-term test).
+  double k2_sigmas_apart() const {
+    const int block = static_cast<int>(std::lround(kHalvesBlockS * s.sim.rec.nominal.frame_rate_hz));
+    const auto va = parameter_variances(s.m, a, {Param::K1, Param::K2}, s.h.a, block);
+    const auto vb = parameter_variances(s.m, b, {Param::K1, Param::K2}, s.h.b, block);
+    return va && vb ? std::abs(a[Param::K2] - b[Param::K2]) / std::sqrt((*va)[1] + (*vb)[1]) : 0;
+  }
+  // The largest difference of the halves' distorted radii over the field, as a share of the
+  // lens's own (the mean's) bending there: computed with distorted_radius, not the test's
+  // Jacobian.
+  double largest_share_apart() const {
+    const NominalModel& n = s.sim.rec.nominal;
+    const double widest = widest_ray_angle(n.cam);
+    double worst = 0;
+    for (int k = 1; k <= 8; ++k) {
+      const double theta = widest * k / 8, r = std::tan(theta);
+      const double da = distorted_radius(lens_of(n, a), theta), db = distorted_radius(lens_of(n, b), theta);
+      worst = std::max(worst, std::abs(da - db) / std::abs(0.5 * (da + db) - r));
+    }
+    return worst;
+  }
+};
+
+}  // namespace
+
+// Terms of one lens trade: under a hand-held shake's parallax a walk's halves (split by angular
+// rate) put k1 at -0.072 and -0.044 and k2 at +0.020 and -0.027 (truth -0.06 and 0), k2 4.2
+// sigmas apart, and the lens was dropped, leaving 5.3 px where the floor was 2.65. Here the
+// halves' k1 differ by 0.012 and their k2 the other way so that the two curves meet at the
+// image's widest ray: k2 alone is over four of its sigmas apart, the curves within a fifth of
+// the lens's bending everywhere, and the test, on the curve, keeps the lens.
+TEST(BlockedHalves, TermsOfALensThatTradeAlongTheSameCurveAgree) {
+  const double r = std::tan(widest_ray_angle(LensHalves::barrel().nominal.cam));
+  const LensHalves l(0.006, 0.006 / (r * r));
+  ASSERT_TRUE(l.s.h.usable());
+  const HalvesVerdict v = cross_check(l.s.m, l.s.h, {{l.s.nominal, l.s.nominal}}, {}, {{l.a, l.b}}, l.lens, l.s.sigma);
+  std::printf("k1 -0.054 / -0.066, k2 %+.4f / %+.4f: k2 %.1f of its sigmas apart, curves up to %.0f%% of the lens apart, "
+              "the test %.2f\n", l.a[Param::K2], l.b[Param::K2], l.k2_sigmas_apart(), 100 * l.largest_share_apart(), v.apart_sigmas);
+  EXPECT_GT(l.k2_sigmas_apart(), kHalvesAgreeSigmas);  // term by term: apart
+  EXPECT_LT(l.largest_share_apart(), 0.21);
+  // No more apart than the size floor allows (a tenth of the lens's bending).
+  EXPECT_LE(v.apart_sigmas, l.largest_share_apart() / kHalvesSizeFraction + 1e-9);
+  EXPECT_LT(v.apart_sigmas, kHalvesAgreeSigmas);
+}
+
+// Halves whose curves differ: k1 0.03 apart with k2 held at zero bends the image by half the
+// lens's own bending, past what the size floor forgives, and the test calls them apart.
+TEST(BlockedHalves, HalvesWhoseLensCurvesDifferAreApart) {
+  const LensHalves l(0.015, 0);
+  ASSERT_TRUE(l.s.h.usable());
+  const HalvesVerdict v = cross_check(l.s.m, l.s.h, {{l.s.nominal, l.s.nominal}}, {}, {{l.a, l.b}}, l.lens, l.s.sigma);
+  std::printf("k1 -0.045 / -0.075, k2 0: curves up to %.0f%% of the lens apart, the test %.2f\n",
+              100 * l.largest_share_apart(), v.apart_sigmas);
+  EXPECT_GT(l.largest_share_apart(), 0.45);
+  EXPECT_GT(v.apart_sigmas, kHalvesAgreeSigmas);
 }
