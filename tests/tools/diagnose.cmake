@@ -44,11 +44,20 @@ set_tests_properties(cli_diagnose_e2e_bad_number PROPERTIES FIXTURES_REQUIRED di
 add_test(NAME diagnosis_benchmark_reduced
          COMMAND rsd-diagnose-suite --reduced --out ${CMAKE_BINARY_DIR}/diagnosis-benchmark-reduced.md)
 set_tests_properties(diagnosis_benchmark_reduced PROPERTIES TIMEOUT 400 LABELS "e2e;slow")
+# A seed the table does not use (shift 9): the phone's barrel lens and turned mount, neither
+# named yet, make a gyro scale 10% off the strongest single structure, and the two together must
+# be named in its stead (select.cpp, plausible_pair_instead); a gyro that clips, the structure the
+# rule that an implausible winner ends the rounds was made for, still names nothing.
+add_test(NAME diagnosis_benchmark_phone_and_clipping_gyro_seed_shift_9
+         COMMAND rsd-diagnose-suite --kinds matches --cases phone,outside:gyro_saturation --seed-shift 9
+                 --out ${CMAKE_BINARY_DIR}/diagnosis-benchmark-seed-shift-9.md)
+set_tests_properties(diagnosis_benchmark_phone_and_clipping_gyro_seed_shift_9 PROPERTIES TIMEOUT 300 LABELS "e2e;slow")
 # Fifty seconds of diagnoses at full speed, beyond the budget ten to twenty times over under
 # AddressSanitizer: disabled in a sanitizer tree (ctest says "Not Run (Disabled)"); rsd-diagnose
 # runs there in cli_diagnose_e2e_* and images_*, the suite's code in the same library.
 if(RSD_SANITIZE)
-  set_tests_properties(diagnosis_benchmark_reduced PROPERTIES DISABLED TRUE)
+  set_tests_properties(diagnosis_benchmark_reduced diagnosis_benchmark_phone_and_clipping_gyro_seed_shift_9
+                       PROPERTIES DISABLED TRUE)
 endif()
 
 # The gyro's axes from the pictures (--imu-axes): the phone scenario (gyro mounted 0,-1,0,-1,0,0,
