@@ -48,7 +48,9 @@ double signal_energy(const std::vector<Eigen::Vector2d>& r0, const std::vector<E
 std::vector<Eigen::VectorXd> compared_values(const DiagnosisModel& m, const ModelParams& at, const std::vector<Param>& free,
                                              const ParamMask& added) {
   constexpr Param kRadial[] = {Param::K1, Param::K2, Param::K3, Param::K4};  // distort_radial_jacobian's columns
-  auto radial_column = [&](Param q) { return static_cast<int>(std::find(std::begin(kRadial), std::end(kRadial), q) - std::begin(kRadial)); };
+  auto radial_column = [&](Param q) {
+    return static_cast<int>(std::find(std::begin(kRadial), std::end(kRadial), q) - std::begin(kRadial));
+  };
   auto is_radial = [&](Param q) { return radial_column(q) < 4; };
   std::vector<Eigen::VectorXd> out;
   bool lens = false;

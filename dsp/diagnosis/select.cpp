@@ -68,6 +68,36 @@ struct Verdict {
 };
 using Verdicts = std::map<Effect, Verdict>;
 
+// Whether two effects may be fitted as a pair: one lens or the other, never both.
+bool may_pair(Effect a, Effect b) {
+  const auto lens = [](Effect e) { return e == Effect::LensDistortion || e == Effect::LensModel; };
+  return !(lens(a) && lens(b));
+}
+
+std::string pair_names(const std::vector<Effect>& pair) {
+  return std::string(effect_name(pair[0])) + " and " + effect_name(pair[1]);
+}
+
+// A pair of effects screened as `screened` (s with both), refitted on the fitting set and
+// judged as a round's winner is (refusal). Named: s becomes its state, `out` gets its drops.
+// Refused by the checks: the progress says `pair_names` + `refused_as` + why; below the
+// threshold: nothing is said. Says whether it was named.
+bool name_pair(const Selector& sel, const State& screened, const std::vector<Effect>& pair, const std::string& refused_as,
+               State& s, RoundResult& out) {
+  State richer = sel.refit_all(screened);
+  const double drop = sel.drop(s, richer);
+  if (drop < sel.opt_.min_bic_drop) return false;
+  const double held_drop = sel.heldout_drop(s, richer);
+  if (const std::string why = refusal(sel, s, richer, pair, drop, held_drop); !why.empty()) {
+    if (sel.opt_.progress) sel.opt_.progress(pair_names(pair) + refused_as + why);
+    return false;
+  }
+  out.drop = drop, out.held_drop = held_drop;
+  out.rivals.clear();
+  s = std::move(richer);
+  return true;
+}
+
 // Two plausible effects that together explain at least what an implausible winner does (its
 // projected drop `to_match`): the winner may be a stand-in for them (a phone's barrel lens and
 // turned mount, neither named yet, made a gyro scale 10% off the strongest single structure,
@@ -89,26 +119,13 @@ std::string plausible_pair_instead(const Selector& sel, const std::vector<Candid
   for (size_t i = 0; i < top.size(); ++i)
     for (size_t j = i + 1; j < top.size(); ++j) {
       const Effect a = top[i]->added, b = top[j]->added;
-      const auto lens = [](Effect e) { return e == Effect::LensDistortion || e == Effect::LensModel; };
-      if (lens(a) && lens(b)) continue;  // one lens or the other
+      if (!may_pair(a, b)) continue;
       State c = sel.screen_add(top[i]->state, b);
       const double d = projected_drop(sel, here, c);
       if (d >= best_projected) best_projected = d, best = std::move(c), pair = {a, b};
     }
-  if (!best) return "";
-  State richer = sel.refit_all(*best);
-  const double drop = sel.drop(s, richer);
-  if (drop < sel.opt_.min_bic_drop) return "";
-  const double held_drop = sel.heldout_drop(s, richer);
-  const std::string names = std::string(effect_name(pair[0])) + " and " + effect_name(pair[1]);
-  if (const std::string why = refusal(sel, s, richer, pair, drop, held_drop); !why.empty()) {
-    if (sel.opt_.progress) sel.opt_.progress(names + " together, in its stead, not named: " + why);
-    return "";
-  }
-  out.drop = drop, out.held_drop = held_drop;
-  out.rivals.clear();
-  s = std::move(richer);
-  return names;
+  if (!best || !name_pair(sel, *best, pair, " together, in its stead, not named: ", s, out)) return "";
+  return pair_names(pair);
 }
 
 // One forward round: every candidate screened on the subsample; those whose projected drop is
@@ -241,8 +258,7 @@ bool forward_pair(const Selector& sel, const std::vector<std::pair<Effect, std::
     std::optional<State> alone;  // s with refused[i], screened once for all its pairs
     for (size_t j = i + 1; j < refused.size(); ++j) {
       const Effect a = refused[i].first, b = refused[j].first;
-      const auto lens = [](Effect e) { return e == Effect::LensDistortion || e == Effect::LensModel; };
-      if (lens(a) && lens(b)) continue;  // one lens or the other
+      if (!may_pair(a, b)) continue;
       if (!alone) alone = sel.screen_add(s, a);
       State c = sel.screen_add(*alone, b);
       const double d = projected_drop(sel, here, c);
@@ -250,19 +266,8 @@ bool forward_pair(const Selector& sel, const std::vector<std::pair<Effect, std::
     }
   }
   if (!best || best_projected < sel.opt_.min_bic_drop) return false;
-  State richer = sel.refit_all(*best);
-  out.drop = sel.drop(s, richer);
-  if (out.drop < sel.opt_.min_bic_drop) return false;
-  out.held_drop = sel.heldout_drop(s, richer);
-  const std::string refused_because = refusal(sel, s, richer, pair, out.drop, out.held_drop);
-  const std::string names = std::string(effect_name(pair[0])) + " and " + effect_name(pair[1]);
-  if (!refused_because.empty()) {
-    if (sel.opt_.progress) sel.opt_.progress(names + " together not named: " + refused_because);
-    return false;
-  }
-  if (sel.opt_.progress) sel.opt_.progress(names + ", each refused alone, hold together");
-  out.rivals.clear();
-  s = std::move(richer);
+  if (!name_pair(sel, *best, pair, " together not named: ", s, out)) return false;
+  if (sel.opt_.progress) sel.opt_.progress(pair_names(pair) + ", each refused alone, hold together");
   return true;
 }
 

@@ -4,6 +4,7 @@
 #include <optional>
 #include <random>
 #include <stdexcept>
+#include <utility>
 
 #include "dsp/geometry/camera_motion.hpp"
 #include "dsp/sim/random_draws.hpp"
@@ -212,10 +213,8 @@ class ParallaxScene {
         slope_(c.unmodelled.scene_slope), body_(samples(body, t_begin, t_end)) {
     if (!c.unmodelled.scene_fixed_in_world) return;
     // The camera at the middle instant: the plane before it, in world axes.
-    const Eigen::Affine3d body_from_world = body_.at(0.5 * (t_begin + t_end));
-    const Eigen::Matrix3d R_wc = body_from_world.linear().transpose() * setup_.mount;
-    wall_ = Wall{R_wc * Eigen::Vector3d(slope_.x(), slope_.y(), 1.0),
-                 -body_from_world.linear().transpose() * body_from_world.translation()};
+    const auto [R_wc, p_wc] = camera_in_world(0.5 * (t_begin + t_end));
+    wall_ = Wall{R_wc * Eigen::Vector3d(slope_.x(), slope_.y(), 1.0), p_wc};
   }
   std::optional<Prediction> predict(double T_a, const Eigen::Vector2d& a, double T_b) const {
     const auto ray = setup_.cam.ray(a);
@@ -224,10 +223,7 @@ class ParallaxScene {
     const double inverse_depth = 1 + slope_.dot(along.head<2>());  // over depth_'s, before frame_a
     if (!wall_ && inverse_depth < 0.1) return std::nullopt;
     const double t = setup_.time.motion_time(T_a + row_timing(setup_.time, setup_.cam.height).row_time(a.y()));
-    // World from camera at the row's capture: the body's pose turned by the mount.
-    const Eigen::Affine3d body_from_world = body_.at(t);
-    const Eigen::Matrix3d R_wc = body_from_world.linear().transpose() * setup_.mount;
-    const Eigen::Vector3d p_wc = -body_from_world.linear().transpose() * body_from_world.translation();
+    const auto [R_wc, p_wc] = camera_in_world(t);  // at the row's capture
     if (!wall_) return predict_landmark(setup_, body_, T_b, p_wc + R_wc * (along * depth_ / inverse_depth));
     // The world's plane n . (X - p) = depth_: where the ray meets it, in front of the camera.
     const Eigen::Vector3d dir = R_wc * along;
@@ -249,6 +245,13 @@ class ParallaxScene {
   double depth_;
   Eigen::Vector2d slope_;
   SampledTrajectory body_;
+  // The camera's orientation and position in the world at motion time t: the body's pose
+  // turned by the mount.
+  std::pair<Eigen::Matrix3d, Eigen::Vector3d> camera_in_world(double t) const {
+    const Eigen::Affine3d body_from_world = body_.at(t);
+    const Eigen::Matrix3d R_wb = body_from_world.linear().transpose();
+    return {R_wb * setup_.mount, -R_wb * body_from_world.translation()};
+  }
   struct Wall {
     Eigen::Vector3d normal, point;  // world axes: n . (X - point) = depth_ on the plane
   };
