@@ -116,6 +116,19 @@ class Selector {
     effects.erase(std::remove(effects.begin(), effects.end(), Effect::LensDistortion), effects.end());
   }
 
+  // s with lens_model undone: the nominal family's lens in its place, starting from its nearest
+  // stand-in for the lens s has, as lens_distortion; refitted on every fitting observation.
+  State nominal_family(const State& s) const {
+    std::vector<Effect> effects;
+    for (Effect f : s.effects) effects.push_back(f == Effect::LensModel ? Effect::LensDistortion : f);
+    ModelParams p = s.params;
+    const Distortion now = lens_of(m_.recording().nominal, p);
+    p.other_lens = false;
+    set_lens_terms(p, nearest_lens(now, lens_, field_));
+    p = fit_params(m_, fit_, p, mask_of(effects, lens_), sigma_, opt_.max_iterations);
+    return {effects, p, bic(p, effects, fit_)};
+  }
+
   // A screened hypothesis refitted on every fitting observation. Remembered, as screen_add.
   State refit_all(const State& screened) const {
     return remembered(FitKind::Refit, screened, Effect{}, &fit_, opt_.max_iterations, [&](FitEnd& end) {

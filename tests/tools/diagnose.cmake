@@ -52,12 +52,20 @@ add_test(NAME diagnosis_benchmark_phone_and_clipping_gyro_seed_shift_9
          COMMAND rsd-diagnose-suite --kinds matches --cases phone,outside:gyro_saturation --seed-shift 9
                  --out ${CMAKE_BINARY_DIR}/diagnosis-benchmark-seed-shift-9.md)
 set_tests_properties(diagnosis_benchmark_phone_and_clipping_gyro_seed_shift_9 PROPERTIES TIMEOUT 300 LABELS "e2e;slow")
-# Fifty seconds of diagnoses at full speed, beyond the budget ten to twenty times over under
+# Ten seconds of the walking phone under parallax, seed shift 1: the equidistant family
+# (lens_model) won its round before the focal length came in; given the final set the nominal
+# family's lens does better and must be named in its place (select.cpp,
+# back_to_the_nominal_family), the focal length then within its goal.
+add_test(NAME diagnosis_benchmark_walk_ten_seconds_seed_shift_1
+         COMMAND rsd-diagnose-suite --kinds matches --cases outside:parallax+phone --duration 10 --seed-shift 1
+                 --out ${CMAKE_BINARY_DIR}/diagnosis-benchmark-walk-seed-shift-1.md)
+set_tests_properties(diagnosis_benchmark_walk_ten_seconds_seed_shift_1 PROPERTIES TIMEOUT 300 LABELS "e2e;slow")
+# A minute of diagnoses at full speed, beyond the budget ten to twenty times over under
 # AddressSanitizer: disabled in a sanitizer tree (ctest says "Not Run (Disabled)"); rsd-diagnose
 # runs there in cli_diagnose_e2e_* and images_*, the suite's code in the same library.
 if(RSD_SANITIZE)
   set_tests_properties(diagnosis_benchmark_reduced diagnosis_benchmark_phone_and_clipping_gyro_seed_shift_9
-                       PROPERTIES DISABLED TRUE)
+                       diagnosis_benchmark_walk_ten_seconds_seed_shift_1 PROPERTIES DISABLED TRUE)
 endif()
 
 # The gyro's axes from the pictures (--imu-axes): the phone scenario (gyro mounted 0,-1,0,-1,0,0,
