@@ -1,6 +1,6 @@
 // The selector of dsp::select_effects (select.cpp): hypotheses about the effects fitted and
 // judged on one recording's fitting, held-out and screening observations. Internal to the
-// diagnosis; select.cpp runs its rounds.
+// diagnosis; forward_selection.cpp runs its rounds, select.cpp checks the set they end with.
 //
 // Thread contract: a Selector's judgements do not change once built (it only remembers the
 // states `remove` fitted and the states it fitted on the blocked halves); its methods may be
@@ -109,10 +109,7 @@ class Selector {
   // lens_model: the other family's lens, starting from its nearest stand-in for the lens the
   // state has (over the image's field); it takes lens_distortion's place, whose terms it frees.
   void switch_lens(std::vector<Effect>& effects, ModelParams& p) const {
-    const NominalModel& n = m_.recording().nominal;
-    const Distortion now = lens_of(n, p);
-    p.other_lens = true;
-    set_lens_terms(p, nearest_lens(now, lens_family(n, p), field_));
+    lens_family_to(true, p);
     effects.erase(std::remove(effects.begin(), effects.end(), Effect::LensDistortion), effects.end());
   }
 
@@ -122,9 +119,7 @@ class Selector {
     std::vector<Effect> effects;
     for (Effect f : s.effects) effects.push_back(f == Effect::LensModel ? Effect::LensDistortion : f);
     ModelParams p = s.params;
-    const Distortion now = lens_of(m_.recording().nominal, p);
-    p.other_lens = false;
-    set_lens_terms(p, nearest_lens(now, lens_, field_));
+    lens_family_to(false, p);
     p = fit_params(m_, fit_, p, mask_of(effects, lens_), sigma_, opt_.max_iterations);
     return {effects, p, bic(p, effects, fit_)};
   }
@@ -146,6 +141,16 @@ class Selector {
     const double prior0 = implausibility(poorer.params, poorer.effects), prior1 = implausibility(richer.params, richer.effects);
     return ((poorer.bic - k_of(poorer) * pen - prior0) - (richer.bic - k_of(richer) * pen - prior1)) / D - dk * pen -
            (prior1 - prior0);
+  }
+  // The screening subsample's BIC drop projected onto the fitting set: the chi-square drop grows
+  // with the number of observations, the penalty with its logarithm.
+  double projected_drop(const State& from, const State& to) const {
+    const double rho = static_cast<double>(screen_.size()) / static_cast<double>(fit_.size());
+    const double k_from = k_of(from), k_to = k_of(to);
+    const double prior_from = implausibility(from.params, from.effects), prior_to = implausibility(to.params, to.effects);
+    const double chi2_drop = (from.bic - k_from * std::log(2.0 * screen_.size()) - prior_from) -
+                             (to.bic - k_to * std::log(2.0 * screen_.size()) - prior_to);
+    return chi2_drop / rho - (k_to - k_from) * std::log(2.0 * fit_.size()) - (prior_to - prior_from);
   }
   double k_of(const State& s) const {
     return static_cast<double>(mask_of(s.effects, lens_).count()) + (s.params.flip_readout ? 1 : 0) + (s.params.other_lens ? 1 : 0);
@@ -219,6 +224,14 @@ class Selector {
   double field_;    // the largest angle off the axis the image sees (radians), through the nominal lens
 
  private:
+  // p's lens as the other family's (other) or the nominal family's: the family's nearest stand-in
+  // for the lens p has over the image's field, its start.
+  void lens_family_to(bool other, ModelParams& p) const {
+    const NominalModel& n = m_.recording().nominal;
+    const Distortion now = lens_of(n, p);
+    p.other_lens = other;
+    set_lens_terms(p, nearest_lens(now, lens_family(n, p), field_));
+  }
   // screen_add's and remove's fits.
   State fit_add(const State& s, Effect e, FitEnd& end) const {
     std::vector<Effect> effects = s.effects;

@@ -46,7 +46,7 @@ add_test(NAME diagnosis_benchmark_reduced
 set_tests_properties(diagnosis_benchmark_reduced PROPERTIES TIMEOUT 400 LABELS "e2e;slow")
 # A seed the table does not use (shift 9): the phone's barrel lens and turned mount, neither
 # named yet, make a gyro scale 10% off the strongest single structure, and the two together must
-# be named in its stead (select.cpp, plausible_pair_instead); a gyro that clips, the structure the
+# be named in its stead (forward_selection.cpp, plausible_pair_instead); a gyro that clips, the structure the
 # rule that an implausible winner ends the rounds was made for, still names nothing.
 add_test(NAME diagnosis_benchmark_phone_and_clipping_gyro_seed_shift_9
          COMMAND rsd-diagnose-suite --kinds matches --cases phone,outside:gyro_saturation --seed-shift 9

@@ -111,7 +111,7 @@ TEST(Translation, AHandHeldPhoneBeforeAWallFixedInTheWorldYieldsItsFocalLengthLe
 // shake past a wall 4 m away. Alone, the focal length stands in for the lens (about 30% off:
 // refused as implausible) and the lens without it predicts the held-out frames worse with the
 // parallax in (refused): each round ended with both refused, and neither was named (the named
-// set was the mount, the shutter and the offset). The two are judged together (select.cpp,
+// set was the mount, the shutter and the offset). The two are judged together (forward_selection.cpp,
 // forward_pair). The lens alone is still refused so, in every round, as is a principal point:
 // a stand-in that predicts the held-out frames worse with the parallax in. (That refusal was
 // first shown on a gyro scale beating a focal length under the shake, seed 759519; since the
