@@ -5,6 +5,7 @@
 #include <optional>
 #include <sstream>
 
+#include "dsp/diagnosis/clock_shape.hpp"
 #include "dsp/diagnosis/forward_selection.hpp"
 #include "dsp/diagnosis/selector.hpp"
 
@@ -116,6 +117,28 @@ bool consistency(const Selector& sel, State& s, std::vector<SelectedEffect>& ste
   });
 }
 
+// Drops clock_drift when the clock's offset, fitted window by window with the rest held, steps
+// rather than grows along a line (clock_shape.hpp): a clock that jumps, which the table does not
+// hold, and a drift only stands in for it. Says whether it went; why goes to `withheld`.
+bool drift_is_a_rate(const Selector& sel, State& s, std::vector<SelectedEffect>& steps, std::vector<std::string>& withheld) {
+  if (!s.has(Effect::ClockDrift)) return false;
+  const ClockShape shape = clock_shape(sel.m_, s.params, sel.fit_, sel.sigma_);
+  if (!shape.verdict.is_step) return false;
+  const WeightedStep& step = shape.verdict.step;
+  std::ostringstream why;
+  why.precision(3);
+  why << effect_name(Effect::ClockDrift) << " not named: the clock's offset, fitted over " << shape.windows.size()
+      << " windows of time, steps by " << (step.after - step.before) * 1e3 << " ms near "
+      << step.at - sel.m_.recording().nominal.time.t0 << " s rather than growing at a rate (chi-square "
+      << std::lround(shape.verdict.line.chi2) << " about a line, " << std::lround(step.chi2)
+      << " about a step): a clock that jumps, which no effect of the table describes";
+  withheld.push_back(why.str());
+  if (sel.opt_.progress) sel.opt_.progress(withheld.back());
+  s = sel.remove(s, Effect::ClockDrift, sel.fit_, sel.opt_.max_iterations);
+  forget(steps, Effect::ClockDrift);
+  return true;
+}
+
 // Drops any selected effect whose value real hardware does not have, or that sits on its fit's
 // bound (plausibility.hpp, unnameable_because), refitting the rest; the latest pick is judged
 // first. What was dropped, and why, goes to `withheld`.
@@ -165,7 +188,8 @@ Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, c
   backward(sel, s, steps, withheld);
   if (!opt.blocked_halves) return {steps, s.params, withheld};
   if (opt.progress && !steps.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
-  const bool dropped = consistency(sel, s, steps);
+  bool dropped = consistency(sel, s, steps);
+  dropped = drift_is_a_rate(sel, s, steps, withheld) || dropped;
   plausible_only(sel, s, steps, withheld);
   each_improves_held_out(sel, s, steps, withheld);
   return {steps, s.params, withheld, dropped};
@@ -180,6 +204,7 @@ Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>
   s.bic = sel.bic(s.params, s.effects, fit);
   if (opt.progress && !chosen.effects.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
   chosen.dropped_on_halves = consistency(sel, s, chosen.effects);
+  chosen.dropped_on_halves = drift_is_a_rate(sel, s, chosen.effects, chosen.withheld) || chosen.dropped_on_halves;
   plausible_only(sel, s, chosen.effects, chosen.withheld);
   each_improves_held_out(sel, s, chosen.effects, chosen.withheld);
   chosen.params = s.params;

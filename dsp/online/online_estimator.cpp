@@ -317,7 +317,7 @@ OnlineEstimator::OffsetUpdate OnlineEstimator::accept_offset(double z, double r,
   }
   if (!drift_on_ && !unseen) {
     offset_fits_.push_back({t, z, r * overlap});
-    if (t - offset_fits_.front()[0] >= opt_.drift_span_s) start_drift(t);
+    if (t - offset_fits_.front().t >= opt_.drift_span_s) start_drift(t);
   }
   var_[0] = P(0, 0);
   return stepped ? OffsetUpdate::Stepped : OffsetUpdate::Updated;
@@ -338,19 +338,12 @@ bool OnlineEstimator::step_confirmed(int i, double t) {
 // variance), the offset and the drift at t with their covariance. A rate beyond a crystal's is
 // not taken: the fits start again.
 bool OnlineEstimator::start_drift(double t) {
-  Eigen::Matrix2d N = Eigen::Matrix2d::Zero();
-  Eigen::Vector2d b = Eigen::Vector2d::Zero();
-  for (const auto& [ti, zi, vi] : offset_fits_) {
-    const Eigen::Vector2d a(1.0, ti - t);
-    N += a * a.transpose() / vi, b += a * zi / vi;
-  }
-  const Eigen::Vector2d line = N.ldlt().solve(b);
-  bool fits = line.allFinite() && std::abs(line[1]) <= opt_.max_drift_ppm * 1e-6;
-  for (const auto& [ti, zi, vi] : offset_fits_) fits = fits && std::abs(zi - line[0] - line[1] * (ti - t)) <= 4 * std::sqrt(vi);
+  const WeightedLine line = fit_line(offset_fits_, t);
+  const bool fits = line.valid && std::abs(line.slope) <= opt_.max_drift_ppm * 1e-6 && line.worst_sigmas <= 4;
   offset_fits_.clear();
   if (!fits) return false;
-  x_[0] = line[0], drift_ = line[1];
-  offset_drift_cov_ = N.inverse();
+  x_[0] = line.at, drift_ = line.slope;
+  offset_drift_cov_ = line.covariance;
   drift_on_ = true;
   return true;
 }

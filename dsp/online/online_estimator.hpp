@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "dsp/core/line_or_step.hpp"
 #include "dsp/diagnosis/model.hpp"
 #include "dsp/observation/recording.hpp"
 #include "dsp/online/shutter.hpp"
@@ -196,7 +197,7 @@ class OnlineEstimator {
   double drift_ = 0;
   Eigen::Matrix2d offset_drift_cov_ = Eigen::Matrix2d::Zero();
   bool drift_on_ = false;
-  std::vector<std::array<double, 3>> offset_fits_;
+  std::vector<TimedValue> offset_fits_;  // (t, offset fit, its variance)
   // Fits the line through offset_fits_ and starts the drift from it at t, unless its slope is
   // beyond max_drift_ppm or a fit lies beyond 4 sigmas of it (a step, not a rate); whether started.
   bool start_drift(double t);
