@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "dsp/core/statistics.hpp"
 #include "dsp/diagnosis/fit.hpp"
 #include "dsp/diagnosis/observation_choice.hpp"
 #include "dsp/diagnosis/parallax.hpp"
@@ -20,6 +21,8 @@ constexpr double kClearZ = 4.0;           // "statistically clear"
 constexpr double kMaterialShare = 0.2;    // structured variance over the noise variance
 constexpr int kMaxPerFrame = 200;         // nearest neighbours are searched among these
 constexpr size_t kMaxObservations = 20000;  // the remainder is assessed on at most these
+constexpr int kMinLostTest = 8;             // observations a frame needs for the whole-frames test
+constexpr double kLostMaterialShare = 0.05;  // of the tested observations, in lost frames
 
 // One frame's inlier observations: their predicted pixels and their residuals.
 struct Frame {
@@ -140,6 +143,47 @@ MeanSeries mean_series(const std::vector<Frame>& frames, double noise_var) {
   return s;
 }
 
+// P(X > n / 2) for X ~ Binomial(n, p): a frame lost by chance, its mismatches independent.
+double majority_tail(int n, double p) {
+  if (p <= 0) return 0;
+  if (p >= 1) return 1;
+  double tail = 0;
+  for (int k = n / 2 + 1; k <= n; ++k)
+    tail += std::exp(std::lgamma(n + 1.0) - std::lgamma(k + 1.0) - std::lgamma(n - k + 1.0) + k * std::log(p) +
+                     (n - k) * std::log1p(-p));
+  return std::min(1.0, tail);
+}
+
+// The whole-frames test: frames most of whose observations are outliers, against the count
+// that the outlier share of a typical frame (the median frame's, which frames lost whole do not
+// move) gives by chance. One is added to the binomial variance: mismatches are not quite
+// independent (a repeated texture mismatches together), and a frame or two the binomial calls
+// nearly impossible is not clear physics.
+void test_whole_frames(const DiagnosisModel& m, const std::vector<int>& idx, const std::vector<Eigen::Vector2d>& res,
+                       Remainder& r) {
+  const std::vector<bool> in = inliers(res);
+  std::map<int, std::pair<int, int>> per;  // frame rank -> (outliers, observations)
+  for (size_t k = 0; k < idx.size(); ++k) {
+    auto& c = per[m.frame_rank(idx[k])];
+    c.first += in[k] ? 0 : 1, c.second += 1;
+  }
+  std::vector<double> shares;
+  for (const auto& [rank, c] : per)
+    if (c.second >= kMinLostTest) shares.push_back(static_cast<double>(c.first) / c.second);
+  if (shares.size() < 3) return;
+  const double p = median(shares);
+  double variance = 1, tested = 0, in_lost = 0;
+  for (const auto& [rank, c] : per) {
+    if (c.second < kMinLostTest) continue;
+    const double q = majority_tail(c.second, p);
+    r.lost_expected += q, variance += q * (1 - q), tested += c.second, ++r.tested_frames;
+    if (2 * c.first > c.second) ++r.lost_frames, in_lost += c.second;
+  }
+  r.lost_z = (r.lost_frames - r.lost_expected) / std::sqrt(variance);
+  r.lost_share = in_lost / tested;
+  r.lost = r.lost_z > kClearZ && r.lost_share >= kLostMaterialShare;
+}
+
 std::string percent(double share) { return std::to_string(std::lround(100 * share)) + "%"; }
 
 std::string summary_of(const Remainder& r) {
@@ -159,6 +203,11 @@ std::string summary_of(const Remainder& r) {
   if (r.spatial) o << " " << r.spatial_rms_px << " px vary smoothly across each frame";
   if (r.spatial && r.temporal) o << ", and";
   if (r.temporal) o << " " << r.temporal_rms_px << " px move all of a frame's observations together, smoothly from frame to frame";
+  if (r.lost && (r.spatial || r.temporal)) o << ", and";
+  if (r.lost)
+    o << " " << r.lost_frames << " of " << r.tested_frames << " frames (" << percent(r.lost_share)
+      << " of the observations) are mostly outliers, where mismatches alone would make " << r.lost_expected
+      << ": whole frames the model does not predict";
   o << ". No effect of the table explains it";
   if (!r.located.empty()) o << "; it lives mostly in " << r.located.front().signal << " (" << r.located.front().detail << ")";
   o << ".";
@@ -175,6 +224,10 @@ std::vector<Located> locate_remainder(const DiagnosisModel& m, const ModelParams
     out.push_back({"frame_shift", std::min(1.0, r.temporal_rms_px * r.temporal_rms_px / total),
                    "all of a frame's observations are displaced together, and the displacement changes smoothly "
                    "from frame to frame: motion the motion data do not carry, or a clock error that changes"});
+  if (r.lost)
+    out.push_back({"lost_frames", r.lost_share,
+                   "whole frames whose observations the model does not predict (most of them outliers): motion the "
+                   "motion data do not carry in those frames (a gyro that clips, a clock that skips)"});
   if (r.spatial)
     out.push_back({"image_field", std::min(1.0, r.spatial_rms_px * r.spatial_rms_px / total),
                    "neighbouring observations of a frame share their residual: a smooth field across the image"});
@@ -186,12 +239,12 @@ std::vector<Located> locate_remainder(const DiagnosisModel& m, const ModelParams
                      "of a near scene, which the rotation-only model of matches cannot express"});
   }
   std::sort(out.begin(), out.end(), [](const Located& a, const Located& b) { return a.strength > b.strength; });
-  // frame_shift and image_field say how the remainder is structured, the others what it
+  // frame_shift, image_field and lost_frames say how the remainder is structured, the others what it
   // follows (a span of time, the fast frames, a translation, ...): one of those first when it
   // explains a fifth of it (a gyro that clips shifts its fast frames, a clock that jumps every
   // frame after the jump).
   std::stable_partition(out.begin(), out.end(), [](const Located& l) {
-    return l.strength >= 0.2 && l.signal != "frame_shift" && l.signal != "image_field";
+    return l.strength >= 0.2 && l.signal != "frame_shift" && l.signal != "image_field" && l.signal != "lost_frames";
   });
   return out;
 }
@@ -233,7 +286,8 @@ Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& p, const 
     frame_white = std::max(0.0, std::min(ms.var, ms.step) - ms.own_noise);
   }
   r.expected_rms_px = std::sqrt(noise_var + frame_white);
-  r.significant = r.spatial || r.temporal;
+  test_whole_frames(m, idx, res, r);
+  r.significant = r.spatial || r.temporal || r.lost;
   // The nominal model within 5% of the noise left nothing to explain.
   r.nothing_to_explain = baseline_rms_px <= 1.05 * r.expected_rms_px;
   const double excess = baseline_rms_px * baseline_rms_px - r.expected_rms_px * r.expected_rms_px;

@@ -11,9 +11,13 @@
 //  - temporal: frame means that follow each other from frame to frame. The von Neumann ratio
 //    of the sequence of frame means (half the mean squared step over the variance) is 1 for
 //    independent frame errors and falls towards 0 for a smooth one.
+//  - whole frames: frames most of whose observations the model does not predict at all (they
+//    fall outside the robust inlier rule). Mismatched features are scattered over the frames;
+//    frames lost whole (a gyro that clips in its fastest swings puts every match of those frames
+//    several pixels off) are not, and the other tests, which look at the inliers, never see them.
 // Each must be statistically clear (4 sigma) and material (its variance at least a fifth of
-// the noise's), so that the motion data's own errors and a remainder too small to matter are
-// not called physics.
+// the noise's; lost frames: a twentieth of the observations), so that the motion data's own
+// errors and a remainder too small to matter are not called physics.
 #pragma once
 
 #include <string>
@@ -38,7 +42,12 @@ struct Remainder {
   // Temporal test: von Neumann ratio of the frame means, and its z.
   double temporal_ratio = 1, temporal_z = 0;
   double spatial_rms_px = 0, temporal_rms_px = 0;  // RMS of the structured parts (0: none)
-  bool spatial = false, temporal = false;         // which test found structure
+  // Whole-frames test: frames (of those with 8 observations or more) most of whose observations
+  // are outliers, how many the frames' median outlier share makes expected (binomial), its z,
+  // and the share of the tested observations those frames hold.
+  int lost_frames = 0, tested_frames = 0;
+  double lost_expected = 0, lost_z = 0, lost_share = 0;
+  bool spatial = false, temporal = false, lost = false;  // which test found structure
   std::vector<Located> located;  // where the remainder lives (empty when not significant)
   std::string summary;           // plain words for the report
 };

@@ -130,9 +130,12 @@ std::string remainder_section(const Remainder& r) {
     << format_number(r.spatial_rms_px, 3) << " |\n"
     << "| from frame to frame: von Neumann ratio of the frame means (1 = independent frames) | "
     << format_number(r.temporal_ratio, 3) << " | " << format_number(r.temporal_z, 3) << " | "
-    << format_number(r.temporal_rms_px, 3) << " |\n\n"
+    << format_number(r.temporal_rms_px, 3) << " |\n"
+    << "| whole frames: frames mostly outliers, " << r.lost_frames << " of " << r.tested_frames << " (mismatches alone "
+    << "would make " << format_number(r.lost_expected, 3) << "); statistic: the share of the observations in them | "
+    << format_number(r.lost_share, 3) << " | " << format_number(r.lost_z, 3) << " | - |\n\n"
     << "Structure is called significant when a test is clear (z above 4) and material (its variance at least a "
-       "fifth of the noise's).\n";
+       "fifth of the noise's; whole frames: a twentieth of the observations in them).\n";
   o << "\n![The final residual per frame: mean and RMS over time](remainder.png)\n";
   if (!r.located.empty()) {
     o << "\n| where the remainder lives | strength | detail |\n| --- | --- | --- |\n";

@@ -1,8 +1,9 @@
 // The remainder test (dsp/diagnosis/remainder.hpp) against simulations whose truth is known:
 // recordings that the model explains exactly (the true parameters given) must come out as
 // noise, whatever the motion data's own errors; physics the effect table lacks (parallax in
-// matches, a gyro that saturates, a clock that jumps, a smooth field across the image) must
-// come out as significant structure, located where it lives.
+// matches, a gyro that saturates, a clock that jumps, a smooth field across the image, whole
+// frames the model does not predict) must come out as significant structure, located where it
+// lives; mismatches scattered over the frames, however many, are not.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -37,12 +38,17 @@ SimConfig phone(unsigned seed, double duration_s = 10) {
 
 SimConfig target(unsigned seed, double duration_s = 10) { return rsd::test::target_simulation(seed, duration_s, 0.5); }
 
-// The remainder of the nominal model (the truth: no table effect is switched on).
+// The remainder of the nominal model (the truth: no table effect is switched on), over the
+// observations the gyro covers, as the diagnosis assesses it (a frame pair inside a gap of the
+// phone's gyro, up to 20 samples missing, is not predicted and never fitted).
 Remainder at_truth(const SimulatedRecording& sim) {
   const DiagnosisModel m(sim.rec);
   const ModelParams p = nominal_params(sim.rec.nominal);
   const double floor = *sim.rec.noise_px * m.noise_gain();
-  const Remainder r = assess_remainder(m, p, rsd::test::every_observation(m), floor, floor);
+  std::vector<int> covered;
+  for (int i : rsd::test::every_observation(m))
+    if (!m.has_gyro() || m.gyro_gap(p, i) <= m.max_gyro_gap()) covered.push_back(i);
+  const Remainder r = assess_remainder(m, p, covered, floor, floor);
   std::printf("rms %.3f expected %.3f stated %.3f | spatial ratio %.3f z %.1f | temporal ratio %.3f z %.1f | %s\n",
               r.rms_px, r.expected_rms_px, r.stated_noise_px, r.spatial_ratio, r.spatial_z, r.temporal_ratio,
               r.temporal_z, r.summary.c_str());
@@ -60,8 +66,10 @@ bool located(const Remainder& r, const std::string& signal) {
 
 TEST(Remainder, NoiseAloneIsNotSignificant) {
   for (unsigned seed : {1u, 2u, 3u}) {
-    EXPECT_FALSE(at_truth(simulate_recording(target(seed))).significant) << "landmarks seed " << seed;
-    EXPECT_FALSE(at_truth(simulate_recording(phone(seed))).significant) << "matches seed " << seed;
+    const Remainder lm = at_truth(simulate_recording(target(seed))), mt = at_truth(simulate_recording(phone(seed)));
+    EXPECT_FALSE(lm.significant) << "landmarks seed " << seed;
+    EXPECT_FALSE(mt.significant) << "matches seed " << seed;
+    EXPECT_EQ(mt.lost_frames, 0) << "matches seed " << seed;  // 10% mismatches: none lost whole
   }
 }
 
@@ -110,6 +118,47 @@ TEST(Remainder, SaturatedGyroIsStructure) {
   ASSERT_FALSE(r.located.empty());
   EXPECT_EQ(r.located.front().signal, "fast_rotation");
   EXPECT_NE(r.located.front().detail.find("from 1 rad/s"), std::string::npos) << r.located.front().detail;
+}
+
+// Whole frames the model does not predict: every match of one frame pair in twelve, in bursts of
+// three pairs (a gyro that clips through the fastest part of a swing), displaced by 6-10 px, a
+// direction of its own per pair. Those matches all fall outside the inlier rule, so the tests of
+// the inliers see nothing; the whole-frames test sees frames that are mostly outliers where the
+// 10% of mismatches elsewhere make none.
+TEST(Remainder, WholeFramesTheModelDoesNotPredictAreStructure) {
+  SimulatedRecording sim = simulate_recording(phone(9));
+  int displaced = 0;
+  for (int f = 0; f < static_cast<int>(sim.rec.frames.size()); ++f) {
+    if (f % 36 >= 3) continue;
+    ++displaced;
+    const double angle = 2.1 * f, size = 6 + 4 * std::abs(std::sin(0.7 * f));
+    for (Match& mt : sim.rec.matches)
+      if (mt.frame_a == f) mt.b += size * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+  }
+  const Remainder r = at_truth(sim);
+  std::printf("lost %d of %d frames (%d displaced), %.2f expected, z %.1f, share %.3f\n", r.lost_frames, r.tested_frames,
+              displaced, r.lost_expected, r.lost_z, r.lost_share);
+  EXPECT_TRUE(r.significant);
+  EXPECT_TRUE(r.lost);
+  EXPECT_FALSE(r.spatial);
+  // Pairs inside the gyro's gaps are not assessed (a fifth of them here); no other pair is lost.
+  EXPECT_GE(r.lost_frames, displaced * 3 / 5);
+  EXPECT_LE(r.lost_frames, displaced);
+  EXPECT_LT(r.lost_expected, 1.0);
+  EXPECT_TRUE(located(r, "lost_frames"));
+  EXPECT_NE(r.summary.find("mostly outliers"), std::string::npos) << r.summary;
+}
+
+// Mismatches in plenty but scattered: 40% of every pair's matches drawn at random. Frames lost by
+// chance are as many as the binomial says, and that is noise.
+TEST(Remainder, ManyMismatchesScatteredOverTheFramesAreNoise) {
+  SimConfig c = phone(10);
+  c.outlier_fraction = 0.4;
+  const Remainder r = at_truth(simulate_recording(c));
+  std::printf("lost %d of %d frames, %.2f expected, z %.1f\n", r.lost_frames, r.tested_frames, r.lost_expected, r.lost_z);
+  EXPECT_FALSE(r.lost);
+  EXPECT_FALSE(r.significant);
+  EXPECT_LT(std::abs(r.lost_frames - r.lost_expected), 4 * std::sqrt(r.lost_expected + 1));
 }
 
 TEST(Remainder, ClockJumpIsStructure) {
