@@ -33,6 +33,14 @@ struct Shaped {
     drift_ppm = p[Param::Drift];
     shape = clock_shape(m, p, idx, sigma);
   }
+  // The windows' verdict, for the log.
+  void print(const char* what) const {
+    const LineOrStep& v = shape.verdict;
+    std::printf("%s: drift fitted %.1f ppm; %zu windows: a line of %.1f ppm, chi2 %.1f; a step of %.2f ms at %.2f s, "
+                "chi2 %.1f\n",
+                what, drift_ppm, shape.windows.size(), v.line.slope * 1e6, v.line.chi2, (v.step.after - v.step.before) * 1e3,
+                v.step.at - sim.rec.nominal.time.t0, v.step.chi2);
+  }
 };
 
 SimConfig twelve_seconds(unsigned seed) {
@@ -48,10 +56,7 @@ TEST(ClockShape, AClockThatJumpsSteps) {
   c.unmodelled.clock_jump_s = 3e-3, c.unmodelled.clock_jump_at_s = 7.0;
   const Shaped s(simulate_recording(c));
   const LineOrStep& v = s.shape.verdict;
-  std::printf("clock jump: drift stand-in %.0f ppm; %zu windows, chi2 %.0f about a line, %.0f about a step of %.2f ms "
-              "at %.2f s\n",
-              s.drift_ppm, s.shape.windows.size(), v.line.chi2, v.step.chi2, (v.step.after - v.step.before) * 1e3,
-              v.step.at - s.sim.rec.nominal.time.t0);
+  s.print("clock jump");
   EXPECT_GT(std::abs(s.drift_ppm), 100);  // a drift does stand in for it
   EXPECT_GE(s.shape.windows.size(), 10u);
   EXPECT_TRUE(v.is_step);
@@ -65,9 +70,7 @@ TEST(ClockShape, ADriftGrowsAlongALine) {
   c.effects.drift_ppm = 300;
   const Shaped s(simulate_recording(c));
   const LineOrStep& v = s.shape.verdict;
-  std::printf("clock drift 300 ppm: fitted %.1f ppm; windows' line %.1f ppm, chi2 %.1f over %zu windows, %.1f about a "
-              "step\n",
-              s.drift_ppm, v.line.slope * 1e6, v.line.chi2, s.shape.windows.size(), v.step.chi2);
+  s.print("clock drift 300 ppm");
   EXPECT_FALSE(v.is_step);
   EXPECT_NEAR(v.line.slope * 1e6, 300, 30);
 }
@@ -86,8 +89,6 @@ TEST(ClockShape, ADriftPastAnUnmodelledWallIsStillALine) {
   }
   const Shaped s(simulate_recording(c));
   const LineOrStep& v = s.shape.verdict;
-  std::printf("clock drift 300 ppm past a wall 1 m away: fitted %.1f ppm; windows' line %.1f ppm, chi2 %.1f over %zu "
-              "windows, %.1f about a step\n",
-              s.drift_ppm, v.line.slope * 1e6, v.line.chi2, s.shape.windows.size(), v.step.chi2);
+  s.print("clock drift 300 ppm past a wall 1 m away");
   EXPECT_FALSE(v.is_step);
 }
