@@ -119,7 +119,9 @@ bool consistency(const Selector& sel, State& s, std::vector<SelectedEffect>& ste
 
 // Drops clock_drift when the clock's offset, fitted window by window with the rest held, steps
 // rather than grows along a line (clock_shape.hpp): a clock that jumps, which the table does not
-// hold, and a drift only stands in for it. Says whether it went; why goes to `withheld`.
+// hold, and a drift only stands in for it. Before the blocked halves, so that they judge the rest
+// without the stand-in (a time offset named beside it must then hold on its own). Says whether
+// it went; why goes to `withheld`.
 bool drift_is_a_rate(const Selector& sel, State& s, std::vector<SelectedEffect>& steps, std::vector<std::string>& withheld) {
   if (!s.has(Effect::ClockDrift)) return false;
   const ClockShape shape = clock_shape(sel.m_, s.params, sel.fit_, sel.sigma_);
@@ -188,8 +190,8 @@ Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, c
   backward(sel, s, steps, withheld);
   if (!opt.blocked_halves) return {steps, s.params, withheld};
   if (opt.progress && !steps.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
-  bool dropped = consistency(sel, s, steps);
-  dropped = drift_is_a_rate(sel, s, steps, withheld) || dropped;
+  bool dropped = drift_is_a_rate(sel, s, steps, withheld);
+  dropped = consistency(sel, s, steps) || dropped;
   plausible_only(sel, s, steps, withheld);
   each_improves_held_out(sel, s, steps, withheld);
   return {steps, s.params, withheld, dropped};
@@ -203,8 +205,8 @@ Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>
   for (const SelectedEffect& st : chosen.effects) s.effects.push_back(st.effect);  // one step per effect
   s.bic = sel.bic(s.params, s.effects, fit);
   if (opt.progress && !chosen.effects.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
-  chosen.dropped_on_halves = consistency(sel, s, chosen.effects);
-  chosen.dropped_on_halves = drift_is_a_rate(sel, s, chosen.effects, chosen.withheld) || chosen.dropped_on_halves;
+  chosen.dropped_on_halves = drift_is_a_rate(sel, s, chosen.effects, chosen.withheld);
+  chosen.dropped_on_halves = consistency(sel, s, chosen.effects) || chosen.dropped_on_halves;
   plausible_only(sel, s, chosen.effects, chosen.withheld);
   each_improves_held_out(sel, s, chosen.effects, chosen.withheld);
   chosen.params = s.params;

@@ -64,10 +64,10 @@ Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, c
                          const SelectionOptions& opt);
 
 // The blocked-halves check of a selection made without it (SelectionOptions::blocked_halves
-// false): every named effect must predict the half of the recording it was not fitted on,
-// both ways, in time and (gyro recordings) in angular rate; those that do not are dropped and
-// the rest refitted; a clock drift must be a rate (the clock's offset window by window on a
-// line, not a step: clock_shape.hpp). Then the plausibility check, and each effect must, given the others,
+// false): a clock drift must be a rate (the clock's offset window by window on a line, not a
+// step: clock_shape.hpp); every named effect must predict the half of the recording it was not
+// fitted on, both ways, in time and (gyro recordings) in angular rate; those that do not are
+// dropped and the rest refitted. Then the plausibility check, and each effect must, given the others,
 // improve the prediction of the held-out observations on its own (what does not is withheld,
 // with why). The same arguments as the selection had.
 Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,
