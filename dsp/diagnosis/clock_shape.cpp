@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "dsp/core/statistics.hpp"
 #include "dsp/diagnosis/fit.hpp"
 #include "dsp/diagnosis/uncertainty.hpp"
 
@@ -36,11 +37,10 @@ ClockShape clock_shape(const DiagnosisModel& m, const ModelParams& p, const std:
     if (w.size() < kMinObservations) continue;
     std::vector<double> t;
     for (int i : w) t.push_back(m.frame_time(i));
-    std::nth_element(t.begin(), t.begin() + t.size() / 2, t.end());
+    const double mid = median(std::move(t));
     const ModelParams q = fit_params(m, w, p, offset_only, sigma_px, kIterations);
     const auto var = parameter_variances(m, q, {Param::TimeOffset}, w);
     if (!var || !((*var)[0] > 0)) continue;
-    const double mid = t[t.size() / 2];
     out.windows.push_back({mid, q[Param::TimeOffset] + q[Param::Drift] * 1e-6 * (mid - t0), (*var)[0]});
   }
   out.verdict = line_or_step(out.windows);

@@ -36,8 +36,7 @@ struct Frame {
 };
 
 std::vector<Frame> frames_of(const DiagnosisModel& m, const std::vector<int>& idx,
-                             const std::vector<Eigen::Vector2d>& r) {
-  const std::vector<bool> in = inliers(r);
+                             const std::vector<Eigen::Vector2d>& r, const std::vector<bool>& in) {
   std::map<int, Frame> by_rank;
   for (size_t k = 0; k < idx.size(); ++k) {
     if (!in[k]) continue;
@@ -159,9 +158,7 @@ double majority_tail(int n, double p) {
 // move) gives by chance. One is added to the binomial variance: mismatches are not quite
 // independent (a repeated texture mismatches together), and a frame or two the binomial calls
 // nearly impossible is not clear physics.
-void test_whole_frames(const DiagnosisModel& m, const std::vector<int>& idx, const std::vector<Eigen::Vector2d>& res,
-                       Remainder& r) {
-  const std::vector<bool> in = inliers(res);
+void test_whole_frames(const DiagnosisModel& m, const std::vector<int>& idx, const std::vector<bool>& in, Remainder& r) {
   std::map<int, std::pair<int, int>> per;  // frame rank -> (outliers, observations)
   for (size_t k = 0; k < idx.size(); ++k) {
     auto& c = per[m.frame_rank(idx[k])];
@@ -260,7 +257,8 @@ Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& p, const 
   const auto res = m.residuals(fitted, idx);
   r.rms_px = robust_stats(res).rms_px;
   r.stated_noise_px = noise_floor_px;
-  const std::vector<Frame> frames = frames_of(m, idx, res);
+  const std::vector<bool> in = inliers(res);
+  const std::vector<Frame> frames = frames_of(m, idx, res, in);
   const Scatter sc = scatter(frames);
   if (sc.n < 20 || !(sc.neighbour_var > 0)) {
     r.expected_rms_px = noise_floor_px > 0 ? noise_floor_px : r.rms_px;
@@ -286,7 +284,7 @@ Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& p, const 
     frame_white = std::max(0.0, std::min(ms.var, ms.step) - ms.own_noise);
   }
   r.expected_rms_px = std::sqrt(noise_var + frame_white);
-  test_whole_frames(m, idx, res, r);
+  test_whole_frames(m, idx, in, r);
   r.significant = r.spatial || r.temporal || r.lost;
   // The nominal model within 5% of the noise left nothing to explain.
   r.nothing_to_explain = baseline_rms_px <= 1.05 * r.expected_rms_px;
