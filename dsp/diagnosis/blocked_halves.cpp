@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "dsp/diagnosis/fit.hpp"
+#include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/uncertainty.hpp"
 #include "dsp/geometry/camera_model.hpp"
 #include "dsp/geometry/lens_model.hpp"
@@ -36,6 +37,27 @@ double signal_energy(const std::vector<Eigen::Vector2d>& r0, const std::vector<E
     if (r0[k].allFinite() && r1[k].allFinite() && r0[k].norm() < core && r1[k].norm() < core)
       s += (r0[k] - r1[k]).squaredNorm() / (sigma * sigma);
   return s;
+}
+
+// The robust chi-square drop from r0 to r1 plus the margin its noise allows (fit_halves).
+double margined_drop(const std::vector<Eigen::Vector2d>& r0, const std::vector<Eigen::Vector2d>& r1, double sigma) {
+  return robust_chi2(r0, sigma) - robust_chi2(r1, sigma) + 3.0 * std::sqrt(signal_energy(r0, r1, sigma));
+}
+
+// The same drop, with its margin, on the bulk of `judge`: the observations `poorer` predicts
+// within kOutlierSigmas robust scales (under the translation nuisance, the translation fitted to
+// them). A half's outliers (a forward flight's near objects, things that move) are no model's:
+// a real clock offset that a drone's closing pan shows raised the flight's half by 254, all of
+// it in that half's tail (its bulk alone: 25, within the margin of 69), and was dropped. A
+// stand-in fitted on one half mispredicts the other's bulk.
+double bulk_drop(const DiagnosisModel& m, const std::vector<int>& judge, const ModelParams& poorer,
+                 const ModelParams& richer, double sigma) {
+  const std::vector<bool> in = inliers(m.residuals(poorer, judge));
+  std::vector<int> bulk;
+  for (size_t k = 0; k < judge.size(); ++k)
+    if (in[k]) bulk.push_back(judge[k]);
+  if (bulk.empty()) return -std::numeric_limits<double>::infinity();
+  return margined_drop(m.residuals(poorer, bulk), m.residuals(richer, bulk), sigma);
 }
 
 // The values on which two halves must agree for the parameters `added` (over the hypothesis's
@@ -147,8 +169,9 @@ HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const Halves
   HalvesVerdict v{std::numeric_limits<double>::infinity(), 0};
   for (int dir = 0; dir < 2; ++dir) {
     const std::vector<int>& judge = dir ? h.a : h.b;
-    const auto r0 = m.residuals(poorer.on[dir], judge), r1 = m.residuals(richer.on[dir], judge);
-    v.drop = std::min(v.drop, robust_chi2(r0, sigma) - robust_chi2(r1, sigma) + 3.0 * std::sqrt(signal_energy(r0, r1, sigma)));
+    double drop = margined_drop(m.residuals(poorer.on[dir], judge), m.residuals(richer.on[dir], judge), sigma);
+    if (drop < 0) drop = std::max(drop, bulk_drop(m, judge, poorer.on[dir], richer.on[dir], sigma));
+    v.drop = std::min(v.drop, drop);
   }
   v.apart_sigmas = apart(m, h, richer.on[0], richer.on[1], poorer.on[0], richer_free, richer_free & ~poorer_free);
   return v;

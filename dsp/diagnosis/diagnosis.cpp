@@ -372,6 +372,14 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   };
   const std::vector<int>&fit_set = sets.fit, &screen = sets.screen;
   split_usable();
+  // The gross start's offset settled at the noise's scale (settle_time_offset), the
+  // observations chosen again where it moved.
+  auto settle_offset = [&] {
+    const double settled = settle_time_offset(m, screen, d.gross, d.sigma_px);
+    if (settled == d.gross[Param::TimeOffset]) return;
+    d.gross[Param::TimeOffset] = settled;
+    split_usable();
+  };
   if (fit_set.size() < use_fit.size())
     progress("fitting on " + std::to_string(fit_set.size()) + " of the " + std::to_string(use_fit.size()) +
              " fitting observations, chosen by the information they carry");
@@ -389,6 +397,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
     }
     d.sigma_px = e.sigma_px, d.parallax = e.parallax;
   }
+  settle_offset();
   SelectionOptions so;
   so.min_bic_drop = opt.min_bic_drop, so.max_iterations = opt.max_iterations;
   so.progress = opt.progress;
@@ -408,6 +417,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
     if (d.noise_floor_px == 0) {
       d.gross = gross_search(m, fit_screen, fit, nominal, d.sigma_px, d.parallax, opt);
       split_usable();
+      settle_offset();
     }
   }
   // The uncertainties are the fit's: with the translation taken out as the effects were fitted

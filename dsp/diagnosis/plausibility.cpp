@@ -35,6 +35,12 @@ Excess excess(const ModelParams& p, Effect e) {
       o << "a gyro scale " << 100 * worst << "% off: a MEMS gyro's is within 5%";
       break;
     }
+    case Effect::ClockDrift: {
+      const double d = std::abs(p[Param::Drift]);
+      x.beyond = over(d, 1000, 250);
+      o << "a clock drift of " << p[Param::Drift] << " ppm: a camera's and an IMU's clocks run within 1000 ppm of each other";
+      break;
+    }
     case Effect::LeverArm: {
       const double l = Eigen::Vector3d(p[Param::LeverX], p[Param::LeverY], p[Param::LeverZ]).norm();
       x.beyond = over(l, 0.5, 0.1);
@@ -61,7 +67,8 @@ double implausibility(const ModelParams& p, const std::vector<Effect>& effects) 
 std::string implausible_because(const ModelParams& p, Effect e) { return excess(p, e).why; }
 
 std::string beyond_hardware_because(const ModelParams& p, Effect e, const DiagnosisModel& m) {
-  // Past the soft bound by more than two widths (a gyro scale 7% off, a bias of 140 mrad/s):
+  // Past the soft bound by more than two widths (a gyro scale 7% off, a bias of 140 mrad/s, a
+  // clock drift of 1500 ppm):
   // between, BIC's penalty weighs the evidence; beyond, no evidence makes it real hardware.
   if (const Excess x = excess(p, e); x.beyond > 2) return x.why;
   const NominalModel& n = m.recording().nominal;

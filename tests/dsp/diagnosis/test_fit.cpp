@@ -107,3 +107,27 @@ TEST(Fit, AConvergedFitIsTheFitOfAnyLargerCap) {
   fit_params(m, k.all, start, ParamMask{}, sigma_px, 1, &none);
   EXPECT_TRUE(none.converged);  // nothing free: any cap gives the start
 }
+
+// settle_time_offset: between the gross grid and the local fits, the offset within two frame
+// periods of the start, at the noise's scale. A start 40 ms off the simulator's offset (what the
+// gross grid left on a drone's forward flight whose clock only a closing pan shows) is out of
+// refine_time_offset's reach (+-5 ms) and settles to the truth; a start at the truth stays.
+TEST(Fit, TheOffsetSettlesFromFortyMillisecondsOffWhereTheRefineCannotReach) {
+  SimConfig c = rsd::test::simulation(ObservationKind::Matches, 23, 3.0, 0.5);
+  c.matches_per_pair = 40;
+  c.rotation_amplitude_rad = 0.25, c.motion_frequency_hz = 1.2;
+  c.effects.time_offset_s = 0.04;
+  const SimulatedRecording sim = simulate_recording(c);
+  const DiagnosisModel m(sim.rec);
+  std::vector<int> all(sim.rec.matches.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+  const double sigma_px = std::sqrt(2.0) * 0.5;
+  const ModelParams start = nominal_params(sim.rec.nominal);  // offset 0
+  const double refined = refine_time_offset(m, all, start, sigma_px), settled = settle_time_offset(m, all, start, sigma_px);
+  std::printf("from 0: refined %.5f s, settled %.5f s (truth 0.04)\n", refined, settled);
+  EXPECT_LE(std::abs(refined), 5e-3 + 1e-9);
+  EXPECT_NEAR(settled, 0.04, 5e-4);
+  ModelParams at_truth = start;
+  at_truth[Param::TimeOffset] = 0.04;
+  EXPECT_NEAR(settle_time_offset(m, all, at_truth, sigma_px), 0.04, 5e-4);
+}

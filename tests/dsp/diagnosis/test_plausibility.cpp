@@ -1,0 +1,42 @@
+// dsp/diagnosis/plausibility: the soft bounds of what real hardware has, against their stated
+// arithmetic (a penalty of the squared widths past the bound; past two widths never named).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "dsp/diagnosis/effects.hpp"
+#include "dsp/diagnosis/plausibility.hpp"
+#include "dsp/sim/recording_simulation.hpp"
+#include "tests/dsp/diagnosis/diagnosis_configs.hpp"
+
+using namespace rsd::dsp;
+
+namespace {
+
+ModelParams with_drift(const NominalModel& n, double ppm) {
+  ModelParams p = nominal_params(n);
+  p[Param::Drift] = ppm;
+  return p;
+}
+
+}  // namespace
+
+// A clock drift within 1000 ppm costs nothing; each 250 ppm past it one sigma squared; past two
+// widths (1500 ppm) it is beyond any camera's and IMU's clocks and never named. 3755 ppm is what
+// stood in for the Karma clip's moved clock (docs/diagnosis.md, "Real recordings").
+TEST(Plausibility, AClockDriftPastAThousandPpmCostsAndPastFifteenHundredIsNeverNamed) {
+  const SimulatedRecording sim = simulate_recording(rsd::test::simulation(ObservationKind::Matches, 5, 1.0, 0.5));
+  const DiagnosisModel m(sim.rec);
+  const NominalModel& n = sim.rec.nominal;
+  for (double ppm : {0.0, 300.0, -999.0}) {
+    EXPECT_EQ(implausibility(with_drift(n, ppm), {Effect::ClockDrift}), 0.0) << ppm;
+    EXPECT_EQ(implausible_because(with_drift(n, ppm), Effect::ClockDrift), "") << ppm;
+  }
+  EXPECT_NEAR(implausibility(with_drift(n, 1250), {Effect::ClockDrift}), 1.0, 1e-12);
+  EXPECT_NEAR(implausibility(with_drift(n, -1500), {Effect::ClockDrift}), 4.0, 1e-12);
+  EXPECT_EQ(beyond_hardware_because(with_drift(n, 1400), Effect::ClockDrift, m), "");
+  const std::string why = beyond_hardware_because(with_drift(n, -3755), Effect::ClockDrift, m);
+  EXPECT_NE(why.find("clock drift of -3755 ppm"), std::string::npos) << why;
+  // Another effect's penalty does not count a drift it does not name.
+  EXPECT_EQ(implausibility(with_drift(n, -3755), {Effect::TimeOffset}), 0.0);
+}
