@@ -10,6 +10,7 @@
 
 #include "dsp/diagnosis/blocked_halves.hpp"
 #include "dsp/diagnosis/observation_choice.hpp"
+#include "dsp/diagnosis/offset_search.hpp"
 #include "dsp/diagnosis/select.hpp"
 
 namespace rsd::dsp {

@@ -1,6 +1,6 @@
-// Fitting the effect parameters of a DiagnosisModel: a robust Levenberg-Marquardt fit (Ceres) and
-// the global searches that put the large parameters (time offset, focal length) near their
-// values first, so that the local fits start in the right valley.
+// Fitting the effect parameters of a DiagnosisModel: a robust Levenberg-Marquardt fit (Ceres)
+// within the parameters' physical bounds. The searches that put the time offset and the focal
+// length near their values first are offset_search.hpp's.
 #pragma once
 
 #include <utility>
@@ -50,33 +50,6 @@ struct FitEnd {
 };
 ModelParams fit_params(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& start,
                        const ParamMask& free, double sigma_px, int max_iterations = 30, FitEnd* end = nullptr);
-
-// Global search of the time offset (others held at `p`): a coarse scan over the offsets that
-// keep the frames inside the motion data (at most +-1 s around p's), then a fine one.
-double scan_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p,
-                        double sigma_px);
-// Fine scan only: 0.25 ms steps over +-`half_width_s` around p's offset.
-double refine_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p,
-                          double sigma_px, double half_width_s = 5e-3);
-
-// Between the gross grid and the local fits, at the noise's scale: the offset within two frame
-// periods of p's at 2.5 ms steps under a cost truncated at 5 sigma, then refined; p's own when
-// no step of that grid costs less or the best lies within half a frame period of it (where a
-// rolling shutter left out puts it). The gross grid's steps and its cost truncated at 2% of the
-// image see an offset only where the motion turns fast for long; a forward flight's clock shows
-// only in its closing pan's first frames, tens of milliseconds that the grid cannot tell from
-// the flight's flow, and the local fits, started there, do not cross the translation's jagged
-// cost to reach it.
-double settle_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma);
-// Gross errors first: a joint grid of the time offset (as scan_time_offset) and a common focal
-// scale (0.8 .. 1.2 of p's fx, fy in 5% steps) under a truncated cost that a wrong offset or a
-// focal length 20% off both saturate. Returns p with the best offset and focal lengths: start
-// values for the time_offset and focal_length hypotheses, not a claim that either is present.
-// With p's translation nuisance on, on 600 observations rather than 150: the translation's
-// velocity spline (translation.hpp) needs a few observations per knot.
-// `step(done, total)`, if given, after each focal scale of the grid.
-ModelParams gross_start(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma_px,
-                        const std::function<void(int, int)>& step = nullptr);
 
 // Every `n`-th of idx, at most `count` (spread over the whole recording).
 std::vector<int> subsample(const std::vector<int>& idx, size_t count);

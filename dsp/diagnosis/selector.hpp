@@ -18,6 +18,7 @@
 
 #include "dsp/diagnosis/blocked_halves.hpp"
 #include "dsp/diagnosis/fit.hpp"
+#include "dsp/diagnosis/offset_search.hpp"
 #include "dsp/diagnosis/plausibility.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/select.hpp"

@@ -9,6 +9,7 @@
 
 #include "dsp/diagnosis/fit.hpp"
 #include "dsp/diagnosis/model.hpp"
+#include "dsp/diagnosis/offset_search.hpp"
 #include "dsp/diagnosis/parallax.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/uncertainty.hpp"

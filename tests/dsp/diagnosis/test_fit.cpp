@@ -10,6 +10,7 @@
 
 #include "dsp/diagnosis/effects.hpp"
 #include "dsp/diagnosis/fit.hpp"
+#include "dsp/diagnosis/offset_search.hpp"
 #include "dsp/sim/recording_simulation.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
 
