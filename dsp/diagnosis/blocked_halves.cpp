@@ -45,14 +45,14 @@ double margined_drop(const std::vector<Eigen::Vector2d>& r0, const std::vector<E
 }
 
 // The same drop, with its margin, on the bulk of `judge`: the observations `poorer` predicts
-// within kOutlierSigmas robust scales (under the translation nuisance, the translation fitted to
-// them). A half's outliers (a forward flight's near objects, things that move) are no model's:
+// within kOutlierSigmas robust scales (`r0`, its residuals on `judge`; under the translation
+// nuisance, the translation fitted to the bulk). A half's outliers (a forward flight's near objects, things that move) are no model's:
 // a real clock offset that a drone's closing pan shows raised the flight's half by 254, all of
 // it in that half's tail (its bulk alone: 25, within the margin of 69), and was dropped. A
 // stand-in fitted on one half mispredicts the other's bulk.
-double bulk_drop(const DiagnosisModel& m, const std::vector<int>& judge, const ModelParams& poorer,
-                 const ModelParams& richer, double sigma) {
-  const std::vector<bool> in = inliers(m.residuals(poorer, judge));
+double bulk_drop(const DiagnosisModel& m, const std::vector<int>& judge, const std::vector<Eigen::Vector2d>& r0,
+                 const ModelParams& poorer, const ModelParams& richer, double sigma) {
+  const std::vector<bool> in = inliers(r0);
   std::vector<int> bulk;
   for (size_t k = 0; k < judge.size(); ++k)
     if (in[k]) bulk.push_back(judge[k]);
@@ -169,8 +169,9 @@ HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const Halves
   HalvesVerdict v{std::numeric_limits<double>::infinity(), 0};
   for (int dir = 0; dir < 2; ++dir) {
     const std::vector<int>& judge = dir ? h.a : h.b;
-    double drop = margined_drop(m.residuals(poorer.on[dir], judge), m.residuals(richer.on[dir], judge), sigma);
-    if (drop < 0) drop = std::max(drop, bulk_drop(m, judge, poorer.on[dir], richer.on[dir], sigma));
+    const auto r0 = m.residuals(poorer.on[dir], judge);
+    double drop = margined_drop(r0, m.residuals(richer.on[dir], judge), sigma);
+    if (drop < 0) drop = std::max(drop, bulk_drop(m, judge, r0, poorer.on[dir], richer.on[dir], sigma));
     v.drop = std::min(v.drop, drop);
   }
   v.apart_sigmas = apart(m, h, richer.on[0], richer.on[1], poorer.on[0], richer_free, richer_free & ~poorer_free);

@@ -59,9 +59,9 @@ double settle_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, 
   const auto [lo, hi] = search_range(m, p[Param::TimeOffset]);
   const double now = p[Param::TimeOffset], half = 2.0 / m.recording().nominal.frame_rate_hz;
   if (!(lo < hi)) return now;
-  ModelParams q = p;
   const GridBest grid = best_offset(m, idx, p, std::max(lo, now - half), std::min(hi, now + half), 2.5e-3, 5 * sigma);
   if (!(grid.cost < truncated_cost(m, idx, p, 5 * sigma))) return now;
+  ModelParams q = p;
   q[Param::TimeOffset] = grid.offset;
   const double settled = refine_time_offset(m, idx, q, sigma, 2.5e-3);
   // A rolling shutter left out moves the best offset by half its readout, at most half a frame
