@@ -112,8 +112,34 @@ std::string plausible_pair_instead(const Selector& sel, const std::vector<Candid
   return pair_names(pair);
 }
 
+// Two effects the round refused one by one, together: alone, each may stand in for the other's
+// part (under a hand-held shake's parallax a focal length 15% long came out 32% off without the
+// lens's distortion, and the lens without the focal length predicted the held-out frames worse;
+// fitted together, the suite's seed has them at +0.47% and 0.0004 from the truth). Every pair
+// screened on the subsample, the best refitted on the fitting set and judged as a round's
+// winner is (refusal), if its projected drop is over `to_beat` too. Says whether the pair was named.
 bool forward_pair(const Selector& sel, const std::vector<std::pair<Effect, std::string>>& refused, State& s,
-                  RoundResult& out, double to_beat);
+                  RoundResult& out, double to_beat) {
+  const State here = sel.on_screen(s);
+  std::optional<State> best;
+  double best_projected = -std::numeric_limits<double>::infinity();
+  std::vector<Effect> pair;
+  for (size_t i = 0; i < refused.size(); ++i) {
+    std::optional<State> alone;  // s with refused[i], screened once for all its pairs
+    for (size_t j = i + 1; j < refused.size(); ++j) {
+      const Effect a = refused[i].first, b = refused[j].first;
+      if (!may_pair(a, b)) continue;
+      if (!alone) alone = sel.screen_add(s, a);
+      State c = sel.screen_add(*alone, b);
+      const double d = sel.projected_drop(here, c);
+      if (d > best_projected) best_projected = d, best = std::move(c), pair = {a, b};
+    }
+  }
+  if (!best || best_projected < std::max(sel.opt_.min_bic_drop, to_beat)) return false;
+  if (!name_pair(sel, *best, pair, " together not named: ", s, out)) return false;
+  if (sel.opt_.progress) sel.opt_.progress(pair_names(pair) + ", each refused alone, hold together");
+  return true;
+}
 
 // One forward round: every candidate screened on the subsample; those whose projected drop is
 // near the best (near-degenerate hypotheses, e.g. a lever arm along the optical axis and a
@@ -212,7 +238,7 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
       // winner: they come first, as the strongest single effect would (under a hand-held
       // shake's parallax a lens and a focal length, each refused alone, together 44 797;
       // named first instead, a principal point at 25 stood in for part of them for two rounds
-      // and went again once they were in, a sixth of the diagnosis).
+      // and went again once they were in: a third of the walk's diagnosis).
       if (out.refused.size() >= 2 && forward_pair(sel, out.refused, s, out, best->projected)) return true;
       s = std::move(*best->refitted);
       return true;
@@ -233,35 +259,6 @@ bool forward_round(const Selector& sel, const std::vector<Effect>& candidates, S
     std::erase(order, best);
   }
   return false;
-}
-
-// Two effects the round refused one by one, together: alone, each may stand in for the other's
-// part (under a hand-held shake's parallax a focal length 15% long came out 32% off without the
-// lens's distortion, and the lens without the focal length predicted the held-out frames worse;
-// fitted together, the suite's seed has them at +0.47% and 0.0004 from the truth). Every pair
-// screened on the subsample, the best refitted on the fitting set and judged as a round's
-// winner is (refusal), if its projected drop is over `to_beat` too. Says whether the pair was named.
-bool forward_pair(const Selector& sel, const std::vector<std::pair<Effect, std::string>>& refused, State& s,
-                  RoundResult& out, double to_beat) {
-  const State here = sel.on_screen(s);
-  std::optional<State> best;
-  double best_projected = -std::numeric_limits<double>::infinity();
-  std::vector<Effect> pair;
-  for (size_t i = 0; i < refused.size(); ++i) {
-    std::optional<State> alone;  // s with refused[i], screened once for all its pairs
-    for (size_t j = i + 1; j < refused.size(); ++j) {
-      const Effect a = refused[i].first, b = refused[j].first;
-      if (!may_pair(a, b)) continue;
-      if (!alone) alone = sel.screen_add(s, a);
-      State c = sel.screen_add(*alone, b);
-      const double d = sel.projected_drop(here, c);
-      if (d > best_projected) best_projected = d, best = std::move(c), pair = {a, b};
-    }
-  }
-  if (!best || best_projected < std::max(sel.opt_.min_bic_drop, to_beat)) return false;
-  if (!name_pair(sel, *best, pair, " together not named: ", s, out)) return false;
-  if (sel.opt_.progress) sel.opt_.progress(pair_names(pair) + ", each refused alone, hold together");
-  return true;
 }
 
 }  // namespace
