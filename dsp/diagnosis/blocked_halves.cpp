@@ -15,6 +15,13 @@ namespace rsd::dsp {
 
 namespace {
 
+std::vector<Param> params_of(const ParamMask& mask) {
+  std::vector<Param> out;
+  for (int k = 0; k < kParamCount; ++k)
+    if (mask[k]) out.push_back(Param(k));
+  return out;
+}
+
 template <class Key>
 Halves split_at_median(const std::vector<int>& idx, Key key) {
   std::vector<double> k;
@@ -113,14 +120,12 @@ std::vector<Eigen::VectorXd> compared_values(const DiagnosisModel& m, const Mode
 // beyond doubt: dropping it left 68 px where the noise floor was 3.6. A stand-in's halves differ by
 // about its whole size (a clock jump's: 0 and 3 ms), far past this floor. The values compared
 // are compared_values's.
-double apart(const DiagnosisModel& m, const Halves& h, const ModelParams& on_a, const ModelParams& on_b,
-             const ModelParams& before, const ParamMask& free_mask, const ParamMask& added) {
-  std::vector<Param> free;
-  for (int k = 0; k < kParamCount; ++k)
-    if (free_mask[k]) free.push_back(Param(k));
-  const int block = std::max(1, static_cast<int>(std::lround(kHalvesBlockS * m.recording().nominal.frame_rate_hz)));
-  const auto ca = parameter_covariance(m, on_a, free, h.a, block), cb = parameter_covariance(m, on_b, free, h.b, block);
+double apart(const DiagnosisModel& m, const CovariedHalves& richer, const ModelParams& before, const ParamMask& free_mask,
+             const ParamMask& added) {
+  const std::vector<Param> free = params_of(free_mask);
+  const auto &ca = richer.cov[0], &cb = richer.cov[1];
   if (!ca || !cb) return 0;  // a half that cannot measure them (no motion there) has no say
+  const ModelParams &on_a = richer.fits.on[0], &on_b = richer.fits.on[1];
   Eigen::VectorXd a(free.size()), b(free.size()), mean_from_before(free.size());
   for (size_t j = 0; j < free.size(); ++j) {
     const Param q = free[j];
@@ -164,18 +169,30 @@ HalvesFits fit_halves(const DiagnosisModel& m, const Halves& h, const Hypothesis
            fit_params(m, h.b, hyp.params, hyp.free, sigma, iterations)}};
 }
 
+CovariedHalves with_covariances(const DiagnosisModel& m, const Halves& h, const ParamMask& free_mask, const HalvesFits& fits) {
+  const std::vector<Param> free = params_of(free_mask);
+  const int block = std::max(1, static_cast<int>(std::lround(kHalvesBlockS * m.recording().nominal.frame_rate_hz)));
+  return {fits, {parameter_covariance(m, fits.on[0], free, h.a, block), parameter_covariance(m, fits.on[1], free, h.b, block)}};
+}
+
 HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const HalvesFits& poorer, const ParamMask& poorer_free,
-                          const HalvesFits& richer, const ParamMask& richer_free, double sigma) {
+                          const CovariedHalves& richer, const ParamMask& richer_free, double sigma) {
   HalvesVerdict v{std::numeric_limits<double>::infinity(), 0};
   for (int dir = 0; dir < 2; ++dir) {
     const std::vector<int>& judge = dir ? h.a : h.b;
+    const ModelParams& rich = richer.fits.on[dir];
     const auto r0 = m.residuals(poorer.on[dir], judge);
-    double drop = margined_drop(r0, m.residuals(richer.on[dir], judge), sigma);
-    if (drop < 0) drop = std::max(drop, bulk_drop(m, judge, r0, poorer.on[dir], richer.on[dir], sigma));
+    double drop = margined_drop(r0, m.residuals(rich, judge), sigma);
+    if (drop < 0) drop = std::max(drop, bulk_drop(m, judge, r0, poorer.on[dir], rich, sigma));
     v.drop = std::min(v.drop, drop);
   }
-  v.apart_sigmas = apart(m, h, richer.on[0], richer.on[1], poorer.on[0], richer_free, richer_free & ~poorer_free);
+  v.apart_sigmas = apart(m, richer, poorer.on[0], richer_free, richer_free & ~poorer_free);
   return v;
+}
+
+HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const HalvesFits& poorer, const ParamMask& poorer_free,
+                          const HalvesFits& richer, const ParamMask& richer_free, double sigma) {
+  return cross_check(m, h, poorer, poorer_free, with_covariances(m, h, richer_free, richer), richer_free, sigma);
 }
 
 HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const Hypothesis& poorer, const Hypothesis& richer,

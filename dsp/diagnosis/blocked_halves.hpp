@@ -4,9 +4,11 @@
 // and mispredicts the other's, or puts its value where the other half does not.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "dsp/diagnosis/model.hpp"
+#include "dsp/diagnosis/uncertainty.hpp"
 
 namespace rsd::dsp {
 
@@ -41,10 +43,22 @@ struct HalvesFits {
   ModelParams on[2];
 };
 HalvesFits fit_halves(const DiagnosisModel& m, const Halves& h, const Hypothesis& hyp, double sigma, int iterations);
+// The richer hypothesis's fits with each one's parameter covariance over the hypothesis's free
+// parameters, clustered by blocks of kHalvesBlockS (empty where a half cannot measure them).
+struct CovariedHalves {
+  HalvesFits fits;
+  std::optional<ParameterCovariance> cov[2];
+};
+CovariedHalves with_covariances(const DiagnosisModel& m, const Halves& h, const ParamMask& free, const HalvesFits& fits);
 
 // Judges the two hypotheses, each fitted on both halves, each fit on the half it did not see.
 HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const HalvesFits& poorer, const ParamMask& poorer_free,
                           const HalvesFits& richer, const ParamMask& richer_free, double sigma);
+// The same with the richer fits' covariances known: a selection judges every named effect
+// against the same richer fits, whose covariances are then computed once, not once an effect (a
+// second of the walking phone's minute, five effects).
+HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const HalvesFits& poorer, const ParamMask& poorer_free,
+                          const CovariedHalves& richer, const ParamMask& richer_free, double sigma);
 // Fits both hypotheses on each half (at most `iterations`), judges them on the other.
 HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const Hypothesis& poorer, const Hypothesis& richer,
                           double sigma, int iterations);

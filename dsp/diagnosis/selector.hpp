@@ -269,18 +269,18 @@ class Selector {
     return a.v == b.v && a.flip_readout == b.flip_readout && a.other_lens == b.other_lens &&
            a.translation_nuisance == b.translation_nuisance && a.translation_knot_s == b.translation_knot_s;
   }
-  // `richer` (hypothesis r) fitted on both halves of h. Remembered: the blocked halves judge
-  // each named effect against the same richer state.
-  const HalvesFits& on_halves(const Halves& h, const State& richer, const Hypothesis& r) const {
+  // `richer` (hypothesis r) fitted on both halves of h, with the fits' covariances. Remembered:
+  // the blocked halves judge each named effect against the same richer state.
+  const CovariedHalves& on_halves(const Halves& h, const State& richer, const Hypothesis& r) const {
     for (const FittedHalves& f : halves_fits_)
       if (f.h == &h && f.of.effects == richer.effects && same(f.of.params, richer.params)) return f.fits;
-    halves_fits_.push_back({&h, richer, fit_halves(m_, h, r, sigma_, opt_.screen_iterations)});
+    halves_fits_.push_back({&h, richer, with_covariances(m_, h, r.free, fit_halves(m_, h, r, sigma_, opt_.screen_iterations))});
     return halves_fits_.back().fits;
   }
   struct FittedHalves {
     const Halves* h;
     State of;
-    HalvesFits fits;
+    CovariedHalves fits;
   };
   mutable std::deque<FittedHalves> halves_fits_;  // a deque: on_halves hands out references
   // The fits a selection asks for more than once, by what they started from.

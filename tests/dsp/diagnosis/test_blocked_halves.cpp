@@ -144,7 +144,7 @@ TEST(BlockedHalves, AGrossOffsetIsKeptWhenTheHalvesDifferByASmallShareOfIt) {
   const auto vb = parameter_variances(s.m, b, {Param::TimeOffset}, s.h.b, block);
   ASSERT_TRUE(va && vb);
   const double plain = 3e-3 / std::sqrt((*va)[0] + (*vb)[0]);
-  const HalvesVerdict v = cross_check(s.m, s.h, {{s.nominal, s.nominal}}, {}, {{a, b}}, only(Param::TimeOffset), s.sigma);
+  const HalvesVerdict v = cross_check(s.m, s.h, {{s.nominal, s.nominal}}, {}, HalvesFits{{a, b}}, only(Param::TimeOffset), s.sigma);
   std::printf("a 0.4 s offset's halves 3 ms apart: %.1f of their sigmas, %.3f of the test's (drop %.1f)\n", plain,
               v.apart_sigmas, v.drop);
   EXPECT_GT(plain, kHalvesAgreeSigmas);  // the sigmas alone would call them apart
@@ -219,7 +219,7 @@ TEST(BlockedHalves, TermsOfALensThatTradeAlongTheSameCurveAgree) {
   const double r = std::tan(widest_ray_angle(LensHalves::barrel().nominal.cam));
   const LensHalves l(0.006, 0.006 / (r * r));
   ASSERT_TRUE(l.s.h.usable());
-  const HalvesVerdict v = cross_check(l.s.m, l.s.h, {{l.s.nominal, l.s.nominal}}, {}, {{l.a, l.b}}, l.lens, l.s.sigma);
+  const HalvesVerdict v = cross_check(l.s.m, l.s.h, {{l.s.nominal, l.s.nominal}}, {}, HalvesFits{{l.a, l.b}}, l.lens, l.s.sigma);
   std::printf("k1 -0.054 / -0.066, k2 %+.4f / %+.4f: k2 %.1f of its sigmas apart, curves up to %.0f%% of the lens apart, "
               "the test %.2f\n", l.a[Param::K2], l.b[Param::K2], l.k2_sigmas_apart(), 100 * l.largest_share_apart(), v.apart_sigmas);
   EXPECT_GT(l.k2_sigmas_apart(), kHalvesAgreeSigmas);  // term by term: apart
@@ -234,7 +234,7 @@ TEST(BlockedHalves, TermsOfALensThatTradeAlongTheSameCurveAgree) {
 TEST(BlockedHalves, HalvesWhoseLensCurvesDifferAreApart) {
   const LensHalves l(0.015, 0);
   ASSERT_TRUE(l.s.h.usable());
-  const HalvesVerdict v = cross_check(l.s.m, l.s.h, {{l.s.nominal, l.s.nominal}}, {}, {{l.a, l.b}}, l.lens, l.s.sigma);
+  const HalvesVerdict v = cross_check(l.s.m, l.s.h, {{l.s.nominal, l.s.nominal}}, {}, HalvesFits{{l.a, l.b}}, l.lens, l.s.sigma);
   std::printf("k1 -0.045 / -0.075, k2 0: curves up to %.0f%% of the lens apart, the test %.2f\n",
               100 * l.largest_share_apart(), v.apart_sigmas);
   EXPECT_GT(l.largest_share_apart(), 0.45);
