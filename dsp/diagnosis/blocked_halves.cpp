@@ -15,13 +15,6 @@ namespace rsd::dsp {
 
 namespace {
 
-std::vector<Param> params_of(const ParamMask& mask) {
-  std::vector<Param> out;
-  for (int k = 0; k < kParamCount; ++k)
-    if (mask[k]) out.push_back(Param(k));
-  return out;
-}
-
 template <class Key>
 Halves split_at_median(const std::vector<int>& idx, Key key) {
   std::vector<double> k;
@@ -122,7 +115,7 @@ std::vector<Eigen::VectorXd> compared_values(const DiagnosisModel& m, const Mode
 // are compared_values's.
 double apart(const DiagnosisModel& m, const CovariedHalves& richer, const ModelParams& before, const ParamMask& free_mask,
              const ParamMask& added) {
-  const std::vector<Param> free = params_of(free_mask);
+  const std::vector<Param> free = params_in(free_mask);
   const auto &ca = richer.cov[0], &cb = richer.cov[1];
   if (!ca || !cb) return 0;  // a half that cannot measure them (no motion there) has no say
   const ModelParams &on_a = richer.fits.on[0], &on_b = richer.fits.on[1];
@@ -170,7 +163,7 @@ HalvesFits fit_halves(const DiagnosisModel& m, const Halves& h, const Hypothesis
 }
 
 CovariedHalves with_covariances(const DiagnosisModel& m, const Halves& h, const ParamMask& free_mask, const HalvesFits& fits) {
-  const std::vector<Param> free = params_of(free_mask);
+  const std::vector<Param> free = params_in(free_mask);
   const int block = std::max(1, static_cast<int>(std::lround(kHalvesBlockS * m.recording().nominal.frame_rate_hz)));
   return {fits, {parameter_covariance(m, fits.on[0], free, h.a, block), parameter_covariance(m, fits.on[1], free, h.b, block)}};
 }

@@ -116,9 +116,7 @@ struct Coordinates {
   Eigen::VectorXd scale, lo, hi;
 
   Coordinates(const DiagnosisModel& m, ModelParams s, const ParamMask& mask)
-      : nominal(m.recording().nominal), start(s) {
-    for (int k = 0; k < kParamCount; ++k)
-      if (mask[k]) free.push_back(Param(k));
+      : nominal(m.recording().nominal), start(s), free(params_in(mask)) {
     const int n = static_cast<int>(free.size());
     scale.resize(n), lo.resize(n), hi.resize(n);
     for (int j = 0; j < n; ++j) {

@@ -25,6 +25,13 @@ const char* param_name(Param p) {
   return kNames[static_cast<int>(p)];
 }
 
+std::vector<Param> params_in(const ParamMask& mask) {
+  std::vector<Param> out;
+  for (int k = 0; k < kParamCount; ++k)
+    if (mask[k]) out.push_back(Param(k));
+  return out;
+}
+
 ModelParams nominal_params(const NominalModel& n) {
   ModelParams p;
   p[Param::LineDelay] = n.time.line_delay_s;

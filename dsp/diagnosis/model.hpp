@@ -43,6 +43,8 @@ constexpr int kParamCount = static_cast<int>(Param::Count);
 using ParamMask = std::bitset<kParamCount>;
 
 const char* param_name(Param p);
+// The parameters a mask holds, in Param order.
+std::vector<Param> params_in(const ParamMask& mask);
 
 struct ModelParams {
   std::array<double, kParamCount> v{};

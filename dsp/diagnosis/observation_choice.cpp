@@ -141,9 +141,7 @@ std::vector<size_t> systematic_choice(const std::vector<double>& w, size_t count
 
 std::vector<double> observation_leverage(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& at,
                                          const ParamMask& mask) {
-  std::vector<Param> free;
-  for (int k = 0; k < kParamCount; ++k)
-    if (mask[k]) free.push_back(Param(k));
+  const std::vector<Param> free = params_in(mask);
   std::vector<double> h(idx.size(), 0.0);
   if (free.empty() || idx.empty()) return h;
   Eigen::MatrixXd J = residual_jacobian(m, at, free, idx);
