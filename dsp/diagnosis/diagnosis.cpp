@@ -12,6 +12,7 @@
 #include "dsp/diagnosis/observation_choice.hpp"
 #include "dsp/diagnosis/offset_search.hpp"
 #include "dsp/diagnosis/select.hpp"
+#include "dsp/diagnosis/stabiliser.hpp"
 
 namespace rsd::dsp {
 
@@ -222,7 +223,11 @@ std::optional<Selection> select_without_parallax(const DiagnosisModel& m, const 
   g.translation_nuisance = false;
   Selection sel = select_effects(m, use_fit, use_held, screen, nominal, g, d.sigma_px, first);
   seen = parallax_signal(m, sel.params, use_fit);
-  if (seen.clear()) return std::nullopt;
+  // A stabiliser found (a gain stood in for the pictures following the gyro smoothed) leaves a
+  // rotation the gyro does not carry, which the parallax test takes for a translation over a
+  // narrow field and the nuisance would take up: a 1 Hz stabiliser's remainder was said to be
+  // parallax. The selection that found it stands.
+  if (seen.clear() && !sel.stabiliser_sigma_s) return std::nullopt;
   return hold_on_blocked_halves(m, use_fit, use_held, screen, nominal, g, d.sigma_px, so, sel);
 }
 
@@ -266,7 +271,10 @@ Selection select_with_parallax(const DiagnosisModel& m, const ObservationSets& s
   // nuisance, unless its residuals show parallax. A restart (at another sigma) after parallax
   // was found goes straight to the selection under the nuisance.
   const bool seen_before_any_effect = d.parallax.clear();
-  if (!seen_before_any_effect)
+  // Or it did, and the gross state follows the gyro smoothed better than a gain under one: a
+  // stabiliser's misfit, which the parallax test takes for a translation over a narrow field (the
+  // suite's stabilised clip on seed 0), and which the selection without the nuisance can find.
+  if (!seen_before_any_effect || smoothing_beats_a_gain(m, screen, d.gross, d.sigma_px, so.min_bic_drop))
     if (auto plain = select_without_parallax(m, use_fit, use_held, screen, nominal, d, so, d.parallax)) return *plain;
   ModelParams n = nominal, g = d.gross;
   n.translation_nuisance = g.translation_nuisance = true;
@@ -412,7 +420,9 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
     // would make BIC name noise. Otherwise the selection runs again at the scale it ended with.
     const double ended = robust_stats(m.residuals(sel.params, screen)).scale_px;
     const bool disagrees = ended > 1.25 * d.sigma_px || (d.noise_floor_px == 0 && ended < 0.8 * d.sigma_px);
-    if (!disagrees || attempt == 2) break;
+    // With a stabiliser found the scale it ends with is the stabiliser's misfit, not noise:
+    // selected again at it, a 1 Hz stabiliser's gain was no longer told from its smoothing.
+    if (!disagrees || attempt == 2 || sel.stabiliser_sigma_s) break;
     d.sigma_restarts.push_back(d.sigma_px);
     d.sigma_px = ended;
     if (d.noise_floor_px == 0) {
@@ -442,7 +452,8 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   const std::vector<int>& fitted_on = as_fitted.translation_nuisance ? under_translation() : fit_set;
   d.uncertainties = effect_uncertainties(m, d.effects, as_fitted, fitted_on);
   d.fit_observations = static_cast<int>(fitted_on.size());
-  d.remainder = assess_remainder(m, d.fitted, use_all, d.noise_floor_px, robust_stats(m.residuals(nominal, use_all)).rms_px);
+  d.remainder = assess_remainder(m, d.fitted, use_all, d.noise_floor_px, robust_stats(m.residuals(nominal, use_all)).rms_px,
+                                 sel.stabiliser_sigma_s);
   for (const std::string& w : d.withheld) d.remainder.summary += (d.remainder.summary.empty() ? "" : "\n") + w + ".";
   return d;
 }

@@ -35,6 +35,10 @@ std::string refusal(const Selector& sel, const State& s, const State& richer, co
     if (why.empty()) why = unnameable_because(richer.params, e, sel.m_);
   if (why.empty()) why = sel.fits_the_tail_because(s, richer);
   if (why.empty()) why = sel.worse_with_parallax_because(s, richer);
+  // Asked even of a gain refused already (a gyro scale 10% off under a heavier stabiliser): the
+  // remainder then says what it stood in for.
+  if (const std::string stabiliser = sel.stands_in_for_a_stabiliser_because(s, richer, added); !stabiliser.empty())
+    why += (why.empty() ? "" : "; and ") + stabiliser;
   if (sel.held_.empty() || held_drop > 0) return why;
   return why + (why.empty() ? "" : "; and ") + "it fits the fitting frames (BIC drop " + std::to_string(std::lround(drop)) +
          ") and predicts the held-out frames worse than without it";

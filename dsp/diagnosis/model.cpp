@@ -172,6 +172,14 @@ struct DiagnosisModel::RayCache {
   }
 };
 
+DiagnosisModel::DiagnosisModel(const DiagnosisModel& m, std::vector<GyroSample> gyro)
+    : rec_(m.rec_), t0_(m.t0_), gyro_(std::move(gyro)), max_gap_(m.max_gap_), stamps_(m.stamps_), obs_(m.obs_),
+      tracks_(std::make_unique<TrackCache>()), rays_(std::make_unique<RayCache>()) {
+  if (m.rec_.kind != ObservationKind::Matches || gyro_.size() != m.gyro_.size())
+    throw std::invalid_argument("diagnosis: another gyro record applies to a matches recording, sample for sample");
+  rays_->px_a = m.rays_->px_a;
+}
+
 DiagnosisModel::~DiagnosisModel() = default;
 
 namespace {
@@ -243,13 +251,13 @@ DiagnosisModel::DiagnosisModel(const Recording& rec)
   if (rec.kind == ObservationKind::Landmarks) {
     std::unordered_map<int, Eigen::Vector3d> point;
     for (const Landmark& L : rec.points) point[L.id] = L.X;
-    obs_.reserve(rec.observations.size());
+    obs_->reserve(rec.observations.size());
     for (const LandmarkObservation& o : rec.observations) {
       const auto f = frame.find(o.frame);
       const auto X = point.find(o.id);
       if (f == frame.end() || X == point.end())
         throw std::invalid_argument("diagnosis: an observation names an unknown frame or point");
-      obs_.push_back({f->second.first, f->second.first, f->second.second, X->second, o.px, o.px});
+      obs_->push_back({f->second.first, f->second.first, f->second.second, X->second, o.px, o.px});
     }
     return;
   }
@@ -260,11 +268,11 @@ DiagnosisModel::DiagnosisModel(const Recording& rec)
   GyroStamps stamps = estimate_gyro_stamps(gyro_, max_gap_);
   gyro_ = std::move(stamps.gyro);
   stamps_ = stamps.spread;
-  obs_.reserve(rec.matches.size());
+  obs_->reserve(rec.matches.size());
   for (const Match& mt : rec.matches) {
     const auto a = frame.find(mt.frame_a), b = frame.find(mt.frame_b);
     if (a == frame.end() || b == frame.end()) throw std::invalid_argument("diagnosis: a match names an unknown frame");
-    obs_.push_back({a->second.first, b->second.first, a->second.second, Eigen::Vector3d::Zero(), mt.b, mt.a});
+    obs_->push_back({a->second.first, b->second.first, a->second.second, Eigen::Vector3d::Zero(), mt.b, mt.a});
     rays_->px_a.push_back(mt.a);
   }
 }
@@ -330,7 +338,7 @@ DiagnosisModel::MatchSetup DiagnosisModel::match_setup(const ModelParams& p) con
 
 std::optional<Eigen::Vector2d> DiagnosisModel::match_residual(const MatchSetup& ms, const GyroTrack& track, int i,
                                                               TrackHints& at, RowStart& row) const {
-  const Obs& o = obs_[i];
+  const Obs& o = (*obs_)[i];
   const Eigen::Vector3d* ray = ms.rays->get(i);
   if (!ray) return std::nullopt;
   // Spec "Matches": the direction seen at frame_a's pixel, in world axes, at its row's time. A
@@ -350,7 +358,7 @@ std::optional<Eigen::Vector2d> DiagnosisModel::match_residual(const MatchSetup& 
 }
 
 std::optional<Eigen::Vector2d> DiagnosisModel::residual(const ModelParams& p, int i) const {
-  if (rec_.kind == ObservationKind::Landmarks) return landmark_residual(p, obs_[i]);
+  if (rec_.kind == ObservationKind::Landmarks) return landmark_residual(p, (*obs_)[i]);
   TrackHints at;
   RowStart row;
   return match_residual(match_setup(p), track(bias_of(p), scale_of(p)), i, at, row);
@@ -367,7 +375,7 @@ std::vector<Eigen::Vector2d> DiagnosisModel::rotation_residuals(const ModelParam
   out.reserve(idx.size());
   const Eigen::Vector2d nan = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
   if (rec_.kind == ObservationKind::Landmarks) {
-    for (int i : idx) out.push_back(landmark_residual(p, obs_[i]).value_or(nan));
+    for (int i : idx) out.push_back(landmark_residual(p, (*obs_)[i]).value_or(nan));
     return out;
   }
   if (near && near->rows.size() != idx.size())
@@ -453,7 +461,7 @@ std::vector<MatchJacobian> DiagnosisModel::rotation_jacobian(const ModelParams& 
   };
   TrackHints at_hint;
   for (size_t k = 0; k < idx.size(); ++k) {
-    const Obs& o = obs_[idx[k]];
+    const Obs& o = (*obs_)[idx[k]];
     const Eigen::Vector3d* ray = ms.rays->get(idx[k]);
     if (!std::isfinite(at.rows[k].row) || !ray) continue;
     MatchAtSolution m;
@@ -473,7 +481,7 @@ std::vector<MatchJacobian> DiagnosisModel::rotation_jacobian(const ModelParams& 
 double DiagnosisModel::gyro_gap(const ModelParams& p, int i) const {
   if (rec_.kind != ObservationKind::Matches) return 0.0;
   const TimeModel tm = with_t0(landmark_setup(rec_.nominal, p).time, t0_);
-  const Obs& o = obs_[i];
+  const Obs& o = (*obs_)[i];
   const double a = tm.motion_time(std::min(o.T, o.T_b)), b = tm.motion_time(std::max(o.T, o.T_b) + 1.0 / rec_.nominal.frame_rate_hz);
   auto lt = [](const GyroSample& g, double t) { return g.t < t; };
   // From the last sample at or before a to the first at or after b.

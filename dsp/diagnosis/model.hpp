@@ -91,11 +91,16 @@ class DiagnosisModel {
   // Throws std::invalid_argument for a recording it cannot model (landmarks without a
   // trajectory, matches without a gyro, an observation naming an unknown frame or point).
   explicit DiagnosisModel(const Recording& rec);
+  // The same observations seen through another record of the gyro's rates: `gyro` as
+  // gyro_samples() of m made it (cleaned, its stamps where the rates put them), its rates
+  // changed (a stabilised video's test smooths them: stabiliser.hpp). Stamps and gaps as m's; m's
+  // recording must outlive it. Throws std::invalid_argument for landmarks.
+  DiagnosisModel(const DiagnosisModel& m, std::vector<GyroSample> gyro);
   ~DiagnosisModel();
 
   const Recording& recording() const { return rec_; }
   ObservationKind kind() const { return rec_.kind; }
-  int size() const { return static_cast<int>(obs_.size()); }
+  int size() const { return static_cast<int>(obs_->size()); }
   // Observed minus predicted pixel of observation i; nullopt when the model has no image
   // of the point (behind the camera, no rolling-shutter solution).
   std::optional<Eigen::Vector2d> residual(const ModelParams& p, int i) const;
@@ -154,13 +159,13 @@ class DiagnosisModel {
   std::vector<Eigen::Matrix<double, 2, 20>> rotation_jacobian(const ModelParams& p, const std::vector<int>& idx,
                                                               const Settled& at, bool gyro = true) const;
   // Position of observation i's frame (frame_a for a match) in time order (0 = first frame).
-  int frame_rank(int i) const { return obs_[i].rank; }
-  double frame_time(int i) const { return obs_[i].T; }
+  int frame_rank(int i) const { return (*obs_)[i].rank; }
+  double frame_time(int i) const { return (*obs_)[i].T; }
   // The observed pixel the residual is taken at (frame_b's for a match).
-  Eigen::Vector2d observed(int i) const { return obs_[i].px; }
+  Eigen::Vector2d observed(int i) const { return (*obs_)[i].px; }
   // Matches: the frame_a pixel and frame_b's timestamp (landmarks: observed(i), frame_time(i)).
-  Eigen::Vector2d observed_a(int i) const { return obs_[i].px_a; }
-  double frame_time_b(int i) const { return obs_[i].T_b; }
+  Eigen::Vector2d observed_a(int i) const { return (*obs_)[i].px_a; }
+  double frame_time_b(int i) const { return (*obs_)[i].T_b; }
   // Time offsets for which every frame stays inside the motion data.
   std::pair<double, double> offset_range() const;
   // Per-coordinate residual sigma over the pixel noise sigma: 1 (landmarks), sqrt(2) (matches).
@@ -175,6 +180,8 @@ class DiagnosisModel {
   // Matches: what the gyro's rates said of its stamps, and how far the samples' times were
   // moved to where the rates put them (dsp/diagnosis/gyro_stamps.hpp).
   const StampSpread& gyro_stamps() const { return stamps_; }
+  // Matches: the gyro's samples as the model integrates them (cleaned, restamped).
+  const std::vector<GyroSample>& gyro_samples() const { return gyro_; }
   // Whether effect parameters apply: gyro bias to gyro motion, lever arm to trajectories.
   bool has_gyro() const { return rec_.motion == MotionKind::Gyro; }
 
@@ -213,7 +220,9 @@ class DiagnosisModel {
   std::vector<GyroSample> gyro_;
   double max_gap_ = std::numeric_limits<double>::infinity();
   StampSpread stamps_;
-  std::vector<Obs> obs_;
+  // Shared with the models seen through another gyro record (the stabiliser's test builds
+  // dozens over a minute's 200 000 observations).
+  std::shared_ptr<std::vector<Obs>> obs_ = std::make_shared<std::vector<Obs>>();
   std::unique_ptr<TrackCache> tracks_;
   std::unique_ptr<RayCache> rays_;
 };

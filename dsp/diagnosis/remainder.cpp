@@ -12,6 +12,7 @@
 #include "dsp/diagnosis/observation_choice.hpp"
 #include "dsp/diagnosis/parallax.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
+#include "dsp/diagnosis/stabiliser.hpp"
 
 namespace rsd::dsp {
 
@@ -196,7 +197,13 @@ std::string summary_of(const Remainder& r) {
     o << "What remains has no structure in the image or in time: it is noise.";
     return o.str();
   }
-  o << "What remains is not noise:";
+  if (r.stabilised)
+    o << "The pictures follow the gyro smoothed over " << std::lround(1e3 * r.stabiliser_sigma_s)
+      << " ms (a Gaussian's sigma), not the gyro itself: a video stabilised in the camera (electronic or optical "
+         "stabilisation), whose gain falls with the motion's frequency where a gyro scale's or a focal length's is "
+         "one at every frequency. Record with the stabilisation off to calibrate. ";
+  o << "What remains is not noise";
+  if (r.spatial || r.temporal || r.lost) o << ":";
   if (r.spatial) o << " " << r.spatial_rms_px << " px vary smoothly across each frame";
   if (r.spatial && r.temporal) o << ", and";
   if (r.temporal) o << " " << r.temporal_rms_px << " px move all of a frame's observations together, smoothly from frame to frame";
@@ -217,6 +224,14 @@ std::vector<Located> locate_remainder(const DiagnosisModel& m, const ModelParams
                                       const Remainder& r) {
   std::vector<Located> out = locate(m, p, idx);
   const double total = r.rms_px * r.rms_px;
+  if (r.stabilised) {
+    // The share of the residual energy the smoothing takes away.
+    const DiagnosisModel smoothed(m, smoothed_rates(m.gyro_samples(), r.stabiliser_sigma_s));
+    const double left = robust_stats(smoothed.residuals(p, idx)).rms_px;
+    out.push_back({"stabilisation", std::clamp(1 - left * left / total, 0.0, 1.0),
+                   "the pictures follow the gyro smoothed over time, not the gyro itself: a video stabilised in the "
+                   "camera, which the rotation model of matches cannot express"});
+  }
   if (r.temporal)
     out.push_back({"frame_shift", std::min(1.0, r.temporal_rms_px * r.temporal_rms_px / total),
                    "all of a frame's observations are displaced together, and the displacement changes smoothly "
@@ -243,13 +258,15 @@ std::vector<Located> locate_remainder(const DiagnosisModel& m, const ModelParams
   std::stable_partition(out.begin(), out.end(), [](const Located& l) {
     return l.strength >= 0.2 && l.signal != "frame_shift" && l.signal != "image_field" && l.signal != "lost_frames";
   });
+  // A stabiliser, found by the selection against the gains that stood in for it, first.
+  std::stable_partition(out.begin(), out.end(), [](const Located& l) { return l.signal == "stabilisation"; });
   return out;
 }
 
 }  // namespace
 
 Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx_all,
-                           double noise_floor_px, double baseline_rms_px) {
+                           double noise_floor_px, double baseline_rms_px, std::optional<double> stabiliser_sigma_s) {
   Remainder r;
   ModelParams fitted = p;
   fitted.translation_nuisance = false;  // the residual the model leaves, parallax and all
@@ -285,7 +302,9 @@ Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& p, const 
   }
   r.expected_rms_px = std::sqrt(noise_var + frame_white);
   test_whole_frames(m, idx, in, r);
-  r.significant = r.spatial || r.temporal || r.lost;
+  r.stabilised = stabiliser_sigma_s.has_value();
+  r.stabiliser_sigma_s = stabiliser_sigma_s.value_or(0);
+  r.significant = r.spatial || r.temporal || r.lost || r.stabilised;
   // The nominal model within 5% of the noise left nothing to explain.
   r.nothing_to_explain = baseline_rms_px <= 1.05 * r.expected_rms_px;
   const double excess = baseline_rms_px * baseline_rms_px - r.expected_rms_px * r.expected_rms_px;

@@ -20,6 +20,7 @@
 // errors and a remainder too small to matter are not called physics.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -48,13 +49,20 @@ struct Remainder {
   int lost_frames = 0, tested_frames = 0;
   double lost_expected = 0, lost_z = 0, lost_share = 0;
   bool spatial = false, temporal = false, lost = false;  // which test found structure
+  // A video stabilised in the camera (stabiliser.hpp): the selection found a gain standing in for
+  // the pictures following the gyro smoothed over stabiliser_sigma_s. Significant whatever the
+  // tests above say: the rotation model, which has the pictures follow the gyro, does not hold.
+  bool stabilised = false;
+  double stabiliser_sigma_s = 0;
   std::vector<Located> located;  // where the remainder lives (empty when not significant)
   std::string summary;           // plain words for the report
 };
 
 // The remainder of `fitted` over the observations `idx` (at most 20000 used), given the
-// recording's stated per-coordinate noise floor (0: unknown) and the nominal model's RMS.
+// recording's stated per-coordinate noise floor (0: unknown) and the nominal model's RMS; with
+// `stabiliser_sigma_s`, the smoothing the selection found the pictures follow (Remainder::stabilised).
 Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& fitted, const std::vector<int>& idx,
-                           double noise_floor_px, double baseline_rms_px);
+                           double noise_floor_px, double baseline_rms_px,
+                           std::optional<double> stabiliser_sigma_s = std::nullopt);
 
 }  // namespace rsd::dsp

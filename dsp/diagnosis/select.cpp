@@ -188,13 +188,13 @@ Selection select_effects(const DiagnosisModel& m, const std::vector<int>& fit, c
   std::vector<SelectedEffect> steps = selection::forward(sel, applicable_effects(m), s, withheld);
   back_to_the_nominal_family(sel, s, steps, withheld);
   backward(sel, s, steps, withheld);
-  if (!opt.blocked_halves) return {steps, s.params, withheld};
+  if (!opt.blocked_halves) return {steps, s.params, withheld, false, sel.stabilised_s_};
   if (opt.progress && !steps.empty()) opt.progress("checking the named effects on blocked halves (time, angular rate)");
   bool dropped = drift_is_a_rate(sel, s, steps, withheld);
   dropped = consistency(sel, s, steps) || dropped;
   plausible_only(sel, s, steps, withheld);
   each_improves_held_out(sel, s, steps, withheld);
-  return {steps, s.params, withheld, dropped};
+  return {steps, s.params, withheld, dropped, sel.stabilised_s_};
 }
 
 Selection hold_on_blocked_halves(const DiagnosisModel& m, const std::vector<int>& fit, const std::vector<int>& held,

@@ -5,6 +5,7 @@
 
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,9 @@ struct Selection {
   // Whether the blocked halves, or the clock's shape (a drift that is a step: clock_shape.hpp),
   // dropped an effect the rounds had chosen (a stand-in).
   bool dropped_on_halves = false;
+  // When a gain stood in for a video stabilised in the camera (stabiliser.hpp): the sigma of
+  // the smoothing the pictures follow better (seconds).
+  std::optional<double> stabiliser_sigma_s;
 };
 
 // `start` holds the gross estimates (gross_start) the candidates start from; `nominal` the

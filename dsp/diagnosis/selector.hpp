@@ -12,6 +12,7 @@
 #include <cmath>
 #include <deque>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -22,6 +23,7 @@
 #include "dsp/diagnosis/plausibility.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/select.hpp"
+#include "dsp/diagnosis/stabiliser.hpp"
 #include "dsp/geometry/lens_model.hpp"
 #include "dsp/observation/observation_model.hpp"
 
@@ -213,6 +215,35 @@ class Selector {
     return why.str();
   }
 
+  // Whether `richer` stands in for a video stabilised in the camera (stabiliser.hpp): an effect
+  // of `added` gives the gyro's motion a gain under one (a gyro scale under one on every axis; a
+  // focal length shorter than `poorer`'s), or one did before in this selection, and `poorer`
+  // seen through the gyro smoothed fits the fitting set better than `richer` by over
+  // min_bic_drop (the chi-square drop over the design effect, as drop's). Once a gain has been
+  // found to stand in for the stabiliser, whatever else is asked must beat it too: a lens and a
+  // principal point came next on a stabilised clip, stand-ins as well. A tie keeps the effect
+  // (the smoothing's one parameter against the effect's is no evidence either way). "" when not.
+  std::string stands_in_for_a_stabiliser_because(const State& poorer, const State& richer,
+                                                 const std::vector<Effect>& added) const {
+    if (!m_.has_gyro() || held_.empty()) return "";
+    const ModelParams& r = richer.params;
+    const auto shrinks = [&](Effect e) {
+      if (e == Effect::GyroScale) return std::max({r[Param::ScaleX], r[Param::ScaleY], r[Param::ScaleZ]}) < 1;
+      return e == Effect::FocalLength && r[Param::Fx] < poorer.params[Param::Fx];
+    };
+    if (!stabilised_s_ && std::none_of(added.begin(), added.end(), shrinks)) return "";
+    const StabiliserFit& s = stabiliser_at(poorer);
+    const double with = robust_chi2(m_.residuals(r, fit_), sigma_);
+    const double D = design_effect(m_, r, fit_, sigma_);
+    if (!((with - s.chi2) / D > opt_.min_bic_drop)) return "";
+    stabilised_s_ = s.sigma_s;
+    std::ostringstream why;
+    why << "it stands in for a video stabilised in the camera: the pictures follow the gyro smoothed over "
+        << std::lround(1e3 * s.sigma_s) << " ms (a Gaussian's sigma) better than with it (chi-square " << std::lround(with)
+        << " -> " << std::lround(s.chi2) << " on the fitting set)";
+    return why.str();
+  }
+
   const DiagnosisModel& m_;
   const std::vector<int>& fit_;
   const std::vector<int>& held_;
@@ -221,6 +252,8 @@ class Selector {
   double sigma_;
   const SelectionOptions& opt_;
   Halves time_halves_, rate_halves_;
+  // The smoothing's sigma once a gain has stood in for a stabiliser in this selection.
+  mutable std::optional<double> stabilised_s_;
   LensModel lens_;  // the nominal lens's family
   double field_;    // the largest angle off the axis the image sees (radians), through the nominal lens
 
@@ -283,6 +316,17 @@ class Selector {
     CovariedHalves fits;
   };
   mutable std::deque<FittedHalves> halves_fits_;  // a deque: on_halves hands out references
+  // `poorer` seen through the gyro smoothed (fit_stabiliser: the smoothing searched on the
+  // screening subsample, poorer's effects refitted on the fitting set). Remembered: a round asks
+  // it of each of its gains and their pair at the same state.
+  const StabiliserFit& stabiliser_at(const State& poorer) const {
+    for (const auto& [of, fit] : stabilisers_)
+      if (of.effects == poorer.effects && same(of.params, poorer.params)) return fit;
+    stabilisers_.emplace_back(poorer, fit_stabiliser(m_, screen_, fit_, poorer.params, mask_of(poorer.effects, lens_),
+                                                     sigma_, opt_.max_iterations));
+    return stabilisers_.back().second;
+  }
+  mutable std::deque<std::pair<State, StabiliserFit>> stabilisers_;
   // The fits a selection asks for more than once, by what they started from.
   enum class FitKind { Add, Refit, Remove };
   struct Remembered {

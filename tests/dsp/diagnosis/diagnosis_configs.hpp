@@ -37,4 +37,14 @@ inline dsp::SimConfig target_simulation(unsigned seed, double duration_s, double
   return c;
 }
 
+// Matches from the VGA camera shaken by hand at 1.2 Hz (0.25 rad), 80 a frame pair, 0.5 px
+// noise, 4 s, its IMU turned on the camera: the invariants' and the stabiliser's recordings.
+inline dsp::SimConfig shaken(unsigned seed) {
+  dsp::SimConfig c = simulation(dsp::ObservationKind::Matches, seed, 4.0, 0.5);
+  c.matches_per_pair = 80;
+  c.nominal.imu_to_camera << 0, -1, 0, -1, 0, 0, 0, 0, -1;
+  c.rotation_amplitude_rad = 0.25, c.motion_frequency_hz = 1.2;
+  return c;
+}
+
 }  // namespace rsd::test

@@ -51,4 +51,11 @@ inline std::vector<int> every_observation(const dsp::DiagnosisModel& m) {
   return all;
 }
 
+// Whether one of the diagnosis's withheld lines (what it found and did not name) says `what`.
+inline bool said(const dsp::Diagnosis& d, const std::string& what) {
+  for (const std::string& w : d.withheld)
+    if (w.find(what) != std::string::npos) return true;
+  return false;
+}
+
 }  // namespace rsd::test

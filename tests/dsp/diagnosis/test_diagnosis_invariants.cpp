@@ -22,22 +22,10 @@
 
 using namespace rsd::dsp;
 using rsd::test::names;
+using rsd::test::said;
+using rsd::test::shaken;
 
 namespace {
-
-SimConfig shaken(unsigned seed) {
-  SimConfig c = rsd::test::simulation(ObservationKind::Matches, seed, 4.0, 0.5);
-  c.matches_per_pair = 80;
-  c.nominal.imu_to_camera << 0, -1, 0, -1, 0, 0, 0, 0, -1;
-  c.rotation_amplitude_rad = 0.25, c.motion_frequency_hz = 1.2;
-  return c;
-}
-
-bool said(const Diagnosis& d, const std::string& what) {
-  for (const std::string& w : d.withheld)
-    if (w.find(what) != std::string::npos) return true;
-  return false;
-}
 
 // `sim`'s recording with the matches of its held-out frames (every fifth frame_a, as the
 // diagnosis holds them out) taken from `other` instead: frames no fit sees, made with other
