@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "dsp/geometry/camera_motion.hpp"
+#include "dsp/geometry/row_fixed_point.hpp"
 
 namespace rsd::dsp {
 
@@ -199,43 +200,6 @@ SampledTrajectory sampled(const Recording& r) {
   return SampledTrajectory(std::move(s));
 }
 
-// The rolling-shutter fixed point (spec "Time model") by secant iteration on the row: `pixel_at(v)`
-// is the predicted pixel when the feature is read at row v; the solution has pixel_at(v).y == v.
-// Starting at the observed row, the map contracts by (image velocity x line delay), a few
-// percent, so three evaluations settle the row to 1e-6 px: the pixel is then within that
-// contraction times 1e-6, under 1e-7 px (settling to 1e-9 took a fourth evaluation on most
-// observations, a sixth of a diagnosis's time). Started instead at a nearby point's solution
-// with its slope (of g(v) = pixel_at(v).y - v: a Jacobian step's), the first Newton step lands
-// within the slope's change times the step, and two evaluations settle it. Returns nullopt when
-// it does not settle (the caller then falls back to the bracketing solver of
-// dsp/geometry/rs_projection.hpp).
-struct RowSolution {
-  Eigen::Vector2d px;
-  double row, slope;  // slope: the last secant's (NaN when the start was already the solution)
-};
-template <class F>
-std::optional<RowSolution> fixed_point_row(F&& pixel_at, double v_start,
-                                           double slope = std::numeric_limits<double>::quiet_NaN()) {
-  double v0 = v_start;
-  std::optional<Eigen::Vector2d> p0 = pixel_at(v0);
-  if (!p0) return std::nullopt;
-  double g0 = p0->y() - v0;
-  double v1 = std::isfinite(slope) ? v0 - g0 / slope : p0->y();
-  for (int it = 0; it < 12; ++it) {
-    if (std::abs(g0) < 1e-6) return RowSolution{*p0, v0, slope};
-    const std::optional<Eigen::Vector2d> p1 = pixel_at(v1);
-    if (!p1) return std::nullopt;
-    const double g1 = p1->y() - v1;
-    const double secant = (g1 - g0) / (v1 - v0);
-    const bool usable = std::isfinite(secant) && std::abs(secant) > 1e-6;
-    const double v2 = usable ? v1 - g1 / secant : p1->y();
-    if (usable) slope = secant;
-    v0 = v1, g0 = g1, p0 = p1, v1 = v2;
-  }
-  if (std::abs(g0) < 1e-6) return RowSolution{*p0, v0, slope};
-  return std::nullopt;
-}
-
 }  // namespace
 
 DiagnosisModel::DiagnosisModel(const Recording& rec)
@@ -313,6 +277,8 @@ std::optional<Eigen::Vector2d> DiagnosisModel::landmark_residual(const ModelPara
     body_->at(s.time.motion_time(o.T + rt.row_time(v)), R, p);
     return s.cam.project(s.mount.transpose() * (R.transpose() * (o.X - p) - s.lever_arm));
   };
+  // The row by secant iteration from the observed one; where it does not settle, the
+  // bracketing solver (rs_projection.hpp, case e).
   const auto solved = fixed_point_row(pixel_at, o.px.y());
   if (!solved) {
     const auto slow = predict_landmark(s, *body_slow_, o.T, o.X);

@@ -225,7 +225,7 @@ class Selector {
   // (the smoothing's one parameter against the effect's is no evidence either way). "" when not.
   std::string stands_in_for_a_stabiliser_because(const State& poorer, const State& richer,
                                                  const std::vector<Effect>& added) const {
-    if (!m_.has_gyro() || held_.empty()) return "";
+    if (!m_.has_gyro()) return "";
     const ModelParams& r = richer.params;
     const auto shrinks = [&](Effect e) {
       if (e == Effect::GyroScale) return std::max({r[Param::ScaleX], r[Param::ScaleY], r[Param::ScaleZ]}) < 1;

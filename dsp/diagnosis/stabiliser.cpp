@@ -7,45 +7,23 @@
 #include <stdexcept>
 
 #include "dsp/diagnosis/effects.hpp"
+#include "dsp/diagnosis/gyro.hpp"
 #include "dsp/geometry/camera_motion.hpp"
 
 namespace rsd::dsp {
 
 namespace {
 
-// The orientation the rates turn through, at each sample (the first the identity): a
-// trapezoid's mean rate over each interval (to second order in the interval, the model's own).
-std::vector<Eigen::Matrix3d> orientations(const std::vector<GyroSample>& gyro) {
-  std::vector<Eigen::Matrix3d> R(gyro.size(), Eigen::Matrix3d::Identity());
-  for (size_t k = 0; k + 1 < gyro.size(); ++k)
-    R[k + 1] = R[k] * exp_so3(0.5 * (gyro[k].w + gyro[k + 1].w) * (gyro[k + 1].t - gyro[k].t));
-  return R;
-}
-
-// The orientation at time t (clamped to the samples' span): from the sample at or before it,
-// turned at the mean of its rate and the rate interpolated at t. `at` is a hint, the interval
-// the last call fell in.
-Eigen::Matrix3d orientation_at(const std::vector<GyroSample>& gyro, const std::vector<Eigen::Matrix3d>& R, double t,
-                               size_t& at) {
-  const size_t n = gyro.size();
-  if (t <= gyro.front().t) return R.front();
-  if (t >= gyro.back().t) return R.back();
-  while (at > 0 && gyro[at].t > t) --at;
-  while (at + 2 < n && gyro[at + 1].t <= t) ++at;
-  const GyroSample &a = gyro[at], &b = gyro[at + 1];
-  const double h = t - a.t, dt = b.t - a.t;
-  const Eigen::Vector3d w_t = dt > 0 ? Eigen::Vector3d(a.w + (b.w - a.w) * (h / dt)) : a.w;
-  return R[at] * exp_so3(0.5 * (a.w + w_t) * h);
-}
-
 // Per sample, the turn v that takes its orientation R_k to the mean of the orientations around
 // it weighted by the kernel, R_k Exp(v_k) (one Gauss-Newton step of the Karcher mean, in the
 // tangent space at R_k; the stabiliser smooths where the camera points, not its body rates,
 // which differ from it by the angle turned times the rate). The kernel is integrated on a
 // regular grid of its own, not over the samples: a gyro sampled at 20 to 200 Hz would weigh a
-// short kernel by where the samples fall.
-std::vector<Eigen::Vector3d> turns_to_mean(const std::vector<GyroSample>& gyro, const std::vector<Eigen::Matrix3d>& R,
-                                           double sigma_s, double from, double to) {
+// short kernel by where the samples fall. Between samples the orientation is the gyro track's
+// (the rate's Hermite curve integrated, not a slerp, which at a gyro's 20 Hz end is off by
+// milliradians).
+std::vector<Eigen::Vector3d> turns_to_mean(const std::vector<GyroSample>& gyro, double sigma_s, double from, double to) {
+  const GyroTrack track(gyro, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), gyro_gap_limit(gyro));
   constexpr int kNodes = 33;  // over +-4 sigma (a cut at 3 raised a 1 Hz sine's gain by 0.3%)
   std::array<double, kNodes> d{}, w{};
   double total = 0;
@@ -54,11 +32,12 @@ std::vector<Eigen::Vector3d> turns_to_mean(const std::vector<GyroSample>& gyro, 
     w[i] = std::exp(-0.5 * (d[i] / sigma_s) * (d[i] / sigma_s)), total += w[i];
   }
   std::vector<Eigen::Vector3d> v(gyro.size(), Eigen::Vector3d::Zero());
-  size_t at = 0;
+  size_t at_k = 0, at = 0;
   for (size_t k = 0; k < gyro.size(); ++k) {
     if (gyro[k].t < from || gyro[k].t > to) continue;
+    const Eigen::Matrix3d Rk_t = track.camera_at(gyro[k].t, at_k).transpose();
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (int i = 0; i < kNodes; ++i) sum += w[i] * log_so3(R[k].transpose() * orientation_at(gyro, R, gyro[k].t + d[i], at));
+    for (int i = 0; i < kNodes; ++i) sum += w[i] * log_so3(Rk_t * track.camera_at(gyro[k].t + d[i], at));
     v[k] = sum / total;
   }
   return v;
@@ -69,18 +48,18 @@ std::vector<Eigen::Vector3d> turns_to_mean(const std::vector<GyroSample>& gyro, 
 std::vector<GyroSample> smoothed_rates(const std::vector<GyroSample>& gyro, double sigma_s, double from, double to) {
   if (!(sigma_s > 0)) throw std::invalid_argument("smoothed_rates: sigma_s must be positive");
   const size_t n = gyro.size();
+  for (size_t k = 1; k < n; ++k)
+    if (!(gyro[k].t > gyro[k - 1].t))
+      throw std::invalid_argument("smoothed_rates: the gyro's sample times must increase (as clean_gyro gives them)");
   if (n < 2) return gyro;
-  const std::vector<Eigen::Vector3d> v = turns_to_mean(gyro, orientations(gyro), sigma_s, from, to);
+  const std::vector<Eigen::Vector3d> v = turns_to_mean(gyro, sigma_s, from, to);
   // S = R Exp(v) turns at Exp(-v) w + J_r(v) dv/dt (J_r to first order); dv/dt by central
-  // differences (one-sided at the ends, over repeated stamps the next distinct ones).
+  // differences (one-sided at the ends).
   std::vector<GyroSample> out(gyro);
   for (size_t k = 0; k < n; ++k) {
     if (gyro[k].t < from || gyro[k].t > to) continue;
-    size_t a = k > 0 ? k - 1 : 0, b = std::min(k + 1, n - 1);
-    while (a > 0 && gyro[b].t - gyro[a].t <= 0) --a;
-    while (b + 1 < n && gyro[b].t - gyro[a].t <= 0) ++b;
-    const double dt = gyro[b].t - gyro[a].t;
-    const Eigen::Vector3d dv = dt > 0 ? Eigen::Vector3d((v[b] - v[a]) / dt) : Eigen::Vector3d::Zero();
+    const size_t a = k > 0 ? k - 1 : 0, b = std::min(k + 1, n - 1);
+    const Eigen::Vector3d dv = (v[b] - v[a]) / (gyro[b].t - gyro[a].t);
     out[k].w = exp_so3(-v[k]) * gyro[k].w + dv - 0.5 * v[k].cross(dv);
   }
   return out;
@@ -134,8 +113,8 @@ StabiliserFit fit_stabiliser(const DiagnosisModel& m, const std::vector<int>& se
   if (std::min(f1, f2) < best.chi2) best.sigma_s = std::exp(f1 < f2 ? x1 : x2);
   const DiagnosisModel s(m, smoothed_rates(m.gyro_samples(), best.sigma_s, span.from - 4 * best.sigma_s,
                                            span.to + 4 * best.sigma_s));
-  best.params = free.any() ? fit_params(s, idx, p, free, sigma_px, iterations) : p;
-  best.chi2 = robust_chi2(s.residuals(best.params, idx), sigma_px);
+  const ModelParams refitted = free.any() ? fit_params(s, idx, p, free, sigma_px, iterations) : p;
+  best.chi2 = robust_chi2(s.residuals(refitted, idx), sigma_px);
   return best;
 }
 
@@ -144,13 +123,14 @@ bool smoothing_beats_a_gain(const DiagnosisModel& m, const std::vector<int>& all
   if (!m.has_gyro()) return false;
   p.translation_nuisance = false;
   // Twenty seconds are evidence enough, and a minute's took three times as long.
+  double first = std::numeric_limits<double>::infinity();
+  for (int i : all) first = std::min(first, m.frame_time(i));
   std::vector<int> idx;
-  if (!all.empty()) {
-    double first = std::numeric_limits<double>::infinity();
-    for (int i : all) first = std::min(first, m.frame_time(i));
-    for (int i : all)
-      if (m.frame_time(i) < first + kProbeSeconds) idx.push_back(i);
-  }
+  for (int i : all)
+    if (m.frame_time(i) < first + kProbeSeconds) idx.push_back(i);
+  // Ten observations per parameter of the larger fit (a scale per axis and the focal length) at
+  // the least: fewer say nothing either way.
+  if (idx.size() < 40) return false;
   const NominalModel& n = m.recording().nominal;
   const ParamMask focal = mask_of({Effect::FocalLength}, n.cam.dist.model);
   const ModelParams gain = fit_params(m, idx, p, mask_of({Effect::GyroScale, Effect::FocalLength}, n.cam.dist.model), sigma_px, 8);

@@ -23,7 +23,8 @@
 
 namespace rsd::dsp {
 
-// `gyro` (sorted by time, as DiagnosisModel::gyro_samples gives it) as the rates of its
+// `gyro` (its times increasing, as DiagnosisModel::gyro_samples gives them; else
+// std::invalid_argument) as the rates of its
 // orientation smoothed by a Gaussian of sigma_s: each sample's orientation moved to the
 // kernel-weighted mean of the orientations around it (one Gauss-Newton step of the Karcher mean;
 // the kernel integrated over +-4 sigma on a grid of its own, not over the samples, which an
@@ -41,8 +42,7 @@ std::vector<GyroSample> smoothed_rates(const std::vector<GyroSample>& gyro, doub
 // seen through it.
 struct StabiliserFit {
   double sigma_s = 0;  // the kernel's standard deviation
-  double chi2 = 0;     // robust chi-square on idx (robust_chi2) at `params`
-  ModelParams params;  // p with `free` refitted on idx through the smoothed gyro
+  double chi2 = 0;     // robust chi-square on idx (robust_chi2), `free` refitted through the smoothed gyro
 };
 // Searches sigma_s from 10 ms to 640 ms on the observations `search` with `p` held (doubling,
 // then a golden section within a factor two of the best), then refits the parameters `free`
@@ -56,7 +56,8 @@ StabiliserFit fit_stabiliser(const DiagnosisModel& m, const std::vector<int>& se
 // length and from the nominal one) better than a gain explains them (a
 // gyro scale per axis and the focal length fitted together), by over min_drop (the chi-square
 // drop over the design effect). Asked before the parallax test sends a selection under the
-// translation nuisance, which takes a stabiliser's misfit up as a translation.
+// translation nuisance, which takes a stabiliser's misfit up as a translation. False under 40
+// observations in the probe's span (ten per parameter of the gain's fit).
 bool smoothing_beats_a_gain(const DiagnosisModel& m, const std::vector<int>& all, ModelParams p, double sigma_px,
                             double min_drop);
 inline constexpr double kProbeSeconds = 20;
