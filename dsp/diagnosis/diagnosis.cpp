@@ -453,7 +453,9 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   d.uncertainties = effect_uncertainties(m, d.effects, as_fitted, fitted_on);
   d.fit_observations = static_cast<int>(fitted_on.size());
   d.remainder = assess_remainder(m, d.fitted, use_all, d.noise_floor_px, robust_stats(m.residuals(nominal, use_all)).rms_px,
-                                 sel.stabiliser_sigma_s);
+                                 sel.stabiliser_sigma_s, std::any_of(sel.effects.begin(), sel.effects.end(), [](const SelectedEffect& st) {
+                                   return st.effect == Effect::TimeOffset;
+                                 }));
   for (const std::string& w : d.withheld) d.remainder.summary += (d.remainder.summary.empty() ? "" : "\n") + w + ".";
   return d;
 }

@@ -202,6 +202,9 @@ std::string summary_of(const Remainder& r) {
       << " ms (a Gaussian's sigma), not the gyro itself: a video stabilised in the camera (electronic or optical "
          "stabilisation), whose gain falls with the motion's frequency where a gyro scale's or a focal length's is "
          "one at every frequency. Record with the stabilisation off to calibrate. ";
+  if (r.offset_beside_stabiliser)
+    o << "The clock offset named beside it may be the stabiliser's delay rather than the clocks' (a stabiliser "
+         "that does not look ahead lags the motion): measure it with the stabilisation off. ";
   o << "What remains is not noise";
   if (r.spatial || r.temporal || r.lost) o << ":";
   if (r.spatial) o << " " << r.spatial_rms_px << " px vary smoothly across each frame";
@@ -266,7 +269,8 @@ std::vector<Located> locate_remainder(const DiagnosisModel& m, const ModelParams
 }  // namespace
 
 Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx_all,
-                           double noise_floor_px, double baseline_rms_px, std::optional<double> stabiliser_sigma_s) {
+                           double noise_floor_px, double baseline_rms_px, std::optional<double> stabiliser_sigma_s,
+                           bool offset_named) {
   Remainder r;
   ModelParams fitted = p;
   fitted.translation_nuisance = false;  // the residual the model leaves, parallax and all
@@ -304,6 +308,7 @@ Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& p, const 
   test_whole_frames(m, idx, in, r);
   r.stabilised = stabiliser_sigma_s.has_value();
   r.stabiliser_sigma_s = stabiliser_sigma_s.value_or(0);
+  r.offset_beside_stabiliser = r.stabilised && offset_named;
   r.significant = r.spatial || r.temporal || r.lost || r.stabilised;
   // The nominal model within 5% of the noise left nothing to explain.
   r.nothing_to_explain = baseline_rms_px <= 1.05 * r.expected_rms_px;

@@ -54,15 +54,20 @@ struct Remainder {
   // tests above say: the rotation model, which has the pictures follow the gyro, does not hold.
   bool stabilised = false;
   double stabiliser_sigma_s = 0;
+  // A clock offset was named beside the stabiliser: a stabiliser that does not look ahead lags
+  // the motion (a first-order one by 1 / (2 pi f_corner) under its corner), which the offset takes
+  // up, so the summary says it may be the stabiliser's delay rather than the clocks'.
+  bool offset_beside_stabiliser = false;
   std::vector<Located> located;  // where the remainder lives (empty when not significant)
   std::string summary;           // plain words for the report
 };
 
 // The remainder of `fitted` over the observations `idx` (at most 20000 used), given the
 // recording's stated per-coordinate noise floor (0: unknown) and the nominal model's RMS; with
-// `stabiliser_sigma_s`, the smoothing the selection found the pictures follow (Remainder::stabilised).
+// `stabiliser_sigma_s`, the smoothing the selection found the pictures follow (Remainder::stabilised);
+// `offset_named`: the named effects include the clock offset.
 Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& fitted, const std::vector<int>& idx,
                            double noise_floor_px, double baseline_rms_px,
-                           std::optional<double> stabiliser_sigma_s = std::nullopt);
+                           std::optional<double> stabiliser_sigma_s = std::nullopt, bool offset_named = false);
 
 }  // namespace rsd::dsp

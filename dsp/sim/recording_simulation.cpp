@@ -260,8 +260,9 @@ class ParallaxScene {
 
 // In-camera stabilisation: the orientation the pictures follow, smoothed by a first-order
 // low-pass of corner `hz` run forward then backward over the samples (zero phase, as a
-// stabiliser that looks ahead in its buffer does), on the sphere by slerp.
-void stabilise(std::vector<OrientationTrack::Sample>& s, double hz) {
+// stabiliser that looks ahead in its buffer does), on the sphere by slerp; forward only when it
+// does not look ahead.
+void stabilise(std::vector<OrientationTrack::Sample>& s, double hz, bool looks_ahead) {
   if (s.size() < 2) return;
   const double tau = 1.0 / (2 * M_PI * hz);
   auto pass = [&](auto begin, auto end) {
@@ -274,7 +275,7 @@ void stabilise(std::vector<OrientationTrack::Sample>& s, double hz) {
     }
   };
   pass(s.begin(), s.end());
-  pass(s.rbegin(), s.rend());
+  if (looks_ahead) pass(s.rbegin(), s.rend());
 }
 
 void simulate_matches(const SimConfig& c, const TrueModel& m, SimulatedRecording& out, std::mt19937& rng) {
@@ -290,7 +291,7 @@ void simulate_matches(const SimConfig& c, const TrueModel& m, SimulatedRecording
   std::vector<OrientationTrack::Sample> cam_samples;
   for (double t = t_begin; t <= t_end; t += 5e-4)
     cam_samples.push_back({t, camera_orientation(imu.at(t).q, m.mount * r.nominal.imu_to_camera)});  // Exp(r) R_nominal
-  if (c.unmodelled.stabilisation_hz > 0) stabilise(cam_samples, c.unmodelled.stabilisation_hz);
+  if (c.unmodelled.stabilisation_hz > 0) stabilise(cam_samples, c.unmodelled.stabilisation_hz, c.unmodelled.stabilisation_looks_ahead);
   const OrientationTrack truth(std::move(cam_samples));
   const MatchSetup setup{m.cam, m.time};
   std::uniform_real_distribution<double> u(0, m.cam.width - 1), v(0, m.cam.height - 1), flip(0, 1);

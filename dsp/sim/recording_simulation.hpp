@@ -75,6 +75,9 @@ struct Unmodelled {
   // orientation smoothed by a zero-phase low-pass of this corner frequency (forward and backward
   // first-order passes), the gyro the real one (0: no stabilisation).
   double stabilisation_hz = 0;
+  // false: the stabiliser does not look ahead (the forward pass alone, a causal low-pass): the
+  // pictures lag the motion, by 1 / (2 pi stabilisation_hz) at frequencies well under the corner.
+  bool stabilisation_looks_ahead = true;
   bool any() const {
     return scene_depth_m > 0 || gyro_saturation_rad_s > 0 || clock_jump_s != 0 || stabilisation_hz > 0;
   }

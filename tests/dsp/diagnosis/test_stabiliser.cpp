@@ -181,3 +181,29 @@ TEST(Stabiliser, ARealScaleUnderOneIsStillNamed) {
   ASSERT_NE(s, nullptr);
   EXPECT_NEAR(rsd::test::param(s, "sx"), 0.97, 0.003);
 }
+
+// A stabiliser that does not look ahead (the forward pass alone) lags the motion: under a 0.7 Hz
+// shake a 5 Hz first-order low-pass delays it by atan(0.7 / 5) / (2 pi 0.7) = 31.6 ms, which the
+// clock offset takes up (the pictures are late on the gyro), and the rest is the smoothing. The
+// offset is named at the lag, the stabilisation said, and the summary says the offset may be the
+// stabiliser's delay rather than the clocks'.
+TEST(Stabiliser, AStabiliserThatLagsIsSaidBesideTheOffsetItsDelayMakes) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("Stabiliser.AStabilisedVideoNamesNoGainInItsStead (the same check)");
+  SimConfig c = shaken(41);
+  c.motion_frequency_hz = 0.7;
+  c.unmodelled.stabilisation_hz = 5;
+  c.unmodelled.stabilisation_looks_ahead = false;
+  const Diagnosis d = diagnose(simulate_recording(c).rec);
+  std::printf("named [%s] held out %.3f -> %.3f px\n", names(d).c_str(), d.heldout_baseline_rms_px, d.heldout_final_rms_px);
+  for (const std::string& w : d.withheld) std::printf("  withheld: %s\n", w.c_str());
+  EXPECT_EQ(names(d), "time_offset ");
+  const NamedEffect* t = rsd::test::find(d, "time_offset");
+  ASSERT_NE(t, nullptr);
+  const double lag = std::atan(0.7 / 5) / (2 * M_PI * 0.7);
+  EXPECT_NEAR(rsd::test::param(t, "time_offset_s"), -lag, 0.002);
+  EXPECT_TRUE(d.remainder.stabilised) << d.remainder.summary;
+  EXPECT_TRUE(d.remainder.offset_beside_stabiliser);
+  EXPECT_NE(d.remainder.summary.find("may be the stabiliser's delay"), std::string::npos) << d.remainder.summary;
+  ASSERT_FALSE(d.remainder.located.empty());
+  EXPECT_EQ(d.remainder.located.front().signal, "stabilisation");
+}

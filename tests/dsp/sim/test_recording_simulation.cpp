@@ -146,7 +146,8 @@ TEST(RecordingSimulation, InlierMatchesFollowTheTrueModel) {
 // In-camera stabilisation (Unmodelled::stabilisation_hz): the pictures follow the orientation
 // through a zero-phase low-pass, |H(f)|^2 = 1 / (1 + (f / fc)^2), the gyro the real one. The
 // shake's frequencies lie in [0.5, 1.5] x 1.2 Hz, so the frame-to-frame image motion keeps a
-// share of its RMS between the gains at 1.8 and at 0.6 Hz (the same matches, seed for seed).
+// share of its RMS between the gains at 1.8 and at 0.6 Hz (the same matches, seed for seed); a
+// stabiliser that does not look ahead passes it once, at the square root of those gains.
 TEST(RecordingSimulation, AStabilisedVideoMovesByTheLowPassOfTheShake) {
   SimConfig c = base(ObservationKind::Matches);
   c.duration_s = 6.0;
@@ -169,6 +170,12 @@ TEST(RecordingSimulation, AStabilisedVideoMovesByTheLowPassOfTheShake) {
     std::printf("stabilised at %.1f Hz: the image motion keeps %.3f of its RMS (band %.3f..%.3f)\n", fc, gain, h2(1.8), h2(0.6));
     EXPECT_GT(gain, 0.97 * h2(1.8)) << fc;
     EXPECT_LT(gain, 1.03 * h2(0.6)) << fc;
+    // Without looking ahead, the forward pass alone: |H(f)| = 1 / sqrt(1 + (f / fc)^2).
+    st.unmodelled.stabilisation_looks_ahead = false;
+    const double lagging = motion_rms(simulate_recording(st)) / motion_rms(plain);
+    std::printf("  forward pass only: %.3f (band %.3f..%.3f)\n", lagging, std::sqrt(h2(1.8)), std::sqrt(h2(0.6)));
+    EXPECT_GT(lagging, 0.97 * std::sqrt(h2(1.8))) << fc;
+    EXPECT_LT(lagging, 1.03 * std::sqrt(h2(0.6))) << fc;
   }
 }
 
