@@ -7,6 +7,7 @@
 
 #include "dsp/geometry/row_fixed_point.hpp"
 #include "dsp/geometry/rs_projection.hpp"
+#include "tests/support/random_twist.hpp"
 
 using namespace rsd::dsp;
 using Eigen::Vector2d;
@@ -44,9 +45,7 @@ TEST(RowFixedPoint, AgreesWithTheBracketingSolverOnScrewMotions) {
   std::uniform_real_distribution<double> u(-1, 1), z(2, 15);
   int n = 0;
   for (int i = 0; i < 300; ++i) {
-    Twist tw;
-    tw.v = 2 * Vector3d(u(rng), u(rng), u(rng));
-    tw.w = 1.5 * Vector3d(u(rng), u(rng), u(rng));
+    const Twist tw = rsd::test::random_twist(rng, Vector3d::Ones(), Vector3d::Ones(), 2, 1.5);
     const Vector3d X(2 * u(rng), 1.5 * u(rng), z(rng));
     const ScrewMotion motion(tw);
     const RsProjection p = project_trajectory(cam, timing, motion, X);
