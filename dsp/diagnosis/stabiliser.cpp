@@ -145,4 +145,16 @@ bool smoothing_beats_a_gain(const DiagnosisModel& m, const std::vector<int>& all
   return (with - smoothed) / design_effect(m, gain, idx, sigma_px) > min_drop;
 }
 
+std::optional<double> stabiliser_after_selection(const DiagnosisModel& m, const std::vector<int>& search,
+                                                 const std::vector<int>& idx, ModelParams p, double sigma_px,
+                                                 double min_drop) {
+  if (!m.has_gyro() || idx.empty()) return std::nullopt;
+  p.translation_nuisance = false;
+  const StabiliserFit s = fit_stabiliser(m, search, idx, p, ParamMask{}, sigma_px, 0);
+  const double with = robust_chi2(m.residuals(p, idx), sigma_px);
+  const bool clear = (with - s.chi2) / design_effect(m, p, idx, sigma_px) > min_drop;
+  if (clear && with - s.chi2 >= kStabiliserShare * with) return s.sigma_s;
+  return std::nullopt;
+}
+
 }  // namespace rsd::dsp
