@@ -459,10 +459,10 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   const std::vector<int>& fitted_on = as_fitted.translation_nuisance ? under_translation() : fit_set;
   d.uncertainties = effect_uncertainties(m, d.effects, as_fitted, fitted_on);
   d.fit_observations = static_cast<int>(fitted_on.size());
+  const bool offset_named = std::any_of(sel.effects.begin(), sel.effects.end(),
+                                        [](const SelectedEffect& st) { return st.effect == Effect::TimeOffset; });
   d.remainder = assess_remainder(m, d.fitted, use_all, d.noise_floor_px, robust_stats(m.residuals(nominal, use_all)).rms_px,
-                                 sel.stabiliser_sigma_s, std::any_of(sel.effects.begin(), sel.effects.end(), [](const SelectedEffect& st) {
-                                   return st.effect == Effect::TimeOffset;
-                                 }));
+                                 sel.stabiliser_sigma_s, offset_named);
   for (const std::string& w : d.withheld) d.remainder.summary += (d.remainder.summary.empty() ? "" : "\n") + w + ".";
   return d;
 }

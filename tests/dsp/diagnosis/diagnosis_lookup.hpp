@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -56,6 +57,13 @@ inline bool said(const dsp::Diagnosis& d, const std::string& what) {
   for (const std::string& w : d.withheld)
     if (w.find(what) != std::string::npos) return true;
   return false;
+}
+
+// What a diagnosis named (sorted), its held-out RMS before and after, and what it withheld, on
+// stdout: the test's log says what happened when an assertion fails.
+inline void show(const dsp::Diagnosis& d) {
+  std::printf("named [%s] held out %.3f -> %.3f px\n", names(d).c_str(), d.heldout_baseline_rms_px, d.heldout_final_rms_px);
+  for (const std::string& w : d.withheld) std::printf("  withheld: %s\n", w.c_str());
 }
 
 }  // namespace rsd::test

@@ -24,6 +24,7 @@ using namespace rsd::dsp;
 using rsd::test::names;
 using rsd::test::said;
 using rsd::test::shaken;
+using rsd::test::show;
 
 namespace {
 
@@ -44,11 +45,6 @@ void hold_out_other_physics(SimulatedRecording& sim, const SimulatedRecording& o
   for (const Match& mt : other.rec.matches)
     if (held_frames.count(mt.frame_a)) mixed.push_back(mt);
   sim.rec.matches = mixed;
-}
-
-void show(const Diagnosis& d) {
-  std::printf("named [%s] held out %.3f -> %.3f px\n", names(d).c_str(), d.heldout_baseline_rms_px, d.heldout_final_rms_px);
-  for (const std::string& w : d.withheld) std::printf("  withheld: %s\n", w.c_str());
 }
 
 }  // namespace

@@ -21,6 +21,7 @@ using namespace rsd::dsp;
 using rsd::test::names;
 using rsd::test::said;
 using rsd::test::shaken;
+using rsd::test::show;
 
 namespace {
 
@@ -155,8 +156,7 @@ TEST(Stabiliser, AStabilisedVideoNamesNoGainInItsStead) {
   c.motion_frequency_hz = 0.7;
   c.unmodelled.stabilisation_hz = 5;
   const Diagnosis d = diagnose(simulate_recording(c).rec);
-  std::printf("named [%s] held out %.3f -> %.3f px\n", names(d).c_str(), d.heldout_baseline_rms_px, d.heldout_final_rms_px);
-  for (const std::string& w : d.withheld) std::printf("  withheld: %s\n", w.c_str());
+  show(d);
   EXPECT_EQ(names(d), "");
   EXPECT_TRUE(said(d, "gyro_scale not named: it stands in for a video stabilised in the camera"));
   EXPECT_TRUE(d.remainder.significant) << d.remainder.summary;
@@ -174,8 +174,7 @@ TEST(Stabiliser, ARealScaleUnderOneIsStillNamed) {
   SimConfig c = shaken(42);
   c.effects.gyro_scale = Eigen::Vector3d(0.97, 0.975, 0.98);
   const Diagnosis d = diagnose(simulate_recording(c).rec);
-  std::printf("named [%s] held out %.3f -> %.3f px\n", names(d).c_str(), d.heldout_baseline_rms_px, d.heldout_final_rms_px);
-  for (const std::string& w : d.withheld) std::printf("  withheld: %s\n", w.c_str());
+  show(d);
   EXPECT_EQ(names(d), "gyro_scale ");
   const NamedEffect* s = rsd::test::find(d, "gyro_scale");
   ASSERT_NE(s, nullptr);
@@ -194,8 +193,7 @@ TEST(Stabiliser, AStabiliserThatLagsIsSaidBesideTheOffsetItsDelayMakes) {
   c.unmodelled.stabilisation_hz = 5;
   c.unmodelled.stabilisation_looks_ahead = false;
   const Diagnosis d = diagnose(simulate_recording(c).rec);
-  std::printf("named [%s] held out %.3f -> %.3f px\n", names(d).c_str(), d.heldout_baseline_rms_px, d.heldout_final_rms_px);
-  for (const std::string& w : d.withheld) std::printf("  withheld: %s\n", w.c_str());
+  show(d);
   EXPECT_EQ(names(d), "time_offset ");
   const NamedEffect* t = rsd::test::find(d, "time_offset");
   ASSERT_NE(t, nullptr);
