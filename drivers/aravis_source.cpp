@@ -103,8 +103,11 @@ void AravisSource::Impl::open_and_configure() {
   configure_region();
   const double fps = configure_frame_rate();
   configure_timing(fps, configure_exposure());
-  create_stream();
+  // Before the stream: Aravis' fake fills frames from the moment its stream has buffers, and a
+  // frame filled with its own ramp before ours was installed was delivered as the first frame
+  // (AravisFake.Rgb8ArrivesExactly, 1 run in 55 under ASan beside four busy loops).
   if (!gige && cfg.fake_fill) install_fake_fill();
+  create_stream();
   mapper.emplace(cfg.clock);
 }
 
@@ -255,7 +258,7 @@ void AravisSource::Impl::fake_fill(ArvBuffer* b, void* self, guint32, guint32, A
   if (!data) return;  // one of our buffers: payload >= f.bytes() was checked at open
   const dsp::ImageView view{data, f.width, f.height,
                             static_cast<std::ptrdiff_t>(dsp::row_bytes(f.format, f.width)), f.format};
-  impl->cfg.fake_fill(view, arv_buffer_get_frame_id(b));
+  impl->cfg.fake_fill(view, arv_buffer_get_frame_id(b), checked_stamp(arv_buffer_get_timestamp(b)));
 }
 
 // Aravis' heartbeat thread: the camera stopped answering the control channel.

@@ -50,8 +50,10 @@ struct AravisConfig {
   // No frame for this long while started: ask the camera whether it is still there.
   std::chrono::milliseconds lost_after{2000};
   // Fake_ cameras only: fills each frame (called on Aravis' stream thread) instead of the
-  // fake's own ramp; for tests and demos that inject known images.
-  std::function<void(const dsp::ImageView& frame, uint64_t frame_id)> fake_fill;
+  // fake's own ramp; for tests and demos that inject known images. `camera_stamp_ns` is the
+  // fake's own stamp of the frame (its clock, CLOCK_REALTIME in Aravis 0.8), the truth a test
+  // holds the published stamps to.
+  std::function<void(const dsp::ImageView& frame, uint64_t frame_id, int64_t camera_stamp_ns)> fake_fill;
 };
 
 struct AravisStats {
