@@ -25,6 +25,10 @@ struct SelectionOptions {
   std::function<void(const std::string& stage, int done, int total)> step;
   // Whether select_effects ends with the blocked-halves check (hold_on_blocked_halves).
   bool blocked_halves = true;
+  // A stabiliser already found (seconds, the smoothing's sigma), by the check after a selection
+  // that never asked (stabiliser_after_selection): every candidate must beat the smoothing from
+  // the first round, as once the Selector has found a gain standing in for one.
+  std::optional<double> stabilised_s;
 };
 
 struct SelectedEffect {

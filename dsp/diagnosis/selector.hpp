@@ -47,7 +47,8 @@ class Selector {
            const SelectionOptions& opt)
       : m_(m), fit_(fit), held_(held), screen_(screen), nominal_(nominal), start_(start), sigma_(sigma), opt_(opt),
         time_halves_(time_halves(m, screen)), rate_halves_(m.has_gyro() ? rate_halves(m, screen, start) : Halves{}),
-        lens_(m.recording().nominal.cam.dist.model), field_(widest_ray_angle(m.recording().nominal.cam)) {}
+        stabilised_s_(opt.stabilised_s), lens_(m.recording().nominal.cam.dist.model),
+        field_(widest_ray_angle(m.recording().nominal.cam)) {}
 
   // Whether adding an effect (poorer -> richer) holds on the blocked halves (blocked_halves.hpp)
   // in time and, in gyro recordings, on the frames of low and of high angular rate (every effect
@@ -252,7 +253,8 @@ class Selector {
   double sigma_;
   const SelectionOptions& opt_;
   Halves time_halves_, rate_halves_;
-  // The smoothing's sigma once a gain has stood in for a stabiliser in this selection.
+  // The smoothing's sigma once a gain has stood in for a stabiliser in this selection, or as
+  // found after a selection before it (SelectionOptions::stabilised_s).
   mutable std::optional<double> stabilised_s_;
   LensModel lens_;  // the nominal lens's family
   double field_;    // the largest angle off the axis the image sees (radians), through the nominal lens

@@ -5,11 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "dsp/diagnosis/diagnosis.hpp"
+#include "dsp/diagnosis/fit.hpp"
+#include "dsp/diagnosis/selector.hpp"
 #include "dsp/diagnosis/stabiliser.hpp"
 #include "dsp/geometry/camera_motion.hpp"
 #include "dsp/sim/recording_simulation.hpp"
@@ -22,6 +25,8 @@ using rsd::test::names;
 using rsd::test::said;
 using rsd::test::shaken;
 using rsd::test::show;
+using rsd::dsp::selection::Selector;
+using rsd::dsp::selection::State;
 
 namespace {
 
@@ -226,6 +231,39 @@ TEST(Stabiliser, TheCheckAfterASelectionSaysAStabiliserAndOnlyThen) {
       EXPECT_NEAR(*sigma, std::sqrt(2.0) / (2 * M_PI * 5), 0.005);
     } else {
       EXPECT_FALSE(sigma.has_value()) << *sigma;
+    }
+  }
+}
+
+// A stabiliser found by the check after a selection is the bar of the selection run again
+// (SelectionOptions::stabilised_s): an effect that gives the motion no gain, which the Selector
+// asks to beat the smoothing only once it has found a stabiliser itself, is asked from the first
+// round. On the 5 Hz stabilised shake a principal point fitted to the nominal model is refused
+// as the smoothing's stand-in with the bar set, and not asked without it.
+TEST(Stabiliser, AStabiliserFoundAfterASelectionIsTheBarOfTheNext) {
+  SimConfig c = shaken(41);
+  c.motion_frequency_hz = 0.7;
+  c.unmodelled.stabilisation_hz = 5;
+  const SimulatedRecording s = simulate_recording(c);
+  const DiagnosisModel m(s.rec);
+  std::vector<int> fit, held, screen;
+  for (int i = 0; i < m.size(); ++i) (i % 2 ? held : fit).push_back(i);
+  for (size_t k = 0; k < fit.size(); k += 4) screen.push_back(fit[k]);
+  const double sigma = 0.5 * std::sqrt(2.0);
+  const ModelParams nominal = nominal_params(s.rec.nominal);
+  const LensModel lens = s.rec.nominal.cam.dist.model;
+  const State poorer{{}, nominal};
+  const State richer{{Effect::PrincipalPoint},
+                     fit_params(m, fit, nominal, mask_of({Effect::PrincipalPoint}, lens), sigma, 20)};
+  for (const std::optional<double> bar : {std::optional<double>{}, std::optional<double>{0.045}}) {
+    SelectionOptions o;
+    o.stabilised_s = bar;
+    const Selector sel(m, fit, held, screen, nominal, nominal, sigma, o);
+    const std::string why = sel.stands_in_for_a_stabiliser_because(poorer, richer, {Effect::PrincipalPoint});
+    if (bar) {
+      EXPECT_NE(why.find("it stands in for a video stabilised in the camera"), std::string::npos) << why;
+    } else {
+      EXPECT_EQ(why, "");
     }
   }
 }
