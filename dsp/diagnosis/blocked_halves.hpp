@@ -51,7 +51,18 @@ struct CovariedHalves {
 };
 CovariedHalves with_covariances(const DiagnosisModel& m, const Halves& h, const ParamMask& free, const HalvesFits& fits);
 
-// Judges the two hypotheses, each fitted on both halves, each fit on the half it did not see.
+// The robust chi-square drop from residuals r0 to r1 plus three standard errors of it, taken
+// from the spread of the drop's shares in the blocks the observations fall in (`block[k]`:
+// observation k's): a drop that one or two blocks' structure decides is within its margin, one
+// that block after block shows is not. Minus infinity with fewer than kMinClusters blocks.
+double block_margined_drop(const std::vector<int>& block, const std::vector<Eigen::Vector2d>& r0,
+                           const std::vector<Eigen::Vector2d>& r1, double sigma);
+
+// Judges the two hypotheses, each fitted on both halves, each fit on the half it did not see:
+// the richer must predict it no worse than the poorer beyond the larger of the noise's margin
+// and block_margined_drop's, on the whole half or its bulk. A fit on a weak half (each value the
+// richer adds measured there with kWeakHalfSigmas times the other half's sigma) is not asked to
+// predict the strong half; it must agree with it (apart_sigmas).
 HalvesVerdict cross_check(const DiagnosisModel& m, const Halves& h, const HalvesFits& poorer, const ParamMask& poorer_free,
                           const HalvesFits& richer, const ParamMask& richer_free, double sigma);
 // The same with the richer fits' covariances known: a selection judges every named effect
@@ -71,5 +82,8 @@ inline constexpr double kHalvesAgreeSigmas = 4.0;
 // hypothesis's: halves that agree on an effect to a tenth of its size agree on the effect.
 inline constexpr double kHalvesSizeFraction = 0.1;
 inline constexpr double kHalvesBlockS = 0.25;
+// A half whose sigma on every value the richer hypothesis adds is at least this many times the
+// other half's (a ninth of its information) shows the effect weakly (issue 34, point 3).
+inline constexpr double kWeakHalfSigmas = 3.0;
 
 }  // namespace rsd::dsp

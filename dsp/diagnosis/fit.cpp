@@ -28,9 +28,13 @@ double huber(double s2) {
 
 }  // namespace
 
+double robust_loss(const Eigen::Vector2d& e, double sigma) {
+  return huber(e.allFinite() ? e.squaredNorm() / (sigma * sigma) : 2 * kFailSigmas * kFailSigmas);
+}
+
 double robust_chi2(const std::vector<Eigen::Vector2d>& r, double sigma) {
   double c = 0;
-  for (const auto& e : r) c += huber(e.allFinite() ? e.squaredNorm() / (sigma * sigma) : 2 * kFailSigmas * kFailSigmas);
+  for (const auto& e : r) c += robust_loss(e, sigma);
   return c;
 }
 

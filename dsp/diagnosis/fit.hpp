@@ -23,6 +23,8 @@ constexpr double kTailSigmas = 20.0;
 // -2 log-likelihood (up to a constant) of 2-D residuals under the robust loss on their length,
 // in sigma units: the quantity the fit minimises, so that BIC compares fits on their own terms.
 double robust_chi2(const std::vector<Eigen::Vector2d>& residuals, double sigma_px);
+// One residual's share of robust_chi2.
+double robust_loss(const Eigen::Vector2d& residual, double sigma_px);
 
 // How much the residuals of one frame move together, as the factor by which it shrinks the
 // information in a chi-square: D = 1 + (n - 1) rho, n the mean inliers per frame, rho the share

@@ -81,8 +81,8 @@ std::optional<ParameterCovariance> covariance(const DiagnosisModel& m, const Eig
     it->second += J.middleRows(2 * k, 2).transpose() * f.r[k];
   }
   const double g = static_cast<double>(score.size());
-  if (cluster_frames > 1 && g < 20) return std::nullopt;
-  if (g >= 20) {  // fewer clusters make the sandwich itself too noisy
+  if (cluster_frames > 1 && g < kMinClusters) return std::nullopt;
+  if (g >= kMinClusters) {
     Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(n, n);
     for (const auto& [rank, sc] : score) meat += sc * sc.transpose();
     c.sandwich = g / (g - 1) * B * meat * B;

@@ -35,6 +35,9 @@ bool held_out(const DiagnosisModel& m, int i, int heldout_every);
 // 0.30% in focal length; the sigma clustered by frame pair said 0.16-0.27%, by blocks of 8 and
 // 15 frames 0.22-0.37% and 0.19-0.38%.
 inline constexpr int kNuisanceClusterFrames = 10;
+// Fewer clusters than this make an estimate from their spread (a sandwich covariance, a drop's
+// standard error) itself too noisy to use.
+inline constexpr int kMinClusters = 20;
 
 // Uncertainties of every named effect's parameters at the fit: numeric Jacobian (central
 // differences) of the fitting-set inlier residuals with respect to all named effects'
