@@ -168,7 +168,7 @@ int weak_half(const DiagnosisModel& m, const CovariedHalves& richer, const Param
   for (const Eigen::VectorXd& g : compared_values(m, richer.fits.on[0], free, added)) {
     const double sa = std::sqrt(ca->variance_of(g)), sb = std::sqrt(cb->variance_of(g));
     any = true;
-    a_weak = a_weak && sa >= kWeakHalfSigmas * sb, b_weak = b_weak && sb >= kWeakHalfSigmas * sa;
+    a_weak = a_weak && sb > 0 && sa >= kWeakHalfSigmas * sb, b_weak = b_weak && sa > 0 && sb >= kWeakHalfSigmas * sa;
   }
   if (!any) return -1;
   return a_weak ? 0 : b_weak ? 1 : -1;
