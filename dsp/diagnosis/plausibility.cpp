@@ -75,7 +75,14 @@ std::string beyond_hardware_because(const ModelParams& p, Effect e, const Diagno
   std::ostringstream o;
   if (e == Effect::FocalLength) {
     const double off = std::max(std::abs(p[Param::Fx] / n.cam.fx - 1), std::abs(p[Param::Fy] / n.cam.fy - 1));
-    if (off > 0.25) return o << "a focal length " << 100 * off << "% from the nominal: a lens is known to within 25%", o.str();
+    if (off > 0.25) {
+      // Said to the user who gave that nominal: where a focal length this far off is the
+      // strongest structure, the nominal is the likelier error (a guessed lens), not the camera.
+      o.precision(3);
+      o << "a focal length of " << p[Param::Fx] << " px, " << 100 * off << "% from the nominal " << n.cam.fx
+        << " px: a lens is known to within 25% (if the nominal is a guess, give the lens's own: rsd-calib import-lens)";
+      return o.str();
+    }
   }
   return "";
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <sstream>
 
 #include "dsp/diagnosis/effects.hpp"
 #include "dsp/diagnosis/plausibility.hpp"
@@ -39,4 +40,26 @@ TEST(Plausibility, AClockDriftPastAThousandPpmCostsAndPastFifteenHundredIsNeverN
   EXPECT_NE(why.find("clock drift of -3755 ppm"), std::string::npos) << why;
   // Another effect's penalty does not count a drift it does not name.
   EXPECT_EQ(implausibility(with_drift(n, -3755), {Effect::TimeOffset}), 0.0);
+}
+
+// A focal length within 25% of the nominal may be named; past it, never, and the reason says the
+// value, the nominal and what to do when the nominal is the guess (the Karma clip's guessed
+// 400 px lens wanted 621 px).
+TEST(Plausibility, AFocalLengthPastAQuarterOfTheNominalIsNeverNamedAndTheNominalIsQuestioned) {
+  const SimulatedRecording sim = simulate_recording(rsd::test::simulation(ObservationKind::Matches, 5, 1.0, 0.5));
+  const DiagnosisModel m(sim.rec);
+  const NominalModel& n = sim.rec.nominal;
+  auto with_focal = [&](double scale) {
+    ModelParams p = nominal_params(n);
+    p[Param::Fx] = scale * n.cam.fx, p[Param::Fy] = scale * n.cam.fy;
+    return p;
+  };
+  EXPECT_EQ(beyond_hardware_because(with_focal(1.24), Effect::FocalLength, m), "");
+  EXPECT_EQ(beyond_hardware_because(with_focal(0.76), Effect::FocalLength, m), "");
+  const std::string why = beyond_hardware_because(with_focal(1.552), Effect::FocalLength, m);
+  std::ostringstream expected;
+  expected.precision(3);
+  expected << "a focal length of " << 1.552 * n.cam.fx << " px, 55.2% from the nominal " << n.cam.fx << " px";
+  EXPECT_EQ(why.rfind(expected.str(), 0), 0u) << why;
+  EXPECT_NE(why.find("rsd-calib import-lens"), std::string::npos) << why;
 }
