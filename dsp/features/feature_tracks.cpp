@@ -5,8 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
+
+#include <Eigen/Dense>
 
 namespace rsd::dsp {
 
@@ -33,12 +36,54 @@ double ncc(const cv::Mat& a, const cv::Point2f& pa, const cv::Mat& b, const cv::
   return den > 0 ? A.dot(B) / den : 0.0;
 }
 
+// What LK's window about p holds, from the gradient g at each of its pixels (G = g g^T, M the
+// sum of G over the window, o a pixel's offset from p):
+// - ratio: M's smaller eigenvalue over its larger; near 0 where the window holds one straight
+//   edge, along which LK's position is free;
+// - turn_offset: how far from p lies the point LK's translation follows when the window turns in
+//   the image. A turn by theta moves each offset by theta J o (J the quarter turn), and LK's least
+//   squares then moves its estimate by -theta M^-1 sum G J o: by theta J d, d = -J M^-1 sum G J o,
+//   as if the window turned about p + d. Zero for a structure centred on p (an X-corner's saddle,
+//   a blob); half a window where p sits on an edge ending in a corner at the window's rim, which
+//   LK follows.
+struct WindowShape {
+  double ratio = 0, turn_offset = std::numeric_limits<double>::infinity();
+};
+WindowShape window_shape(const cv::Mat& img, const cv::Point2f& p, int win) {
+  cv::Mat A, gx, gy;
+  cv::getRectSubPix(img, cv::Size(win + 2, win + 2), p, A, CV_32F);
+  cv::Sobel(A, gx, CV_32F, 1, 0, 3);
+  cv::Sobel(A, gy, CV_32F, 0, 1, 3);
+  Eigen::Matrix2d M = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d v = Eigen::Vector2d::Zero();
+  const double half = 0.5 * (win - 1);
+  for (int y = 0; y < win; ++y)
+    for (int x = 0; x < win; ++x) {
+      const Eigen::Vector2d g(gx.at<float>(y + 1, x + 1), gy.at<float>(y + 1, x + 1));
+      const Eigen::Matrix2d G = g * g.transpose();
+      M += G;
+      v += G * Eigen::Vector2d(-(y - half), x - half);  // G J o
+    }
+  WindowShape w;
+  const double tr = M.trace(), det = M.determinant();
+  if (!(tr > 0 && det > 0)) return w;
+  const double dev = std::sqrt(std::max(0.0, 0.25 * tr * tr - det));
+  w.ratio = (0.5 * tr - dev) / (0.5 * tr + dev);
+  w.turn_offset = M.ldlt().solve(v).norm();  // |J M^-1 v| = |M^-1 v|
+  if (!std::isfinite(w.turn_offset)) w.turn_offset = std::numeric_limits<double>::infinity();
+  return w;
+}
+
 }  // namespace
 
 FeatureTracker::FeatureTracker(const TrackOptions& o) : o_(o) {
   if (o.grid_cols < 1 || o.grid_rows < 1 || o.max_per_pair < 1 || o.window_px < 3 || o.pyramid_levels < 0 || o.max_iterations < 1 ||
       o.detect_level < 0 || o.detect_level > o.pyramid_levels)
     throw std::invalid_argument("feature tracker: grid, cap and window must be positive");
+  if (!(o.min_corner_ratio >= 0 && o.min_corner_ratio <= 1))
+    throw std::invalid_argument("feature tracker: min_corner_ratio must lie in [0, 1] (the structure tensor's eigenvalue ratio)");
+  if (!(o.max_turn_offset > 0))
+    throw std::invalid_argument("feature tracker: max_turn_offset must be positive (a share of the window; infinite: off)");
 }
 
 void FeatureTracker::restart() {
@@ -72,7 +117,12 @@ std::vector<cv::Point2f> FeatureTracker::corners(const std::vector<cv::Mat>& pyr
   std::vector<cv::Point2f> kept = have;
   for (cv::Point2f p : all) {
     p = p * scale + cv::Point2f(shift, shift);
-    if (count[cell_of(p, size, o_)]++ < per_cell) kept.push_back(p);
+    int& in_cell = count[cell_of(p, size, o_)];
+    if (in_cell >= per_cell) continue;
+    const WindowShape w = window_shape(pyr[0], p, o_.window_px);
+    if (w.ratio < o_.min_corner_ratio || w.turn_offset > o_.max_turn_offset * o_.window_px) continue;
+    ++in_cell;
+    kept.push_back(p);
   }
   return kept;
 }

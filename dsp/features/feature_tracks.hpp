@@ -1,5 +1,6 @@
 // Feature matches between consecutive frames for recording-v1's matches kind and the online
-// estimator: Shi-Tomasi corners spread over the image by grid bucketing, tracked with pyramidal
+// estimator: Shi-Tomasi corners spread over the image by grid bucketing (each a corner at the
+// tracking window's scale too, not only at the detector's), tracked with pyramidal
 // Lucas-Kanade and kept only when tracking back from the second frame lands where it started
 // (forward-backward check) and the patches around both ends correlate (LK can settle
 // consistently both ways on an unrelated texture, e.g. where something moved in front). No
@@ -10,6 +11,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include <limits>
 #include <vector>
 
 namespace rsd::dsp {
@@ -20,6 +22,22 @@ struct TrackOptions {
   double quality = 0.01;         // corner strength relative to the image's strongest corner
   double min_distance_px = 8;    // between detected corners
   int window_px = 21;            // LK window (odd)
+  // A corner is tracked only when its window holds structure in two directions: the structure
+  // tensor's smaller eigenvalue over its larger, summed over the LK window, at least this. The
+  // detector's 3x3 corner measure fires on the steps of a rendered or aliased slanted edge, where
+  // LK's window sees one edge and slides along it: 40% of the matches of rsd-sim's checkerboard
+  // scene lay 0.5-15 px along an edge, through the round trip and the correlation (1.2% with the
+  // test). 0.2 took too many of a real drone clip's matches (docs/extract.md).
+  double min_corner_ratio = 0.1;
+  // With a finite value, a corner is tracked only when the point LK's window follows as the
+  // picture turns in the image lies within this share of the window from it (window_shape in
+  // feature_tracks.cpp): where a window's structure sits off its centre (an edge ending in a
+  // corner at its rim), LK reports the structure's motion, and a turn by theta errs by theta
+  // times that offset. On rsd-sim's checkerboard scene such matches make the pictures turn 0.13%
+  // less than the gyro about the optical axis (0.99994 with 0.25); off by default, because
+  // taking them out cost the diagnosis elsewhere: at 0.25 a parallax scene named a focal length
+  // for its translation, at 0.15 a real drone clip's moved clock was lost (docs/extract.md).
+  double max_turn_offset = std::numeric_limits<double>::infinity();
   int pyramid_levels = 3;
   int max_iterations = 40;       // LK's per level (it stops sooner once a step is below 0.001 px)
   double max_fb_error_px = 0.25; // forward-backward round trip; more is a tracking failure

@@ -163,7 +163,7 @@ TEST(ExtractDiagnose, MatchesFromFeatureTracksNameTheRollingShutter) {
   const dsp::Recording rec = formats::read_recording(dir + "/rec");
   ASSERT_EQ(rec.kind, dsp::ObservationKind::Matches);
   EXPECT_EQ(rec.motion, dsp::MotionKind::Gyro);
-  EXPECT_GE(rec.matches.size(), 28u * 150);  // 29 frames (the last lacks motion to its end), measured ~200 per pair
+  EXPECT_GE(rec.matches.size(), 28u * 150);  // 29 frames (the last lacks motion to its end), measured 183 per pair
   for (const auto& m : rec.matches) ASSERT_EQ(m.frame_b, m.frame_a + 1);  // consecutive frames only
   must_run(std::string(RSD_DIAGNOSE) + " " + dir + "/rec --json " + dir + "/diagnosis.json", dir + "/diagnose.txt");
   const Verdict v = read_verdict(dir + "/diagnosis.json");
