@@ -159,7 +159,12 @@ double apart(const DiagnosisModel& m, const CovariedHalves& richer, const ModelP
 
 // The half (0: a, 1: b) that measures the values `added` adds far less well than the other:
 // every compared value's sigma there at least kWeakHalfSigmas times the other half's; -1 if
-// neither, or where a half cannot measure them at all (apart gives it no say either).
+// neither, or where a half cannot measure them at all (apart gives it no say either). A weak
+// half's own fit is loose and mispredicts the strong half by what that looseness allows, not for
+// what the effect is (on the Karma clip with its nominal focal length 35% short, the flight's
+// half put the focal length at 800 +- 136 px, its bound, the pan's at 465 +- 12, and the
+// flight's value cost the pan's half 2 813): it is not asked to predict the strong half
+// (cross_check); its say is whether the two values agree within their sigmas (apart).
 int weak_half(const DiagnosisModel& m, const CovariedHalves& richer, const ParamMask& free_mask, const ParamMask& added) {
   const auto &ca = richer.cov[0], &cb = richer.cov[1];
   if (!ca || !cb) return -1;
@@ -210,12 +215,6 @@ Halves rate_halves(const DiagnosisModel& m, const std::vector<int>& idx, const M
 // S = sum |d_i|^2 / sigma^2 its signal energy on the half, the drop is S + 2 sum r_i.d_i /
 // sigma^2 with standard deviation 2 sqrt(S) for independent noise; the margin is 3 sqrt(S). A
 // stand-in's wrong half costs about S itself, far past the margin once S is more than 9.
-// The weak half is asked that much, not the strong one: where a half measures the effect far
-// less well than the other (weak_half), its own fit is loose and mispredicts the strong half by
-// what that looseness allows, not for what the effect is (on the Karma clip with its nominal
-// focal length 35% short, the flight's half put the focal length at 800 +- 136 px, its bound,
-// the pan's at 465 +- 12, and the flight's value cost the pan's half 2 813); that half's say is
-// whether the two values agree within their sigmas (apart).
 HalvesFits fit_halves(const DiagnosisModel& m, const Halves& h, const Hypothesis& hyp, double sigma, int iterations) {
   return {{fit_params(m, h.a, hyp.params, hyp.free, sigma, iterations),
            fit_params(m, h.b, hyp.params, hyp.free, sigma, iterations)}};

@@ -56,6 +56,24 @@ dsp::Scene wall(unsigned seed) {
   return s;
 }
 
+// A checkerboard of 12 x 9 squares 0.1 m wide at 1 m (50 px squares), turned 0.3 rad in the
+// image so that its edges are slanted, as a hand-held camera sees them.
+dsp::Scene board() {
+  dsp::Scene s;
+  s.planes = {dsp::fronto_parallel_checkerboard(1.0, 12, 9, 0.1)};
+  s.background = Eigen::Vector3f::Constant(0.5f);
+  return s;
+}
+const Eigen::Affine3d kBoardSlanted = pose(Eigen::Vector3d(0, 0, 0.3), Eigen::Vector3d::Zero());
+
+// Where the camera turned by `turn` (a rotation vector) moves each pixel: K R K^-1.
+Eigen::Matrix3d turn_homography(const Eigen::Vector3d& turn) {
+  const dsp::CameraModel cam = camera();
+  Eigen::Matrix3d K;
+  K << cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1;
+  return K * dsp::exp_so3(turn) * K.inverse();
+}
+
 double percentile(std::vector<double> v, double p) {
   std::sort(v.begin(), v.end());
   return v[static_cast<size_t>(p * (v.size() - 1))];
@@ -93,21 +111,13 @@ TEST(FeatureTracks, RecoverAKnownSubPixelShiftAcrossTheImage) {
 // the correlation and lie up to pixels along their edge. The window's own corner test keeps the
 // corners.
 TEST(FeatureTracks, CornersOnAStraightEdgeAreNotTracked) {
-  dsp::Scene board;
-  board.planes = {dsp::fronto_parallel_checkerboard(1.0, 12, 9, 0.1)};
-  board.background = Eigen::Vector3f::Constant(0.5f);
-  const Eigen::Affine3d slanted = pose(Eigen::Vector3d(0, 0, 0.3), Eigen::Vector3d::Zero());
   const Eigen::Vector3d turn(0.008, -0.006, 0.02);
-  const cv::Mat a = render(board, slanted, 1.0, 1, 2);
-  const cv::Mat b = render(board, pose(turn, Eigen::Vector3d::Zero()) * slanted, 1.0, 2, 2);
-  const dsp::CameraModel cam = camera();
-  Eigen::Matrix3d K;
-  K << cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1;
-  const Eigen::Matrix3d H = K * dsp::exp_so3(turn) * K.inverse();
+  const cv::Mat a = render(board(), kBoardSlanted, 1.0, 1, 2);
+  const cv::Mat b = render(board(), pose(turn, Eigen::Vector3d::Zero()) * kBoardSlanted, 1.0, 2, 2);
+  const Eigen::Matrix3d H = turn_homography(turn);
   auto errors = [&](double min_ratio) {
     dsp::TrackOptions o;
     o.min_corner_ratio = min_ratio;
-
     const dsp::PairTracks t = dsp::track_pair(a, b, o);
     std::vector<double> err;
     for (size_t i = 0; i < t.a.size(); ++i) err.push_back((t.b[i] - (H * t.a[i].homogeneous()).hnormalized()).norm());
@@ -131,17 +141,11 @@ TEST(FeatureTracks, CornersOnAStraightEdgeAreNotTracked) {
 // (off by default: docs/extract.md) keeps them out within a quarter of the window; the pure turn
 // is then still 0.14% short (0.03% within 0.15 of the window).
 TEST(FeatureTracks, CornersFollowingAStructureOffTheirCentreTurnShort) {
-  dsp::Scene board;
-  board.planes = {dsp::fronto_parallel_checkerboard(1.0, 12, 9, 0.1)};
-  board.background = Eigen::Vector3f::Constant(0.5f);
   const dsp::CameraModel cam = camera();
-  Eigen::Matrix3d K;
-  K << cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1;
-  const Eigen::Affine3d slanted = pose(Eigen::Vector3d(0, 0, 0.3), Eigen::Vector3d::Zero());
+  const cv::Mat a = render(board(), kBoardSlanted, 1.0, 1, 2);
   for (const Eigen::Vector3d& turn : {Eigen::Vector3d(0, 0, 0.02), Eigen::Vector3d(0.008, -0.006, 0.02)}) {
-    const cv::Mat a = render(board, slanted, 1.0, 1, 2);
-    const cv::Mat b = render(board, pose(turn, Eigen::Vector3d::Zero()) * slanted, 1.0, 2, 2);
-    const Eigen::Matrix3d H = K * dsp::exp_so3(turn) * K.inverse();
+    const cv::Mat b = render(board(), pose(turn, Eigen::Vector3d::Zero()) * kBoardSlanted, 1.0, 2, 2);
+    const Eigen::Matrix3d H = turn_homography(turn);
     auto extra_turn = [&](double max_offset) {
       dsp::TrackOptions o;
       o.max_turn_offset = max_offset;
