@@ -1,15 +1,14 @@
 #include "dsp/features/feature_tracks.hpp"
 
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 #include <string>
 
-#include <Eigen/Dense>
 
 namespace rsd::dsp {
 
@@ -36,42 +35,26 @@ double ncc(const cv::Mat& a, const cv::Point2f& pa, const cv::Mat& b, const cv::
   return den > 0 ? A.dot(B) / den : 0.0;
 }
 
-// What LK's window about p holds, from the gradient g at each of its pixels (G = g g^T, M the
-// sum of G over the window, o a pixel's offset from p):
-// - ratio: M's smaller eigenvalue over its larger; near 0 where the window holds one straight
-//   edge, along which LK's position is free;
-// - turn_offset: how far from p lies the point LK's translation follows when the window turns in
-//   the image. A turn by theta moves each offset by theta J o (J the quarter turn), and LK's least
-//   squares then moves its estimate by -theta M^-1 sum G J o: by theta J d, d = -J M^-1 sum G J o,
-//   as if the window turned about p + d. Zero for a structure centred on p (an X-corner's saddle,
-//   a blob); half a window where p sits on an edge ending in a corner at the window's rim, which
-//   LK follows.
-struct WindowShape {
-  double ratio = 0, turn_offset = std::numeric_limits<double>::infinity();
-};
-WindowShape window_shape(const cv::Mat& img, const cv::Point2f& p, int win) {
+// The structure tensor summed over LK's window about p (the gradient's outer product at each of
+// its pixels): its smaller eigenvalue over its larger, near 0 where the window holds one straight
+// edge, along which LK's position is free.
+double corner_ratio(const cv::Mat& img, const cv::Point2f& p, int win) {
   cv::Mat A, gx, gy;
   cv::getRectSubPix(img, cv::Size(win + 2, win + 2), p, A, CV_32F);
   cv::Sobel(A, gx, CV_32F, 1, 0, 3);
   cv::Sobel(A, gy, CV_32F, 0, 1, 3);
-  Eigen::Matrix2d M = Eigen::Matrix2d::Zero();
-  Eigen::Vector2d v = Eigen::Vector2d::Zero();
-  const double half = 0.5 * (win - 1);
-  for (int y = 0; y < win; ++y)
-    for (int x = 0; x < win; ++x) {
-      const Eigen::Vector2d g(gx.at<float>(y + 1, x + 1), gy.at<float>(y + 1, x + 1));
-      const Eigen::Matrix2d G = g * g.transpose();
-      M += G;
-      v += G * Eigen::Vector2d(-(y - half), x - half);  // G J o
-    }
-  WindowShape w;
-  const double tr = M.trace(), det = M.determinant();
-  if (!(tr > 0 && det > 0)) return w;
+  const cv::Rect in(1, 1, win, win);
+  const double xx = gx(in).dot(gx(in)), yy = gy(in).dot(gy(in)), xy = gx(in).dot(gy(in));
+  const double tr = xx + yy, det = xx * yy - xy * xy;
+  if (!(tr > 0 && det > 0)) return 0;
   const double dev = std::sqrt(std::max(0.0, 0.25 * tr * tr - det));
-  w.ratio = (0.5 * tr - dev) / (0.5 * tr + dev);
-  w.turn_offset = M.ldlt().solve(v).norm();  // |J M^-1 v| = |M^-1 v|
-  if (!std::isfinite(w.turn_offset)) w.turn_offset = std::numeric_limits<double>::infinity();
-  return w;
+  return (0.5 * tr - dev) / (0.5 * tr + dev);
+}
+
+// p through the homography h (3x3, double).
+cv::Point2f mapped(const cv::Mat& h, const cv::Point2f& p) {
+  const cv::Vec3d q = cv::Matx33d(h) * cv::Vec3d(p.x, p.y, 1);
+  return {static_cast<float>(q[0] / q[2]), static_cast<float>(q[1] / q[2])};
 }
 
 }  // namespace
@@ -82,8 +65,8 @@ FeatureTracker::FeatureTracker(const TrackOptions& o) : o_(o) {
     throw std::invalid_argument("feature tracker: grid, cap and window must be positive");
   if (!(o.min_corner_ratio >= 0 && o.min_corner_ratio <= 1))
     throw std::invalid_argument("feature tracker: min_corner_ratio must lie in [0, 1] (the structure tensor's eigenvalue ratio)");
-  if (!(o.max_turn_offset > 0))
-    throw std::invalid_argument("feature tracker: max_turn_offset must be positive (a share of the window; infinite: off)");
+  if (!(o.align_above_px >= 0))
+    throw std::invalid_argument("feature tracker: align_above_px must be at least 0 (pixels; infinite: never)");
 }
 
 void FeatureTracker::restart() {
@@ -119,12 +102,55 @@ std::vector<cv::Point2f> FeatureTracker::corners(const std::vector<cv::Mat>& pyr
     p = p * scale + cv::Point2f(shift, shift);
     int& in_cell = count[cell_of(p, size, o_)];
     if (in_cell >= per_cell) continue;
-    const WindowShape w = window_shape(pyr[0], p, o_.window_px);
-    if (w.ratio < o_.min_corner_ratio || w.turn_offset > o_.max_turn_offset * o_.window_px) continue;
+    if (corner_ratio(pyr[0], p, o_.window_px) < o_.min_corner_ratio) continue;
     ++in_cell;
     kept.push_back(p);
   }
   return kept;
+}
+
+// How the second picture is turned, zoomed and tilted against the first: the homography H
+// (first picture's pixels to the second's) fitted robustly to a coarse tracking of at most 64 of
+// the corners, when it moves the picture's corners by align_above_px or more beyond the shift of
+// its centre; none where too few corners track or most do not agree on one H. The coarse tracking needs no precision: H only
+// has to leave LK's windows a turn small enough to neglect.
+std::optional<cv::Mat> FeatureTracker::turn_between(const std::vector<cv::Point2f>& pa) const {
+  constexpr size_t kCoarse = 64;
+  constexpr int kEnough = 12;
+  if (pa.size() < kEnough) return std::nullopt;
+  std::vector<cv::Point2f> from, to;
+  const size_t stride = std::max<size_t>(1, pa.size() / kCoarse);
+  for (size_t i = 0; i < pa.size(); i += stride) from.push_back(pa[i]);
+  std::vector<uchar> st;
+  std::vector<float> err;
+  const cv::TermCriteria coarse(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, o_.max_iterations, 0.01);
+  const cv::Size win(o_.window_px, o_.window_px);
+  cv::calcOpticalFlowPyrLK(prev_, cur_, from, to, st, err, win, o_.pyramid_levels, coarse);
+  std::vector<cv::Point2f> f, t;
+  for (size_t i = 0; i < from.size(); ++i)
+    if (st[i]) f.push_back(from[i]), t.push_back(to[i]);
+  if (f.size() < kEnough) return std::nullopt;
+  std::vector<uchar> inliers;
+  cv::Mat h = cv::findHomography(f, t, cv::RANSAC, 1.0, inliers);
+  // Where most of the corners do not move as one picture (a near scene's parallax, something
+  // moving across the view), no homography says how the windows turn: they are tracked as they are.
+  const int agree = h.empty() ? 0 : cv::countNonZero(inliers);
+  if (agree < kEnough || 2 * static_cast<size_t>(agree) < f.size()) return std::nullopt;
+  const cv::Size size = prev_[0].size();
+  const cv::Point2f centre(0.5f * (size.width - 1), 0.5f * (size.height - 1));
+  const cv::Point2f shift = mapped(h, centre) - centre;
+  double moved = 0;
+  for (const cv::Point2f c : {cv::Point2f(0, 0), cv::Point2f(size.width - 1, 0), cv::Point2f(0, size.height - 1),
+                              cv::Point2f(size.width - 1, size.height - 1)}) {
+    const cv::Point2f d = mapped(h, c) - c - shift;
+    moved = std::max(moved, static_cast<double>(std::hypot(d.x, d.y)));
+  }
+  // A picture turned by a quarter of its size is no frame pair LK follows; such an H is wrong.
+  if (!(moved >= o_.align_above_px && moved < 0.25 * std::max(size.width, size.height))) return std::nullopt;
+  // LK follows a shift without error: H's is kept to whole pixels at the picture's centre, so that
+  // there the picture is not resampled (interpolation adds to the matches' noise).
+  const cv::Matx33d whole(1, 0, std::round(shift.x) - shift.x, 0, 1, std::round(shift.y) - shift.y, 0, 0, 1);
+  return cv::Mat(whole * cv::Matx33d(h));
 }
 
 PairTracks FeatureTracker::next(const cv::Mat& frame) {
@@ -146,6 +172,16 @@ PairTracks FeatureTracker::next(const cv::Mat& frame) {
   const cv::Mat& b = cur_[0];
   const std::vector<cv::Point2f> pa = o_.carry ? carried_ : corners(prev_, {});
   out.detected = static_cast<int>(pa.size());
+  // Tracked into the second picture as it is, or into it turned back onto the first
+  // (align_above_px): the turned picture shows at q what the second shows at H q.
+  const std::optional<cv::Mat> turn = std::isinf(o_.align_above_px) ? std::nullopt : turn_between(pa);
+  if (turn) {
+    cv::warpPerspective(b, aligned_image_, *turn, b.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
+    cv::buildOpticalFlowPyramid(aligned_image_, aligned_, win, o_.pyramid_levels, true, cv::BORDER_REFLECT_101,
+                                cv::BORDER_CONSTANT, false);
+  }
+  const std::vector<cv::Mat>& second = turn ? aligned_ : cur_;
+  const cv::Mat& b2 = second[0];
   std::vector<cv::Point2f> kept;
   if (!pa.empty()) {
     // Tight convergence: the matches feed a sub-pixel model fit (~0.1 px matters).
@@ -153,10 +189,12 @@ PairTracks FeatureTracker::next(const cv::Mat& frame) {
     std::vector<cv::Point2f> pb, back;
     std::vector<uchar> st_f, st_b;
     std::vector<float> err;
-    cv::calcOpticalFlowPyrLK(prev_, cur_, pa, pb, st_f, err, win, o_.pyramid_levels, crit);
-    cv::calcOpticalFlowPyrLK(cur_, prev_, pb, back, st_b, err, win, o_.pyramid_levels, crit);
+    cv::calcOpticalFlowPyrLK(prev_, second, pa, pb, st_f, err, win, o_.pyramid_levels, crit);
+    cv::calcOpticalFlowPyrLK(second, prev_, pb, back, st_b, err, win, o_.pyramid_levels, crit);
     for (size_t i = 0; i < pa.size() && static_cast<int>(out.a.size()) < o_.max_per_pair; ++i) {
-      if (!st_f[i] || !st_b[i] || !inside(pb[i], b, o_.border_px) || !inside(pa[i], a, o_.border_px)) {
+      const cv::Point2f in_b = turn ? mapped(*turn, pb[i]) : pb[i];
+      if (!st_f[i] || !st_b[i] || !inside(in_b, b, o_.border_px) || !inside(pb[i], b2, o_.border_px) ||
+          !inside(pa[i], a, o_.border_px)) {
         ++out.lost;
         continue;
       }
@@ -165,13 +203,13 @@ PairTracks FeatureTracker::next(const cv::Mat& frame) {
         ++out.fb_rejected;
         continue;
       }
-      if (ncc(a, pa[i], b, pb[i], o_.window_px) < o_.min_ncc) {
+      if (ncc(a, pa[i], b2, pb[i], o_.window_px) < o_.min_ncc) {
         ++out.ncc_rejected;
         continue;
       }
       out.a.emplace_back(pa[i].x, pa[i].y);
-      out.b.emplace_back(pb[i].x, pb[i].y);
-      kept.push_back(pb[i]);
+      out.b.emplace_back(in_b.x, in_b.y);
+      kept.push_back(in_b);
     }
   }
   if (o_.carry)

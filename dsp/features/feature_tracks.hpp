@@ -11,7 +11,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
-#include <limits>
+#include <optional>
 #include <vector>
 
 namespace rsd::dsp {
@@ -29,15 +29,15 @@ struct TrackOptions {
   // scene lay 0.5-15 px along an edge, through the round trip and the correlation (1.2% with the
   // test). 0.2 took too many of a real drone clip's matches (docs/extract.md).
   double min_corner_ratio = 0.1;
-  // With a finite value, a corner is tracked only when the point LK's window follows as the
-  // picture turns in the image lies within this share of the window from it (window_shape in
-  // feature_tracks.cpp): where a window's structure sits off its centre (an edge ending in a
-  // corner at its rim), LK reports the structure's motion, and a turn by theta errs by theta
-  // times that offset. On rsd-sim's checkerboard scene such matches make the pictures turn 0.13%
-  // less than the gyro about the optical axis (0.99994 with 0.25); off by default, because
-  // taking them out cost the diagnosis elsewhere: at 0.25 a parallax scene named a focal length
-  // for its translation, at 0.15 a real drone clip's moved clock was lost (docs/extract.md).
-  double max_turn_offset = std::numeric_limits<double>::infinity();
+  // LK follows a translation: where the picture turns between the frames, a window whose
+  // structure sits off its centre (an edge ending in a corner at its rim) follows the structure
+  // and errs by the turn times that offset, which made rsd-sim's rendered pictures turn 0.13% less
+  // than the gyro about the optical axis (docs/extract.md).
+  // So when a first, coarse tracking of a few corners shows the picture's corners moving by at
+  // least this (pixels) beyond its centre's shift, the second picture is turned back onto the
+  // first by the homography fitted to them before the tracking proper, and the matches mapped
+  // back; 0 always, infinity never.
+  double align_above_px = 1.0;
   int pyramid_levels = 3;
   int max_iterations = 40;       // LK's per level (it stops sooner once a step is below 0.001 px)
   double max_fb_error_px = 0.25; // forward-backward round trip; more is a tracking failure
@@ -79,7 +79,10 @@ class FeatureTracker {
  private:
   std::vector<cv::Point2f> corners(const std::vector<cv::Mat>& pyr, const std::vector<cv::Point2f>& have) const;
   TrackOptions o_;
+  std::optional<cv::Mat> turn_between(const std::vector<cv::Point2f>& pa) const;
   std::vector<cv::Mat> prev_, cur_;      // pyramids with derivatives (cv::buildOpticalFlowPyramid)
+  std::vector<cv::Mat> aligned_;         // the second frame's, turned back onto the first's (align_above_px)
+  cv::Mat aligned_image_;
   std::vector<cv::Point2f> carried_;     // features of the frame held, to track into the next
   bool carried_detected_ = false;        // carried_ came from detection, not from tracking
 };

@@ -31,12 +31,12 @@ namespace {
 // `sim`'s recording with the matches of its held-out frames (every fifth frame_a, as the
 // diagnosis holds them out) taken from `other` instead: frames no fit sees, made with other
 // physics.
-void hold_out_other_physics(SimulatedRecording& sim, const SimulatedRecording& other) {
+void hold_out_other_physics(SimulatedRecording& sim, const SimulatedRecording& other, int from_frame = 0) {
   std::set<int> held_frames;
   {
     const DiagnosisModel m(sim.rec);
     for (int i = 0; i < m.size(); ++i)
-      if (held_out(m, i, kHeldoutEvery)) held_frames.insert(sim.rec.matches[i].frame_a);
+      if (held_out(m, i, kHeldoutEvery) && sim.rec.matches[i].frame_a >= from_frame) held_frames.insert(sim.rec.matches[i].frame_a);
   }
   ASSERT_GT(held_frames.size(), 10u);
   std::vector<Match> mixed;
@@ -45,6 +45,17 @@ void hold_out_other_physics(SimulatedRecording& sim, const SimulatedRecording& o
   for (const Match& mt : other.rec.matches)
     if (held_frames.count(mt.frame_a)) mixed.push_back(mt);
   sim.rec.matches = mixed;
+}
+
+// Diagnosed, nothing is named, the fitted model is the nominal one, and the remainder says why
+// (`why`, a part of the reason).
+void expect_withdrawn_saying(const SimulatedRecording& sim, const std::string& why) {
+  const Diagnosis d = diagnose(sim.rec);
+  show(d);
+  EXPECT_EQ(names(d), "");
+  EXPECT_TRUE(said(d, why)) << "the remainder must say why: " << why;
+  EXPECT_EQ(d.fitted[Param::TimeOffset], sim.rec.nominal.time.time_offset_s);
+  EXPECT_EQ(d.heldout_final_rms_px, d.heldout_baseline_rms_px);
 }
 
 }  // namespace
@@ -76,12 +87,26 @@ TEST(DiagnosisInvariants, EffectsThatPredictTheHeldOutFramesWorseAreWithdrawn) {
   b.effects.time_offset_s = -0.008;
   SimulatedRecording sim = simulate_recording(a);
   hold_out_other_physics(sim, simulate_recording(b));
-  const Diagnosis d = diagnose(sim.rec);
-  show(d);
-  EXPECT_EQ(names(d), "");
-  EXPECT_TRUE(said(d, "the held-out frames worse")) << "the remainder must say why";
-  EXPECT_EQ(d.fitted[Param::TimeOffset], sim.rec.nominal.time.time_offset_s);
-  EXPECT_EQ(d.heldout_final_rms_px, d.heldout_baseline_rms_px);
+  expect_withdrawn_saying(sim, "the held-out frames worse");
+}
+
+// Invariant (a) half by half: the fitting frames and the held-out frames of the first half in
+// time hide a clock offset of 8 ms, the held-out frames of the second half one of 3 ms. The offset
+// fitted predicts the held-out frames better in all (the first half's gain outweighs the second's
+// loss) but the second half worse than the nominal model: it describes part of the recording
+// only, nothing is named, and the remainder says which half.
+TEST(DiagnosisInvariants, EffectsThatPredictOneHalfOfTheHeldOutFramesWorseAreWithdrawn) {
+  RSD_SKIP_LONG_IN_SLOW_BUILD("DiagnosisMatches.NoEffectNamesNothingDespiteOutliersAndIrregularGyro (the same fits and checks)");
+  SimConfig a = shaken(34), b = shaken(34);
+  a.effects.time_offset_s = 0.008;
+  b.effects.time_offset_s = 0.003;
+  SimulatedRecording sim = simulate_recording(a);
+  std::vector<int> frames;
+  for (const Match& mt : sim.rec.matches) frames.push_back(mt.frame_a);
+  std::nth_element(frames.begin(), frames.begin() + frames.size() / 2, frames.end());
+  hold_out_other_physics(sim, simulate_recording(b), frames[frames.size() / 2]);
+  // Measured: the second half 0.82 -> 0.98 px, 6.9 standard errors over its 12 frame pairs.
+  expect_withdrawn_saying(sim, "second half in time worse");
 }
 
 // Invariant (c): each named effect, given the others, improves the held-out prediction on its
