@@ -1,7 +1,9 @@
 // Feature matches between consecutive frames for recording-v1's matches kind and the online
 // estimator: Shi-Tomasi corners spread over the image by grid bucketing (each a corner at the
 // tracking window's scale too, not only at the detector's), tracked with pyramidal
-// Lucas-Kanade and kept only when tracking back from the second frame lands where it started
+// Lucas-Kanade into the second frame turned back onto the first (a homography from a coarse
+// tracking, so that LK's windows do not turn; no match is judged by it), and kept only when
+// tracking back from the second frame lands where it started
 // (forward-backward check) and the patches around both ends correlate (LK can settle
 // consistently both ways on an unrelated texture, e.g. where something moved in front). No
 // geometric outlier rejection: the diagnosis is robust, and a model-based filter would throw
@@ -32,11 +34,11 @@ struct TrackOptions {
   // LK follows a translation: where the picture turns between the frames, a window whose
   // structure sits off its centre (an edge ending in a corner at its rim) follows the structure
   // and errs by the turn times that offset, which made rsd-sim's rendered pictures turn 0.13% less
-  // than the gyro about the optical axis (docs/extract.md).
-  // So when a first, coarse tracking of a few corners shows the picture's corners moving by at
-  // least this (pixels) beyond its centre's shift, the second picture is turned back onto the
-  // first by the homography fitted to them before the tracking proper, and the matches mapped
-  // back; 0 always, infinity never.
+  // than the gyro about the optical axis (docs/extract.md). So when a first, coarse tracking of
+  // a few corners shows the picture's corners moving by at least this (pixels) beyond its
+  // centre's shift, and most corners agree on one homography, the second picture is turned back
+  // onto the first by it before the tracking proper, and the matches mapped back; 0 always,
+  // infinity never.
   double align_above_px = 1.0;
   int pyramid_levels = 3;
   int max_iterations = 40;       // LK's per level (it stops sooner once a step is below 0.001 px)
