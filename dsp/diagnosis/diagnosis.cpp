@@ -1,7 +1,6 @@
 #include "dsp/diagnosis/diagnosis.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <functional>
 #include <optional>
@@ -9,10 +8,10 @@
 #include <utility>
 
 #include "dsp/diagnosis/blocked_halves.hpp"
+#include "dsp/diagnosis/heldout_check.hpp"
 #include "dsp/diagnosis/observation_choice.hpp"
 #include "dsp/diagnosis/offset_search.hpp"
 #include "dsp/diagnosis/select.hpp"
-#include "dsp/diagnosis/selector.hpp"
 #include "dsp/diagnosis/stabiliser.hpp"
 
 namespace rsd::dsp {
@@ -304,67 +303,6 @@ Selection select_with_parallax(const DiagnosisModel& m, const ObservationSets& s
   return *plain;
 }
 
-// The held-out observations split at their median frame time (the blocked halves' split in
-// time), each half's RMS under the nominal and the final model.
-void heldout_halves(const DiagnosisModel& m, const ModelParams& nominal, const std::vector<int>& held, Diagnosis& d) {
-  const Halves split = time_halves(m, held);
-  const std::array<const std::vector<int>*, 2> half = {&split.a, &split.b};
-  for (int h = 0; h < 2; ++h) {
-    if (half[h]->empty()) continue;
-    d.heldout_halves[h] = {robust_stats(m.residuals(nominal, *half[h])).rms_px,
-                           robust_stats(m.residuals(d.fitted, *half[h])).rms_px, static_cast<int>(half[h]->size())};
-  }
-}
-
-// Why the final model `fitted` predicts one half in time of the held-out observations worse than
-// the nominal model beyond that half's uncertainty: by over kWorseSigmas standard errors of the
-// change, paired over its frame pairs ("" when neither). Effects that do describe one stretch of
-// the recording only: on the Karma drone clip at a guessed focal length 35% short, a focal length
-// and a clock drift predicted the held-out frames 0.814 -> 0.811 px in all, the flight's half 7%
-// worse and the pan's 5% better.
-std::string worse_half_because(const DiagnosisModel& m, const ModelParams& nominal, const ModelParams& fitted,
-                               const std::vector<int>& held) {
-  const Halves split = time_halves(m, held);
-  const std::array<const std::vector<int>*, 2> half = {&split.a, &split.b};
-  for (int h = 0; h < 2; ++h) {
-    const std::vector<int>& idx = *half[h];
-    const std::vector<Eigen::Vector2d> before = m.residuals(nominal, idx), after = m.residuals(fitted, idx);
-    std::vector<int> pair(idx.size());
-    for (size_t k = 0; k < idx.size(); ++k) pair[k] = m.frame_rank(idx[k]);
-    const PairedChange c = paired_change(before, after, pair);
-    if (!(c.t > selection::kWorseSigmas)) continue;
-    std::ostringstream o;
-    o << "its " << (h ? "second" : "first") << " half in time worse (" << robust_stats(before).rms_px << " -> "
-      << robust_stats(after).rms_px << " px RMS; " << c.t << " standard errors over " << c.groups << " frame pairs)";
-    return o.str();
-  }
-  return "";
-}
-
-// The diagnosis's first invariant: the final model predicts the frames no fit saw no worse than
-// the nominal model, in all and in each half in time beyond its uncertainty. Effects that do
-// worse there describe the fitting frames only (stand-ins for physics outside the table): none is
-// named, and the remainder says why.
-void never_worse_than_nominal(const DiagnosisModel& m, const ModelParams& nominal, const std::vector<int>& use_all,
-                              const std::vector<int>& held, Diagnosis& d) {
-  if (d.effects.empty()) return;
-  std::ostringstream o;
-  if (d.heldout_final_rms_px > d.heldout_baseline_rms_px)
-    o << "in all (" << d.heldout_baseline_rms_px << " -> " << d.heldout_final_rms_px << " px RMS)";
-  else
-    o << worse_half_because(m, nominal, d.fitted, held);
-  if (o.str().empty()) return;
-  std::ostringstream why;
-  why << "nothing named: the effects found (";
-  for (size_t k = 0; k < d.effects.size(); ++k) why << (k ? ", " : "") << d.effects[k].name;
-  why << ") predict the held-out frames worse than the nominal model, " << o.str();
-  d.withheld.push_back(why.str());
-  d.effects.clear();
-  d.fitted = nominal;
-  d.final_rms_px = robust_stats(m.residuals(nominal, use_all)).rms_px;
-  d.heldout_final_rms_px = d.heldout_baseline_rms_px;
-}
-
 }  // namespace
 
 Diagnosis diagnose(const Recording& rec, const DiagnosisOptions& opt) { return diagnose(DiagnosisModel(rec), opt); }
@@ -495,8 +433,7 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   d.heldout_baseline_rms_px = robust_stats(m.residuals(nominal, use_held)).rms_px;
   d.heldout_final_rms_px = robust_stats(m.residuals(sel.params, use_held)).rms_px;
   d.withheld = sel.withheld;
-  never_worse_than_nominal(m, nominal, use_all, use_held, d);
-  heldout_halves(m, nominal, use_held, d);
+  check_heldout(m, nominal, use_all, use_held, d);
   progress("uncertainties and the remainder");
   const std::vector<int>& fitted_on = as_fitted.translation_nuisance ? under_translation() : fit_set;
   d.uncertainties = effect_uncertainties(m, d.effects, as_fitted, fitted_on);

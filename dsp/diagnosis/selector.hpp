@@ -19,6 +19,7 @@
 
 #include "dsp/diagnosis/blocked_halves.hpp"
 #include "dsp/diagnosis/fit.hpp"
+#include "dsp/diagnosis/heldout_check.hpp"
 #include "dsp/diagnosis/offset_search.hpp"
 #include "dsp/diagnosis/plausibility.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
@@ -205,9 +206,7 @@ class Selector {
     ModelParams a = poorer.params, b = richer.params;
     a.translation_nuisance = b.translation_nuisance = false;
     const std::vector<Eigen::Vector2d> ra = m_.residuals(a, held_), rb = m_.residuals(b, held_);
-    std::vector<int> pair(held_.size());
-    for (size_t k = 0; k < held_.size(); ++k) pair[k] = m_.frame_rank(held_[k]);
-    const PairedChange c = paired_change(ra, rb, pair);
+    const PairedChange c = paired_over_frame_pairs(m_, held_, ra, rb);
     if (!(c.t > kWorseSigmas)) return "";
     std::ostringstream why;
     why << "with the camera's translation left in, it predicts the held-out frames worse than without it ("
