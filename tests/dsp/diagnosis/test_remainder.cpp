@@ -8,7 +8,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <string>
+#include <vector>
 
 #include "dsp/diagnosis/diagnosis.hpp"
 #include "dsp/sim/recording_simulation.hpp"
@@ -208,6 +210,46 @@ TEST(Remainder, AFewPercentAboveTheNoiseIsStructureOverThousandsOfMatches) {
   EXPECT_TRUE(r_many.significant);
   EXPECT_TRUE(r_many.spatial);
   EXPECT_FALSE(r_few.significant);
+}
+
+// A tracker's corners come in clusters (rsd-extract's rendered checkerboard: most features had a
+// twin 8-10 px away, inside the same 21 px window) and a twin's error follows its own: the
+// differences between nearest neighbours then understate the noise, and noise reads as a smooth
+// field. Here every match has a twin 8 px to its right whose error correlates 0.5 with its own
+// (the same variance): the nearest-twin differences would put the noise at 0.71 of the truth
+// and the spatial ratio at 2. Measured against neighbours too far apart to share a window, the
+// remainder is noise and its expected RMS the noise's.
+TEST(Remainder, TwinMatchesWhoseErrorsCorrelateAreNoise) {
+  SimConfig c = phone(23);
+  c.gyro = {200, 200, 0, 0, 0, 0};  // a clean gyro: at the truth the residual is the pixels' noise
+  c.outlier_fraction = 0;
+  c.matches_per_pair = 60;
+  SimulatedRecording sim = simulate_recording(c);
+  const size_t n = sim.rec.matches.size();
+  for (size_t k = 0; k < n; ++k) {
+    Match twin = sim.rec.matches[k];
+    twin.a.x() += 8, twin.b.x() += 8;
+    sim.rec.matches.push_back(twin);
+  }
+  const auto r = DiagnosisModel(sim.rec).residuals(nominal_params(sim.rec.nominal), [&] {
+    std::vector<int> all(2 * n);
+    for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+    return all;
+  }());
+  double sum2 = 0;
+  for (size_t k = 0; k < n; ++k) sum2 += r[k].squaredNorm();
+  const double sigma = std::sqrt(sum2 / (2.0 * n)), rho = 0.5;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> fresh(0, sigma);
+  for (size_t k = 0; k < n; ++k) {
+    const Eigen::Vector2d predicted = sim.rec.matches[n + k].b - r[n + k];
+    sim.rec.matches[n + k].b =
+        predicted + rho * r[k] + std::sqrt(1 - rho * rho) * Eigen::Vector2d(fresh(rng), fresh(rng));
+  }
+  const Remainder rem = at_truth(sim);
+  EXPECT_FALSE(rem.significant);
+  EXPECT_LT(rem.spatial_ratio, 1.15);
+  EXPECT_NEAR(rem.expected_rms_px / sigma, 1.0, 0.06);
 }
 
 // A recording that understates its noise (0.3 px stated, 1 px real): BIC at the stated scale
