@@ -1,6 +1,7 @@
 #include "dsp/diagnosis/fit.hpp"
 
 #include "dsp/diagnosis/match_jacobian.hpp"
+#include "dsp/diagnosis/robust_stats.hpp"
 
 #include <ceres/ceres.h>
 
@@ -9,6 +10,8 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <utility>
+#include <vector>
 
 namespace rsd::dsp {
 
@@ -46,12 +49,35 @@ std::vector<int> subsample(const std::vector<int>& idx, size_t count) {
   return out;
 }
 
+namespace {
+
+// One frame's inlier residuals, where they were observed, and how many pairs of them are
+// closer than kSharedWindowPx.
+struct Group {
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> at;  // (pixel, residual)
+  double near_pairs = 0;
+};
+
+// Per coordinate, the summed products of the residuals of each frame's observations closer than
+// kSharedWindowPx to each other (their pairs counted into each group), and how many pairs.
+std::pair<double, double> shared_window_products(std::vector<Group>& groups) {
+  double products = 0, pairs = 0;
+  for (Group& g : groups) {
+    std::sort(g.at.begin(), g.at.end(), [](const auto& a, const auto& b) { return a.first.x() < b.first.x(); });
+    for (size_t i = 0; i < g.at.size(); ++i)
+      for (size_t j = i + 1; j < g.at.size() && g.at[j].first.x() - g.at[i].first.x() < kSharedWindowPx; ++j)
+        if ((g.at[j].first - g.at[i].first).squaredNorm() < kSharedWindowPx * kSharedWindowPx)
+          products += 0.5 * g.at[i].second.dot(g.at[j].second), g.near_pairs += 1;
+    pairs += g.near_pairs;
+  }
+  return {products, pairs};
+}
+
+}  // namespace
+
 double design_effect(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx, double sigma) {
   const auto r = m.residuals(p, idx);
-  struct Group {
-    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-    int n = 0;
-  };
   std::vector<Group> g;
   double var = 0;
   int n = 0;
@@ -59,18 +85,32 @@ double design_effect(const DiagnosisModel& m, const ModelParams& p, const std::v
     if (!r[k].allFinite() || r[k].norm() > 3 * sigma) continue;  // the Gaussian core
     const int f = m.frame_rank(idx[k]);
     if (f >= static_cast<int>(g.size())) g.resize(f + 1);
-    g[f].sum += r[k], g[f].n += 1;
+    g[f].sum += r[k], g[f].at.push_back({m.observed(idx[k]), r[k]});
     var += 0.5 * r[k].squaredNorm(), ++n;
   }
   if (n < 10) return 1.0;
   var /= n;
-  // Per coordinate: E[mean^2] = tau^2 + var / n_g for a common part of variance tau^2.
+  // Twin features (closer than a tracker's window) covary by c_near, measured on their pairs.
+  const auto [products, pairs] = shared_window_products(g);
+  const double c_near = pairs > 0 ? products / pairs : 0.0;
+  // Per coordinate: E[mean^2] = tau^2 + var / n_g + 2 P_g c_near / n_g^2 for a common part of
+  // variance tau^2 and P_g twin pairs. The frame means alone would count the twins too, as a
+  // common part, but from one number a frame: on 6 s of matches with a correlated twin each,
+  // 1.33 where the twins' own pairs say 1.46 of the true 1.5 (DesignEffect.CountsWhatTwinFeaturesShare).
   double tau2 = 0, groups = 0;
-  for (const Group& x : g)
-    if (x.n >= 2) tau2 += 0.5 * (x.sum / x.n).squaredNorm() - var / x.n, groups += 1;
+  for (const Group& x : g) {
+    const double size = static_cast<double>(x.at.size());
+    if (size >= 2)
+      tau2 += 0.5 * (x.sum / size).squaredNorm() - var / size - 2 * x.near_pairs * c_near / (size * size), groups += 1;
+  }
   if (groups < 2) return 1.0;
-  const double rho = std::max(0.0, tau2 / groups / var);
-  return 1.0 + (static_cast<double>(n) / groups - 1.0) * rho;
+  tau2 /= groups;
+  const double rho = std::max(0.0, tau2 / var);
+  // The twins' covariance beyond the common part, once for each such neighbour an observation
+  // has (k, the mean over the observations): Var(sum) = n var (1 + (n_g - 1) rho + k rho_near).
+  const double rho_near = pairs > 0 ? std::max(0.0, (c_near - rho * var) / var) : 0.0;
+  const double k = 2 * pairs / n;
+  return 1.0 + (static_cast<double>(n) / groups - 1.0) * rho + k * rho_near;
 }
 
 // ---------------------------------------------------------------- the fit, by Ceres

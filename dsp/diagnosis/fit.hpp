@@ -32,7 +32,10 @@ double robust_loss(const Eigen::Vector2d& residual, double sigma_px);
 // what independent noise gives). Errors of the motion data (gyro timestamp jitter, a
 // trajectory's interpolation) are common to all of a frame's observations; BIC, which
 // assumes independent residuals, would otherwise name tiny spurious effects on long
-// recordings. 1 for independent residuals.
+// recordings. Observations closer than kSharedWindowPx (a tracker's twin features, sharing
+// its window) add k rho_near, k the mean count of such neighbours an observation has and
+// rho_near their residuals' correlation beyond the frame's common part, measured on their
+// pairs. 1 for independent residuals.
 double design_effect(const DiagnosisModel& m, const ModelParams& p, const std::vector<int>& idx, double sigma_px);
 
 // Fits the parameters in `free` (starting at `start`, clamped into their physical bounds) with

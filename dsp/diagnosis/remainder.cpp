@@ -24,13 +24,6 @@ constexpr int kMaxPerFrame = 200;         // nearest neighbours are searched amo
 constexpr size_t kMaxObservations = 20000;  // the remainder is assessed on at most these
 constexpr int kMinLostTest = 8;             // observations a frame needs for the whole-frames test
 constexpr double kLostMaterialShare = 0.05;  // of the tested observations, in lost frames
-// Observations closer than this share pixels of the tracker's window (ours is 21 px square,
-// OpenCV's default 21, KLT's usual 15-31) and their errors with them: in rsd-sim's 1080p rendering
-// most features had a twin 8-10 px away whose error correlated 0.35 with its own, and the twins'
-// differences put the noise at 0.028 px where the tracker erred by 0.049 px against the truth, so a
-// remainder of pure noise read as a smooth field (docs/diagnosis.md, "The noise the remainder is
-// measured against"). Beyond it the correlation was 0.01.
-constexpr double kIndependentPx = 32;
 
 // One frame's inlier observations: their predicted pixels and their residuals.
 struct Frame {
@@ -90,35 +83,55 @@ std::vector<int> assessed_observations(const DiagnosisModel& m, const std::vecto
 }
 
 // The independent noise: differences between each observation and its nearest neighbour in
-// the same frame at least kIndependentPx away (a smooth field beneath cancels), and the scatter
-// about the frame mean (it does not); both per coordinate, and how many values each rests on.
+// the same frame at least kSharedWindowPx away, whose error is not its own (a smooth field
+// beneath cancels), and differences with an observation anywhere in the frame (it does not);
+// both per coordinate, and how many values each rests on.
 struct Scatter {
   double neighbour_var = 0, within_var = 0;
+  // The noise's RMS within the inlier bound over its robust scale, from the same differences:
+  // 1 for Gaussian noise; a tracker's errors have tails (1.39 on rsd-sim's 1080p rendering).
+  double tail = 1;
   int n = 0;
 };
 
+// The first observation from half the frame's list on past i that lies kSharedWindowPx or more
+// from it (i if none does).
+size_t partner(const Frame& f, size_t i) {
+  const size_t n = f.r.size();
+  for (size_t step = 0; step + 1 < n; ++step) {
+    const size_t j = (i + n / 2 + step) % n;
+    if (j != i && (f.px[j] - f.px[i]).squaredNorm() >= kSharedWindowPx * kSharedWindowPx) return j;
+  }
+  return i;
+}
+
 Scatter scatter(const std::vector<Frame>& frames) {
-  std::vector<Eigen::Vector2d> diff, dev;
+  std::vector<Eigen::Vector2d> diff, far;
   for (const Frame& f : frames) {
-    const Eigen::Vector2d mean = f.mean();
-    const double n = static_cast<double>(f.r.size());
     for (size_t i = 0; i < f.r.size(); ++i) {
       size_t best = i;
       double best_d2 = std::numeric_limits<double>::infinity();
       for (size_t j = 0; j < f.r.size(); ++j) {
         const double d2 = (f.px[j] - f.px[i]).squaredNorm();
-        if (d2 >= kIndependentPx * kIndependentPx && d2 < best_d2) best_d2 = d2, best = j;
+        if (d2 >= kSharedWindowPx * kSharedWindowPx && d2 < best_d2) best_d2 = d2, best = j;
       }
       if (best != i) diff.push_back(f.r[i] - f.r[best]);
-      dev.push_back((f.r[i] - mean) * std::sqrt(n / (n - 1)));  // unbiased about the frame mean
+      // Against an observation about half the frame's list away, anywhere in the image (the
+      // field does not cancel) but not in its window, so that both sides are differences of two
+      // independent errors: a heavy-tailed noise's difference has a larger robust scale than the
+      // noise itself (on rsd-sim's rendering 0.058 against 0.049 px), and the scatter about the
+      // frame mean, set against it, hid a field of up to a third of the noise variance.
+      if (const size_t j = partner(f, i); j != i) far.push_back(f.r[i] - f.r[j]);
     }
   }
   Scatter s;
   s.n = static_cast<int>(diff.size());
   if (diff.empty()) return s;
-  const double nb = robust_stats(diff).scale_px, w = robust_stats(dev).scale_px;
+  const RobustStats d = robust_stats(diff);
+  const double nb = d.scale_px, w = robust_stats(far).scale_px;
   s.neighbour_var = 0.5 * nb * nb;  // a difference carries two observations' noise
-  s.within_var = w * w;
+  s.tail = nb > 0 ? d.rms_px / nb : 1.0;
+  s.within_var = 0.5 * w * w;
   return s;
 }
 
@@ -295,11 +308,16 @@ Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& p, const 
     return r;
   }
   const double noise_var = sc.neighbour_var;
+  // Material against the noise's variance in the residual's own units (its RMS, tails and all:
+  // "a residual 10-15% above the expected noise" is in RMS). A tracker's errors carry a field of
+  // their own, 0.024 px on rsd-sim's rendering under 0.066 px of noise (0.052 px of robust scale),
+  // a seventh of its variance: noise, as the nominal model fits within it.
+  const double material_var = kMaterialShare * noise_var * sc.tail * sc.tail;
   // Spatial: log of the variance ratio, its standard error inflated by half for the sharing
   // of observations between neighbour pairs.
   r.spatial_ratio = sc.within_var / noise_var;
   r.spatial_z = std::log(r.spatial_ratio) / (1.5 * std::sqrt(2.0 / sc.n));
-  r.spatial = r.spatial_z > kClearZ && r.spatial_ratio - 1 > kMaterialShare;
+  r.spatial = r.spatial_z > kClearZ && sc.within_var - noise_var > material_var;
   r.spatial_rms_px = r.spatial ? std::sqrt(sc.within_var - noise_var) : 0;
   // Temporal: the von Neumann ratio over both coordinates has standard error 1/sqrt(2F).
   const MeanSeries ms = mean_series(frames, noise_var);
@@ -308,11 +326,14 @@ Remainder assess_remainder(const DiagnosisModel& m, const ModelParams& p, const 
     r.temporal_ratio = ms.step / ms.var;
     r.temporal_z = (1 - r.temporal_ratio) * std::sqrt(2.0 * ms.frames);
     const double smooth = std::max(0.0, ms.var - ms.step);
-    r.temporal = r.temporal_z > kClearZ && smooth > kMaterialShare * noise_var;
+    r.temporal = r.temporal_z > kClearZ && smooth > material_var;
     r.temporal_rms_px = r.temporal ? std::sqrt(smooth) : 0;
     frame_white = std::max(0.0, std::min(ms.var, ms.step) - ms.own_noise);
   }
-  r.expected_rms_px = std::sqrt(noise_var + frame_white);
+  // In the units of rms_px (the inliers' RMS, tails and all), so that the two compare: a
+  // tracker's heavy-tailed noise alone left 0.068 px against a scale of 0.052 px, and the report
+  // said a quarter of the residual was mismatch beyond noise while calling it noise.
+  r.expected_rms_px = std::sqrt(noise_var * sc.tail * sc.tail + frame_white);
   test_whole_frames(m, idx, in, r);
   r.stabilised = stabiliser_sigma_s.has_value();
   r.stabiliser_sigma_s = stabiliser_sigma_s.value_or(0);

@@ -19,6 +19,13 @@ struct RobustStats {
 constexpr double kOutlierSigmas = 5.0;
 RobustStats robust_stats(const std::vector<Eigen::Vector2d>& residuals);
 
+// Observations closer than this (pixels) may share pixels of the tracker's window (ours is 21 px
+// square, OpenCV's default 21, KLT's usual 15-31), and their errors with them: in rsd-sim's 1080p
+// rendering most features had a twin 8-10 px away whose error correlated 0.35 with its own, past
+// this 0.01 (docs/diagnosis.md, "The noise the remainder is measured against"). The remainder
+// measures its noise past them; the design effect counts what they share.
+constexpr double kSharedWindowPx = 32;
+
 // The inlier rule every layer uses: finite and within kOutlierSigmas robust scales.
 std::vector<bool> inliers(const std::vector<Eigen::Vector2d>& residuals);
 

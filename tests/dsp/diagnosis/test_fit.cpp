@@ -7,12 +7,14 @@
 
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "dsp/diagnosis/effects.hpp"
 #include "dsp/diagnosis/fit.hpp"
 #include "dsp/diagnosis/offset_search.hpp"
 #include "dsp/sim/recording_simulation.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
+#include "tests/dsp/diagnosis/twin_matches.hpp"
 
 using namespace rsd::dsp;
 
@@ -131,4 +133,34 @@ TEST(Fit, TheOffsetSettlesFromFortyMillisecondsOffWhereTheRefineCannotReach) {
   ModelParams at_truth = start;
   at_truth[Param::TimeOffset] = 0.04;
   EXPECT_NEAR(settle_time_offset(m, all, at_truth, sigma_px), 0.04, 5e-4);
+}
+
+// design_effect (fit.hpp) against its definition, Var(sum of the residuals) / (n var), from the
+// correlations the simulation gives the residuals: independent errors give 1, twins with
+// independent errors 1, and every match with a twin inside its window whose error correlates
+// 0.5 with its own 1 + 1 x 0.5 (rsd-extract's detector makes such twins: docs/diagnosis.md, "The
+// noise the remainder is measured against"). Measured on the twins' own pairs: the frame means
+// alone count them too, as a part the frame shares, but from one number a frame (1.33 here).
+TEST(DesignEffect, CountsWhatTwinFeaturesShare) {
+  SimConfig c = rsd::test::simulation(ObservationKind::Matches, 12, 6.0, 0.5);
+  c.rotation_amplitude_rad = 0.25, c.motion_frequency_hz = 1.2;
+  c.gyro = {200, 200, 0, 0, 0, 0};  // a clean gyro: at the truth the residual is the pixels' noise
+  c.matches_per_pair = 30;
+  const SimulatedRecording plain = simulate_recording(c);
+  auto effect = [](const SimulatedRecording& sim, double sigma) {
+    const DiagnosisModel m(sim.rec);
+    std::vector<int> all(sim.rec.matches.size());
+    for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+    return design_effect(m, nominal_params(sim.rec.nominal), all, sigma);
+  };
+  SimulatedRecording independent = plain, shared = plain;
+  const double sigma = rsd::test::add_correlated_twins(independent, 0.0, 3);
+  rsd::test::add_correlated_twins(shared, 0.5, 3);
+  const double d_plain = effect(plain, sigma), d_independent = effect(independent, sigma),
+               d_shared = effect(shared, sigma);
+  std::printf("design effect: plain %.3f, independent twins %.3f, twins correlated 0.5 %.3f\n", d_plain, d_independent,
+              d_shared);
+  EXPECT_NEAR(d_plain, 1.0, 0.1);
+  EXPECT_NEAR(d_independent, 1.0, 0.1);
+  EXPECT_NEAR(d_shared, 1.5, 0.1);
 }

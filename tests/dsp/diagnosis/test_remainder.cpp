@@ -16,6 +16,7 @@
 #include "dsp/sim/recording_simulation.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
 #include "tests/dsp/diagnosis/diagnosis_lookup.hpp"
+#include "tests/dsp/diagnosis/twin_matches.hpp"
 #include "tests/support/sanitizer.hpp"
 
 using namespace rsd::dsp;
@@ -225,31 +226,58 @@ TEST(Remainder, TwinMatchesWhoseErrorsCorrelateAreNoise) {
   c.outlier_fraction = 0;
   c.matches_per_pair = 60;
   SimulatedRecording sim = simulate_recording(c);
-  const size_t n = sim.rec.matches.size();
-  for (size_t k = 0; k < n; ++k) {
-    Match twin = sim.rec.matches[k];
-    twin.a.x() += 8, twin.b.x() += 8;
-    sim.rec.matches.push_back(twin);
-  }
-  const auto r = DiagnosisModel(sim.rec).residuals(nominal_params(sim.rec.nominal), [&] {
-    std::vector<int> all(2 * n);
-    for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
-    return all;
-  }());
-  double sum2 = 0;
-  for (size_t k = 0; k < n; ++k) sum2 += r[k].squaredNorm();
-  const double sigma = std::sqrt(sum2 / (2.0 * n)), rho = 0.5;
-  std::mt19937 rng(5);
-  std::normal_distribution<double> fresh(0, sigma);
-  for (size_t k = 0; k < n; ++k) {
-    const Eigen::Vector2d predicted = sim.rec.matches[n + k].b - r[n + k];
-    sim.rec.matches[n + k].b =
-        predicted + rho * r[k] + std::sqrt(1 - rho * rho) * Eigen::Vector2d(fresh(rng), fresh(rng));
-  }
+  const double sigma = rsd::test::add_correlated_twins(sim, 0.5, 5);
   const Remainder rem = at_truth(sim);
   EXPECT_FALSE(rem.significant);
   EXPECT_LT(rem.spatial_ratio, 1.15);
   EXPECT_NEAR(rem.expected_rms_px / sigma, 1.0, 0.06);
+}
+
+// A tracker's errors have tails: rsd-sim's 1080p rendering, tracked, erred by 0.049 px (robust
+// scale) with an RMS of 0.068 px within the inlier bound. Here every match errs by a mixture
+// (three in four at 0.5 px, one in four at 1.5 px): the remainder is noise, what noise alone
+// leaves is said in the residual's own units (the RMS within the bound), and the nominal model
+// fits within it. With the robust scale as the expectation the report said that the named
+// effects had left a quarter of the mismatch unexplained and called it noise in the same breath.
+// And a smooth field beneath such noise is found.
+TEST(Remainder, HeavyTailedNoiseIsNoiseAndAFieldBeneathItIsFound) {
+  SimConfig c = phone(24);
+  c.gyro = {200, 200, 0, 0, 0, 0};
+  c.outlier_fraction = 0;
+  c.matches_per_pair = 60;
+  SimulatedRecording sim = simulate_recording(c);
+  std::vector<int> all(sim.rec.matches.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+  const auto r = DiagnosisModel(sim.rec).residuals(nominal_params(sim.rec.nominal), all);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> unit(0, 1);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (size_t k = 0; k < all.size(); ++k) {
+    const double s = u(rng) < 0.75 ? 0.5 : 1.5;
+    sim.rec.matches[k].b += -r[k] + s * Eigen::Vector2d(unit(rng), unit(rng));
+  }
+  // Assessed as the diagnosis does when the recording states no noise and nothing is named.
+  auto assess = [&](const SimulatedRecording& s) {
+    const DiagnosisModel m(s.rec);
+    const ModelParams p = nominal_params(s.rec.nominal);
+    const double baseline = robust_stats(m.residuals(p, all)).rms_px;
+    const Remainder rem = assess_remainder(m, p, all, 0.0, baseline);
+    std::printf("rms %.3f expected %.3f | spatial ratio %.3f | %s\n", rem.rms_px, rem.expected_rms_px,
+                rem.spatial_ratio, rem.summary.c_str());
+    return rem;
+  };
+  const Remainder rem = assess(sim);
+  EXPECT_FALSE(rem.significant);
+  EXPECT_TRUE(rem.nothing_to_explain);
+  EXPECT_NEAR(rem.rms_px / rem.expected_rms_px, 1.0, 0.05);
+  // Both sides of the spatial test are differences of two errors, so the tails cancel from it
+  // (set against the scatter about the frame mean the ratio was 0.74), and a ripple across the
+  // columns with a third of the noise's variance (A^2 / 4 per coordinate) is found.
+  EXPECT_NEAR(rem.spatial_ratio, 1.0, 0.1);
+  for (auto& mt : sim.rec.matches) mt.b.y() += 0.8 * std::sin(2 * M_PI * mt.b.x() / 1920 * 1.5);
+  const Remainder rippled = assess(sim);
+  EXPECT_TRUE(rippled.significant);
+  EXPECT_TRUE(rippled.spatial);
 }
 
 // A recording that understates its noise (0.3 px stated, 1 px real): BIC at the stated scale
