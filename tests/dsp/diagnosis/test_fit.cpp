@@ -14,6 +14,7 @@
 #include "dsp/diagnosis/offset_search.hpp"
 #include "dsp/sim/recording_simulation.hpp"
 #include "tests/dsp/diagnosis/diagnosis_configs.hpp"
+#include "tests/dsp/diagnosis/diagnosis_lookup.hpp"
 #include "tests/dsp/diagnosis/twin_matches.hpp"
 
 using namespace rsd::dsp;
@@ -149,9 +150,7 @@ TEST(DesignEffect, CountsWhatTwinFeaturesShare) {
   const SimulatedRecording plain = simulate_recording(c);
   auto effect = [](const SimulatedRecording& sim, double sigma) {
     const DiagnosisModel m(sim.rec);
-    std::vector<int> all(sim.rec.matches.size());
-    for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
-    return design_effect(m, nominal_params(sim.rec.nominal), all, sigma);
+    return design_effect(m, nominal_params(sim.rec.nominal), rsd::test::every_observation(m), sigma);
   };
   SimulatedRecording independent = plain, shared = plain;
   const double sigma = rsd::test::add_correlated_twins(independent, 0.0, 3);

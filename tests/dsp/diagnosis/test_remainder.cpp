@@ -246,8 +246,7 @@ TEST(Remainder, HeavyTailedNoiseIsNoiseAndAFieldBeneathItIsFound) {
   c.outlier_fraction = 0;
   c.matches_per_pair = 60;
   SimulatedRecording sim = simulate_recording(c);
-  std::vector<int> all(sim.rec.matches.size());
-  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+  const std::vector<int> all = rsd::test::every_observation(DiagnosisModel(sim.rec));
   const auto r = DiagnosisModel(sim.rec).residuals(nominal_params(sim.rec.nominal), all);
   std::mt19937 rng(7);
   std::normal_distribution<double> unit(0, 1);

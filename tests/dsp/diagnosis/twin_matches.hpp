@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "dsp/diagnosis/model.hpp"
+#include "tests/dsp/diagnosis/diagnosis_lookup.hpp"
 #include "dsp/sim/recording_simulation.hpp"
 
 namespace rsd::test {
@@ -23,9 +24,8 @@ inline double add_correlated_twins(dsp::SimulatedRecording& sim, double rho, uns
     twin.a.x() += 8, twin.b.x() += 8;
     sim.rec.matches.push_back(twin);
   }
-  std::vector<int> all(2 * n);
-  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
-  const auto r = dsp::DiagnosisModel(sim.rec).residuals(dsp::nominal_params(sim.rec.nominal), all);
+  const dsp::DiagnosisModel m(sim.rec);
+  const auto r = m.residuals(dsp::nominal_params(sim.rec.nominal), every_observation(m));
   double sum2 = 0;
   for (size_t k = 0; k < n; ++k) sum2 += r[k].squaredNorm();
   const double sigma = std::sqrt(sum2 / (2.0 * n));
