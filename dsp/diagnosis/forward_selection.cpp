@@ -33,6 +33,8 @@ std::string refusal(const Selector& sel, const State& s, const State& richer, co
   std::string why;
   for (Effect e : added)
     if (why.empty()) why = unnameable_because(richer.params, e, sel.m_);
+  for (Effect e : added)
+    if (why.empty()) why = sel.immaterial_because(richer.params, e);
   if (why.empty()) why = sel.fits_the_tail_because(s, richer);
   if (why.empty()) why = sel.worse_with_parallax_because(s, richer);
   // Asked even of a gain refused already (a gyro scale 10% off under a heavier stabiliser): the

@@ -58,10 +58,24 @@ AxesCandidate score(Recording rec, const Eigen::Matrix3d& R, int max_observation
 
 }  // namespace
 
+Eigen::Matrix3d nearest_axis_rotation(const Eigen::Matrix3d& R) {
+  const std::vector<Eigen::Matrix3d> axes = axis_rotations();
+  // The angle between two rotations grows as the trace of one's transpose times the other falls.
+  return *std::max_element(axes.begin(), axes.end(), [&](const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+    return (a.transpose() * R).trace() < (b.transpose() * R).trace();
+  });
+}
+
 AxesSearch search_imu_axes(const Recording& rec, int max_observations) {
   if (rec.kind != ObservationKind::Matches) throw std::invalid_argument("search_imu_axes: a matches recording (gyro motion) is needed");
+  // The given matrix's tilt off its nearest axis order, in camera axes: a calibrated rig's
+  // T_cam_imu is a degree or two off the axes, and that tilt is the camera's on its board,
+  // whichever way the gyro's axes are labelled. Every candidate carries it, so the given matrix
+  // is one of them (and a search that keeps its axis order keeps its calibration).
+  const Eigen::Matrix3d& given = rec.nominal.imu_to_camera;
+  const Eigen::Matrix3d tilt = given * nearest_axis_rotation(given).transpose();
   AxesSearch s;
-  for (const Eigen::Matrix3d& R : axis_rotations()) s.ranked.push_back(score(rec, R, max_observations));
+  for (const Eigen::Matrix3d& R : axis_rotations()) s.ranked.push_back(score(rec, tilt * R, max_observations));
   std::stable_sort(s.ranked.begin(), s.ranked.end(), [](const AxesCandidate& a, const AxesCandidate& b) { return a.scale_px < b.scale_px; });
   return s;
 }

@@ -31,8 +31,14 @@ struct AxesSearch {
 // The 24 rotations that take the coordinate axes onto coordinate axes.
 std::vector<Eigen::Matrix3d> axis_rotations();
 
+// The axis rotation nearest R (the smallest angle between them).
+Eigen::Matrix3d nearest_axis_rotation(const Eigen::Matrix3d& R);
+
 // Ranks the 24 axis orders for a matches recording (gyro motion), on at most `max_observations`
-// matches spread over the recording. Throws std::invalid_argument for a recording of another kind.
+// matches spread over the recording: each is motion.imu_to_camera's tilt off its nearest axis
+// order (the camera's on its board, a degree or two on a calibrated rig) times the order, so the
+// given matrix is one of the candidates. Throws std::invalid_argument for a recording of another
+// kind.
 AxesSearch search_imu_axes(const Recording& rec, int max_observations = 1000);
 
 }  // namespace rsd::dsp

@@ -38,7 +38,9 @@ struct Remainder {
   // 1 when the nominal model already fitted within noise (nothing_to_explain).
   double explained_share = 0;
   bool nothing_to_explain = false;
-  // Spatial test: within-frame variance over the neighbour-difference variance, and its z.
+  // Spatial test: the variance of differences with an observation anywhere in the frame over
+  // that of differences with the nearest one outside its window (a smooth field cancels only in
+  // the second), and its z.
   double spatial_ratio = 1, spatial_z = 0;
   // Temporal test: von Neumann ratio of the frame means, and its z.
   double temporal_ratio = 1, temporal_z = 0;

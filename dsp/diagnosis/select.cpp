@@ -142,11 +142,13 @@ bool drift_is_a_rate(const Selector& sel, State& s, std::vector<SelectedEffect>&
 }
 
 // Drops any selected effect whose value real hardware does not have, or that sits on its fit's
-// bound (plausibility.hpp, unnameable_because), refitting the rest; the latest pick is judged
-// first. What was dropped, and why, goes to `withheld`.
+// bound (plausibility.hpp, unnameable_because), or that moves the predictions by less than an
+// instrument's own bias (Selector::immaterial_because), refitting the rest; the latest pick is
+// judged first. What was dropped, and why, goes to `withheld`.
 void plausible_only(const Selector& sel, State& s, std::vector<SelectedEffect>& steps, std::vector<std::string>& withheld) {
   drop_latest_first(s, steps, [&](Effect e) -> std::optional<State> {
-    const std::string why = unnameable_because(s.params, e, sel.m_);
+    std::string why = unnameable_because(s.params, e, sel.m_);
+    if (why.empty()) why = sel.immaterial_because(s.params, e);
     if (why.empty()) return std::nullopt;
     withheld.push_back(std::string(effect_name(e)) + " not named: " + why);
     if (sel.opt_.progress) sel.opt_.progress(withheld.back());

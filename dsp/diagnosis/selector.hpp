@@ -34,6 +34,15 @@ namespace rsd::dsp::selection {
 // for a focal length under a hand-held shake came out 7.8 and 6.6 worse; the drone's shutter 0.9.
 inline constexpr double kWorseSigmas = 3.0;
 
+// The least an effect must move the predictions to be named (px, RMS per coordinate over the
+// fitting set's inliers): below it no instrument here tells it from its own bias. OpenCV's
+// checkerboard detector is biased by 0.005-0.03 px depending on the view
+// (target_observations.cpp), and rsd-extract's tracker holds a field of its own of about 0.02 px
+// against rsd-sim's rendering (docs/diagnosis.md). On a board rendered by an independent
+// generator, whose corners were found to 0.016 px with a bias of (0.010, 0.010) px, a lever arm
+// of 16 um (BIC drop 2750) was named for that bias, moving the corners by 0.010 px.
+inline constexpr double kMinShiftPx = 0.03;
+
 struct State {
   std::vector<Effect> effects;
   ModelParams params;
@@ -190,6 +199,25 @@ class Selector {
     return why.str();
   }
 
+  // Why e, at its values in p beside the others', is too small to name ("" when it is not):
+  // with its values set back (the rest as they are) the predictions of the fitting set's
+  // inliers move by less than kMinShiftPx.
+  std::string immaterial_because(const ModelParams& p, Effect e) const {
+    const std::vector<Eigen::Vector2d> with = m_.residuals(p, fit_), without = m_.residuals(without_values(p, e), fit_);
+    const std::vector<bool> in = inliers(with);
+    double sum = 0;
+    size_t n = 0;
+    for (size_t k = 0; k < with.size(); ++k)
+      if (in[k] && without[k].allFinite()) sum += (with[k] - without[k]).squaredNorm(), ++n;
+    const double shift = n ? std::sqrt(0.5 * sum / static_cast<double>(n)) : 0.0;
+    if (shift >= kMinShiftPx) return "";
+    std::ostringstream why;
+    why.precision(2);
+    why << "it moves the predictions by " << shift << " px (RMS per coordinate), under the " << kMinShiftPx
+        << " px a target detector's or a tracker's own bias reaches: too small to tell from the instrument";
+    return why.str();
+  }
+
   // Robust chi-square drop on the held-out observations from `poorer` to `richer` (0 when
   // nothing is held out).
   double heldout_drop(const State& poorer, const State& richer) const {
@@ -289,15 +317,18 @@ class Selector {
     std::vector<Effect> effects;
     for (Effect f : s.effects)
       if (f != e) effects.push_back(f);
-    ModelParams p = s.params;
+    const ModelParams p = fit_params(m_, idx, without_values(s.params, e), mask_of(effects, lens_), sigma_, iterations, &end);
+    return {effects, p, bic(p, effects, idx)};
+  }
+  // p with e's values back at the nominal ones and its switch off, the rest as they are.
+  ModelParams without_values(ModelParams p, Effect e) const {
     const ParamMask drop = effect_params(e, lens_);
     for (int k = 0; k < kParamCount; ++k)
       // With its followers (fy follows fx): a focal length withdrawn left fy 26% off on a real clip.
       if (drop[k]) set_param(p, static_cast<Param>(k), nominal_.v[k], m_.recording().nominal);
     if (e == Effect::ReadoutDirection) p.flip_readout = false;
     if (e == Effect::LensModel) p.other_lens = false;
-    p = fit_params(m_, idx, p, mask_of(effects, lens_), sigma_, iterations, &end);
-    return {effects, p, bic(p, effects, idx)};
+    return p;
   }
   static bool same(const ModelParams& a, const ModelParams& b) {
     return a.v == b.v && a.flip_readout == b.flip_readout && a.other_lens == b.other_lens &&

@@ -125,7 +125,8 @@ std::string remainder_section(const Remainder& r) {
   o << "## What remains\n\n" << (r.significant ? "**Significant: physics the effect table does not hold.** " : "")
     << r.summary << "\n\n"
     << "| test | statistic | z | structured RMS (px) |\n| --- | --- | --- | --- |\n"
-    << "| across each frame: scatter about the frame mean over nearest-neighbour differences (1 = noise) | "
+    << "| across each frame: differences with a far observation over differences with the nearest one outside "
+       "its tracking window (1 = noise) | "
     << format_number(r.spatial_ratio, 3) << " | " << format_number(r.spatial_z, 3) << " | "
     << format_number(r.spatial_rms_px, 3) << " |\n"
     << "| from frame to frame: von Neumann ratio of the frame means (1 = independent frames) | "

@@ -1,0 +1,287 @@
+#!/usr/bin/env python3
+"""An independent check of rsd-diagnose: a gyro and matches recording written from the
+recording format's text alone (docs/formats/recording-v1.md), with none of rsd's code (its
+simulator agrees with its model by construction), diagnosed by the tool, its named effects
+compared with the truth.
+
+The camera turns under a random sum of sines in the IMU's axes, integrated as dR/dt = R [w]x;
+each match is a point at a random depth seen at a random pixel of frame_a and found in frame_b
+at the fixed point of the rows' read times (the rolling-shutter constraint). Plain Python: no
+third-party module.
+
+  independent_recording.py --case pinhole|fisheye --rsd-diagnose PATH --work DIR
+
+Exit status 0 when every goal holds, 1 when one does not (each says why), 2 on bad use.
+"""
+import argparse
+import json
+import math
+import os
+import random
+import subprocess
+import sys
+
+
+# --- 3-vectors and 3x3 matrices as lists -------------------------------------------------
+
+def mat_mul(a, b):
+    return [[sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+
+
+def mat_vec(a, v):
+    return [sum(a[i][k] * v[k] for k in range(3)) for i in range(3)]
+
+
+def transpose(a):
+    return [[a[j][i] for j in range(3)] for i in range(3)]
+
+
+def exp_so3(r):
+    """Rodrigues: the rotation by |r| about r / |r|."""
+    th = math.sqrt(sum(x * x for x in r))
+    if th < 1e-12:
+        return [[1, -r[2], r[1]], [r[2], 1, -r[0]], [-r[1], r[0], 1]]
+    k = [x / th for x in r]
+    c, s, v = math.cos(th), math.sin(th), 1 - math.cos(th)
+    return [[c + k[0] * k[0] * v, k[0] * k[1] * v - k[2] * s, k[0] * k[2] * v + k[1] * s],
+            [k[1] * k[0] * v + k[2] * s, c + k[1] * k[1] * v, k[1] * k[2] * v - k[0] * s],
+            [k[2] * k[0] * v - k[1] * s, k[2] * k[1] * v + k[0] * s, c + k[2] * k[2] * v]]
+
+
+def log_so3(m):
+    c = max(-1.0, min(1.0, (m[0][0] + m[1][1] + m[2][2] - 1) / 2))
+    th = math.acos(c)
+    v = [(m[2][1] - m[1][2]) / 2, (m[0][2] - m[2][0]) / 2, (m[1][0] - m[0][1]) / 2]
+    return v if th < 1e-9 else [x * th / math.sin(th) for x in v]
+
+
+# --- the rig --------------------------------------------------------------------------------
+
+CASES = {
+    # A phone-like pinhole camera: a readout the nominal model lacks, the clocks 15 ms apart, a
+    # gyro bias; the gyro's axes a permutation of the camera's, 2 degrees off it (a calibration).
+    'pinhole': dict(width=1280, height=720, f=1000.0, model='pinhole-radtan', k=[-0.05, 0.01],
+                    line_delay=2.5e-5, offset=0.015, bias=[0.004, -0.003, 0.005], rate=0.6),
+    # A fisheye (equidistant) action camera, corners 70 degrees off the axis, its nominal lens
+    # right: the clocks 30 ms apart, a bias, the readout known.
+    'fisheye': dict(width=1280, height=960, f=420.0, model='pinhole-equi', k=[0.02, -0.01],
+                    line_delay=2e-5, nominal_line_delay=2e-5, offset=-0.030, bias=[0.002, 0.004, -0.003],
+                    rate=0.8),
+}
+DURATION_S, FPS, PER_PAIR, NOISE_PX, OUTLIERS, GYRO_HZ, GYRO_NOISE = 10.0, 30.0, 100, 0.5, 0.05, 200.0, 0.003
+PERMUTED = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]  # w_camera = R w_imu: the gyro's x is the camera's y
+
+
+class Rig:
+    def __init__(self, case, seed):
+        self.c = case
+        self.rng = random.Random(seed)
+        self.cx = (case['width'] - 1) / 2 + 3.0
+        self.cy = (case['height'] - 1) / 2 - 2.0
+        self.imu_to_camera = mat_mul(exp_so3([0.02, -0.01, 0.03]), PERMUTED)
+        self.terms = [(ax, self.rng.uniform(0.3, 2.5), self.rng.uniform(0, 2 * math.pi), self.rng.gauss(0, 1))
+                      for ax in range(3) for _ in range(4)]
+        power = [sum(am * am / 2 for a, _, _, am in self.terms if a == ax) for ax in range(3)]
+        self.gain = [case['rate'] / math.sqrt(p) for p in power]
+        self.t0 = 0.2
+        self.dt = 1 / 2000.0
+        self._integrate(self.t0 - 0.5, self.t0 + DURATION_S + 1.0)
+
+    def w_imu(self, t):
+        w = [0.0, 0.0, 0.0]
+        for ax, fr, ph, am in self.terms:
+            w[ax] += self.gain[ax] * am * math.sin(2 * math.pi * fr * t + ph)
+        return w
+
+    def _integrate(self, t_lo, t_hi):
+        self.t_lo = t_lo
+        r = [[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0]]
+        self.orient = []
+        t = t_lo
+        while t <= t_hi + self.dt:
+            self.orient.append(r)
+            w = self.w_imu(t + self.dt / 2)
+            r = mat_mul(r, exp_so3([x * self.dt for x in w]))
+            t += self.dt
+
+    def r_imu(self, t):
+        x = (t - self.t_lo) / self.dt
+        i = int(math.floor(x))
+        a, b = self.orient[i], self.orient[i + 1]
+        step = log_so3(mat_mul(transpose(a), b))
+        return mat_mul(a, exp_so3([(x - i) * s for s in step]))
+
+    def r_camera(self, t_motion):
+        return mat_mul(self.r_imu(t_motion), transpose(self.imu_to_camera))
+
+    def project(self, p):
+        k, f = self.c['k'], self.c['f']
+        if self.c['model'] == 'pinhole-equi':
+            r = math.hypot(p[0], p[1])
+            th = math.atan2(r, p[2])
+            thd = th * (1 + k[0] * th ** 2 + k[1] * th ** 4)
+            s = thd / r if r > 1e-12 else 1 / p[2]
+            return f * p[0] * s + self.cx, f * p[1] * s + self.cy
+        x, y = p[0] / p[2], p[1] / p[2]
+        r2 = x * x + y * y
+        s = 1 + k[0] * r2 + k[1] * r2 * r2
+        return f * x * s + self.cx, f * y * s + self.cy
+
+    def ray(self, u, v):
+        """The unit direction seen at pixel (u, v)."""
+        k, f = self.c['k'], self.c['f']
+        xd, yd = (u - self.cx) / f, (v - self.cy) / f
+        if self.c['model'] == 'pinhole-equi':
+            thd = math.hypot(xd, yd)
+            th = thd
+            for _ in range(30):
+                th -= (th * (1 + k[0] * th ** 2 + k[1] * th ** 4) - thd) / (1 + 3 * k[0] * th ** 2 + 5 * k[1] * th ** 4)
+            if thd < 1e-12:
+                return [0.0, 0.0, 1.0]
+            return [math.sin(th) * xd / thd, math.sin(th) * yd / thd, math.cos(th)]
+        x, y = xd, yd
+        for _ in range(40):
+            r2 = x * x + y * y
+            s = 1 + k[0] * r2 + k[1] * r2 * r2
+            x, y = xd / s, yd / s
+        n = math.sqrt(x * x + y * y + 1)
+        return [x / n, y / n, 1 / n]
+
+    def motion_time(self, frame, v):
+        return self.t0 + frame / FPS + self.c['line_delay'] * v + self.c['offset']
+
+    def match(self, frame):
+        """One match of frame and frame + 1, or None when the point leaves the picture."""
+        w, h = self.c['width'], self.c['height']
+        ua, va = self.rng.uniform(0, w - 1), self.rng.uniform(0, h - 1)
+        d = self.ray(ua, va)
+        if math.atan2(math.hypot(d[0], d[1]), d[2]) > 1.4:
+            return None
+        world = mat_vec(self.r_camera(self.motion_time(frame, va)), d)  # a distant point: rotation only
+        vb = va
+        for _ in range(20):
+            p = mat_vec(transpose(self.r_camera(self.motion_time(frame + 1, vb))), world)
+            if p[2] <= 0.05 and self.c['model'] != 'pinhole-equi':
+                return None
+            ub, vb_new = self.project(p)
+            done = abs(vb_new - vb) < 1e-7
+            vb = vb_new
+            if done:
+                break
+        if not (0 <= ub <= w - 1 and 0 <= vb <= h - 1):
+            return None
+        g = self.rng.gauss
+        if self.rng.random() < OUTLIERS:
+            ub, vb = self.rng.uniform(0, w - 1), self.rng.uniform(0, h - 1)
+        return ua + g(0, NOISE_PX), va + g(0, NOISE_PX), ub + g(0, NOISE_PX), vb + g(0, NOISE_PX)
+
+    def write(self, out):
+        os.makedirs(out, exist_ok=True)
+        frames = int(DURATION_S * FPS)
+        with open(os.path.join(out, 'frames.csv'), 'w') as f:
+            f.write('frame,t\n')
+            for k in range(frames):
+                f.write(f'{k},{self.t0 + k / FPS:.9f}\n')
+        with open(os.path.join(out, 'matches.csv'), 'w') as f:
+            f.write('frame_a,ua,va,frame_b,ub,vb\n')
+            for k in range(frames - 1):
+                n = 0
+                while n < PER_PAIR:
+                    m = self.match(k)
+                    if m:
+                        f.write(f'{k},{m[0]:.4f},{m[1]:.4f},{k + 1},{m[2]:.4f},{m[3]:.4f}\n')
+                        n += 1
+        with open(os.path.join(out, 'gyro.csv'), 'w') as f:
+            f.write('t,wx,wy,wz\n')
+            t = 0.0
+            while t < self.t0 + DURATION_S + 0.5:
+                w = self.w_imu(t)  # w_true = w_measured - b
+                f.write('{:.9f},{:.9f},{:.9f},{:.9f}\n'.format(
+                    t, *[w[i] + self.c['bias'][i] + self.rng.gauss(0, GYRO_NOISE) for i in range(3)]))
+                t += 1 / GYRO_HZ
+        c = self.c
+        rows = ', '.join(f'{x:.12f}' for row in self.imu_to_camera for x in row)
+        with open(os.path.join(out, 'recording.yaml'), 'w') as f:
+            f.write(f"""format: rsd-recording/1
+camera:
+  width: {c['width']}
+  height: {c['height']}
+  fx: {c['f']}
+  fy: {c['f']}
+  cx: {self.cx}
+  cy: {self.cy}
+  distortion: [{c['k'][0]}, {c['k'][1]}, 0, 0]
+  model: {c['model']}
+timing:
+  frame_rate_hz: {FPS}
+  line_delay_s: {c.get('nominal_line_delay', 0.0)}
+  readout: top_to_bottom
+  time_offset_s: 0.0
+  drift_ppm: 0.0
+motion:
+  kind: gyro
+  file: gyro.csv
+  imu_to_camera: [{rows}]
+observations:
+  kind: matches
+  file: matches.csv
+frames: frames.csv
+""")
+
+
+# --- the goals ------------------------------------------------------------------------------
+
+def check(case, d):
+    """What does not hold, one line each."""
+    bad = []
+    expected = {'time_offset', 'gyro_bias'} | ({'rolling_shutter'} if case['line_delay'] != case.get('nominal_line_delay', 0) else set())
+    named = {e['name']: e['params'] for e in d['effects']}
+    if set(named) != expected:
+        bad.append(f'named {sorted(named)}, the truth is {sorted(expected)}')
+    if 'rolling_shutter' in named and abs(named['rolling_shutter']['line_delay_s'] / case['line_delay'] - 1) > 0.03:
+        bad.append(f"line delay {named['rolling_shutter']['line_delay_s']}, the truth {case['line_delay']} (goal 3%)")
+    if 'time_offset' in named and abs(named['time_offset']['time_offset_s'] - case['offset']) > 5e-4:
+        bad.append(f"time offset {named['time_offset']['time_offset_s']}, the truth {case['offset']} (goal 0.5 ms)")
+    if 'gyro_bias' in named:
+        got = [named['gyro_bias'][k] for k in ('bx', 'by', 'bz')]
+        if max(abs(g - t) for g, t in zip(got, case['bias'])) > 1e-3:
+            bad.append(f"gyro bias {got}, the truth {case['bias']} (goal 1 mrad/s a component)")
+    if d['remainder']['significant']:
+        bad.append('the remainder is called significant: ' + json.dumps(d['remainder']))
+    if d['heldout']['final_rms_px'] > 1.1 * d['remainder']['expected_rms_px']:
+        bad.append(f"held out {d['heldout']['final_rms_px']} px, noise alone {d['remainder']['expected_rms_px']} px")
+    axes = d.get('imu_axes', '')
+    if not axes.endswith(': motion.imu_to_camera'):
+        bad.append('the gyro\'s axes: ' + axes)
+    return bad
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument('--case', choices=sorted(CASES), required=True)
+    ap.add_argument('--rsd-diagnose', required=True, help='the rsd-diagnose binary')
+    ap.add_argument('--work', required=True, help='a directory for the recording and the diagnosis')
+    ap.add_argument('--seed', type=int, default=1)
+    a = ap.parse_args()
+    case = CASES[a.case]
+    rec = os.path.join(a.work, 'recording-' + a.case)
+    Rig(case, a.seed).write(rec)
+    out = os.path.join(a.work, 'diagnosis-' + a.case + '.json')
+    run = subprocess.run([a.rsd_diagnose, rec, '--json', out], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    if run.returncode != 0:
+        print(run.stdout[-4000:])
+        print(f'rsd-diagnose exited {run.returncode}')
+        return 1
+    with open(out) as f:
+        d = json.load(f)
+    print(json.dumps({'effects': d['effects'], 'heldout': d['heldout'], 'remainder': d['remainder'],
+                      'imu_axes': d.get('imu_axes')}, indent=1))
+    bad = check(case, d)
+    for b in bad:
+        print('FAIL: ' + b)
+    print('independent recording (' + a.case + '): ' + ('FAIL' if bad else 'all goals hold'))
+    return 1 if bad else 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
