@@ -202,12 +202,18 @@ std::vector<int> usable(const DiagnosisModel& m, const ModelParams& p, const std
   return out;
 }
 
-// The translation nuisance's knot spacing (translation_knot_spacing), judged on the richest
-// rotation fit from `gross` under the nuisance, every applicable effect free: what an effect
-// explains is not left for a finer spline to take.
-double knot_spacing(const DiagnosisModel& m, const std::vector<int>& screen, ModelParams gross, double sigma) {
-  gross.translation_nuisance = true;
-  return translation_knot_spacing(m, screen, fit_params(m, screen, gross, applicable_params(m), sigma, 20));
+// The translation nuisance's knot spacing (translation_knot_spacing) and the scene's depth spread
+// (translation_depth_spread), judged on the richest rotation fit from `gross` under the nuisance,
+// every applicable effect free: what an effect explains is not left for a finer spline to take,
+// nor measured as the scene's depths. Set in `n` and `gross`.
+void nuisance_shape(const DiagnosisModel& m, const std::vector<int>& screen, ModelParams& n, ModelParams& gross,
+                    double sigma) {
+  n.translation_nuisance = gross.translation_nuisance = true;
+  ModelParams richest = fit_params(m, screen, gross, applicable_params(m), sigma, 20);
+  richest.translation_knot_s = n.translation_knot_s = gross.translation_knot_s =
+      translation_knot_spacing(m, screen, richest);
+  const double spread = translation_depth_spread(m, screen, richest);
+  n.translation_depth_px = gross.translation_depth_px = spread > 0 ? sigma / spread : 0.0;
 }
 
 // The selection without the translation nuisance, its blocked-halves check held until the
@@ -277,12 +283,13 @@ Selection select_with_parallax(const DiagnosisModel& m, const ObservationSets& s
   if (!seen_before_any_effect || smoothing_beats_a_gain(m, screen, d.gross, d.sigma_px, so.min_bic_drop))
     if (auto plain = select_without_parallax(m, use_fit, use_held, screen, nominal, d, so, d.parallax)) return *plain;
   ModelParams n = nominal, g = d.gross;
-  n.translation_nuisance = g.translation_nuisance = true;
-  n.translation_knot_s = g.translation_knot_s = knot_spacing(m, screen, g, d.sigma_px);
+  nuisance_shape(m, screen, n, g, d.sigma_px);
   if (so.progress) {
     std::ostringstream what;
     what << "parallax in the matches: selecting again with the camera's translation (a smooth velocity over the depth, knots every "
-         << g.translation_knot_s << " s) taken out";
+         << g.translation_knot_s << " s; "
+         << (g.translation_depth_px > 0 ? "each match's depth its own" : "one plane")
+         << ") taken out";
     so.progress(what.str());
   }
   Selection with = select_effects(m, use_fit, use_held, screen, n, g, d.sigma_px, so);

@@ -363,7 +363,7 @@ std::vector<Eigen::Vector2d> DiagnosisModel::translation_out(const ModelParams& 
   if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return r;
   const MatchSetup ms = match_setup(p);
   remove_translation(*this, idx, r, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s, keep,
-                     p.translation_pair_shifts);
+                     p.translation_pair_shifts, p.translation_depth_px);
   return r;
 }
 

@@ -57,6 +57,9 @@ struct ModelParams {
   bool translation_nuisance = false;
   // The knot spacing of its velocity spline (s; translation.hpp).
   double translation_knot_s = kTranslationKnotS;
+  // Each match's own depth about the plane: the noise over the scene's depth spread
+  // (translation_depth_spread), px; 0: one plane.
+  double translation_depth_px = 0;
   // With it, each frame pair's time shift under the gyro stamps' remaining error (translation.hpp,
   // pair_shifts); the gross search goes without (gross_start: one observation a pair under a
   // truncated cost, where a shift per pair would cost a rate per observation and decide nothing).

@@ -84,6 +84,13 @@ struct TranslationFit::State {
   std::vector<bool> in;  // after the passes: whether each grouped observation was an inlier of the last
   Eigen::Vector2d slope = Eigen::Vector2d::Zero();  // after the passes: the scene's slope
   double shift_rho = 0;  // the pairs' shift prior, noise^2 / shift sd^2 at the last pass; 0: no shifts
+  // After the passes: each grouped observation's own depth (own_depths), empty without one; and
+  // what translation_depth_spread measures from: the last pass's velocities (camera axes), the
+  // matches' rows' delays and the pass's robust scale.
+  std::vector<Eigen::Vector2d> own_depth;
+  Eigen::MatrixXd velocities;
+  std::vector<double> delta;
+  double scale = 0;
 };
 
 namespace {
@@ -172,10 +179,14 @@ std::vector<double> row_delays(const DiagnosisModel& m, const PairGroups& s, con
 // second of it is flows[k] = s_k (shift_flows), and the shift, one scalar under the prior shift_rho, is
 // eliminated beside w: N - c^T c / (s.s + rho) and B - c^T b_s / (s.s + rho), c = sum s_k^T F_k
 // its coupling to w, b_s = sum s_k^T r_k its right-hand side (rows of `Bs`, one per pair).
+//
+// With `own` (own_depths) each match's inner products are taken in its own metric P_k = I - b b^T,
+// which eliminates its own depth beside w: unit^T P unit, unit^T P r and the shift's likewise.
 template <int Cols, class Depth, class Residual>
 void pair_sums(std::vector<PairSums>& pairs, Eigen::MatrixXd& B, Eigen::MatrixXd& Bs, Eigen::Index columns,
                const PairGroups& s, const std::vector<double>& delta, const std::vector<bool>& in, const Depth& depth,
-               const Residual& rk, const std::vector<Eigen::Vector2d>& flows, double shift_rho) {
+               const Residual& rk, const std::vector<Eigen::Vector2d>& flows, double shift_rho,
+               const std::vector<Eigen::Vector2d>& own) {
   B.setZero(kW * static_cast<Eigen::Index>(pairs.size()), columns);
   const bool shifts = shift_rho > 0 && !flows.empty();
   Bs.setZero(shifts ? static_cast<Eigen::Index>(pairs.size()) : 0, columns);
@@ -195,17 +206,22 @@ void pair_sums(std::vector<PairSums>& pairs, Eigen::MatrixXd& B, Eigen::MatrixXd
       if (!in[k]) continue;
       const double d = depth(k), e = delta[k], d2 = d * d;
       const Eigen::Matrix<double, 2, 3>& a = s.unit[k];
-      const Eigen::Matrix<double, 6, 1> G = (Eigen::Matrix<double, 6, 1>() << a.col(0).squaredNorm(), a.col(0).dot(a.col(1)),
-                                             a.col(0).dot(a.col(2)), a.col(1).squaredNorm(), a.col(1).dot(a.col(2)),
-                                             a.col(2).squaredNorm()).finished();
+      const Eigen::Vector2d b = own.empty() ? Eigen::Vector2d::Zero() : own[k];
+      const Eigen::Vector3d ub = a.transpose() * b;
+      const Eigen::Matrix<double, 6, 1> G =
+          (Eigen::Matrix<double, 6, 1>() << a.col(0).squaredNorm() - ub[0] * ub[0], a.col(0).dot(a.col(1)) - ub[0] * ub[1],
+           a.col(0).dot(a.col(2)) - ub[0] * ub[2], a.col(1).squaredNorm() - ub[1] * ub[1],
+           a.col(1).dot(a.col(2)) - ub[1] * ub[2], a.col(2).squaredNorm() - ub[2] * ub[2]).finished();
       S.noalias() += G * Eigen::RowVector3d(d2, d2 * e, d2 * e * e);
-      g.noalias() = a.transpose() * rk(k);
+      const Eigen::Matrix<double, 1, Cols> br = b.transpose() * rk(k);
+      g.noalias() = a.transpose() * rk(k) - ub * br;
       c0 += d * g, c1 += (d * e) * g;
       if (!shifts) continue;
       const Eigen::Vector2d& sk = flows[k];
-      const Eigen::RowVector3d su = sk.transpose() * a;
-      ss += sk.squaredNorm(), p0 += d * su, p1 += (d * e) * su;
-      bs.noalias() += sk.transpose() * rk(k);
+      const double sb = sk.dot(b);
+      const Eigen::RowVector3d su = sk.transpose() * a - sb * ub.transpose();
+      ss += sk.squaredNorm() - sb * sb, p0 += d * su, p1 += (d * e) * su;
+      bs.noalias() += sk.transpose() * rk(k) - sb * br;
     }
     PairSums& p = pairs[q];
     const Eigen::Matrix3d T = p.turn, Tt = T.transpose();
@@ -273,6 +289,64 @@ inline Eigen::Vector2d unit_depth_flow(const PairGroups& s, const std::vector<do
   return s.unit[k] * (V.block<3, 1>(at, column) + delta[k] * V.block<3, 1>(at + 3, column));
 }
 
+// A match's own depth. One plane describes a wall or a ground; a forward flight past points 20
+// to 200 m away has inverse depths a decade apart, and the plane's misfit (along each match's
+// translation flow, pixels for a near point) went into a rotation effect: the independent
+// generator's drone had a gyro bias about the pan's axis 29 mrad/s off (13 and 26 on two other
+// seeds). So each match's inverse depth is the plane's times (1 + e), e its own under a prior
+// of spread s: eliminating e leaves the match the metric P = I - b b^T (pair_sums),
+// b = a / sqrt(|a|^2 + depth_px^2), depth_px = sigma / s (the diagnosis's noise, fixed: against
+// each pass's robust scale a parameter that shrank the scale loosened the depths and lowered
+// the cost, and the fits found one, a focal length 10% long), a its translation flow at the
+// plane's depth in the previous pass's fit. A match whose a is large against the noise keeps
+// what lies across a; one that the translation moves by less than the noise keeps nearly all.
+
+// The scene's depth spread about the plane as measured (measured_spread: 0 when the excess is
+// negative); the excess's z-score against noise alone, under which along and across are alike
+// (x^2 - y^2 of two independent N(0, noise^2) has mean 0 and variance 4 noise^4); and the
+// inliers' median flow over the noise.
+struct DepthSpread {
+  double spread = 0, z = 0, median_flow = 0;
+};
+
+// The spread, from the inliers whose flow a exceeds the noise: the residual's energy along a
+// beyond its energy across a, over the energy of a.
+template <class Flow, class Residual>
+DepthSpread measured_spread(size_t n, const Flow& flow, const Residual& left, const std::vector<bool>& in, double noise) {
+  double excess = 0, energy = 0;
+  size_t used = 0;
+  std::vector<double> flows;
+  for (size_t k = 0; k < n; ++k) {
+    if (!in[k]) continue;
+    const Eigen::Vector2d a = flow(k);
+    flows.push_back(a.norm() / noise);
+    if (a.norm() <= noise) continue;
+    const Eigen::Vector2d along = a.normalized(), r = left(k);
+    const double x = along.dot(r), y = along.x() * r.y() - along.y() * r.x();
+    excess += x * x - y * y, energy += a.squaredNorm(), ++used;
+  }
+  if (used == 0) return {};
+  return {std::sqrt(std::max(0.0, excess / energy)), excess / (2 * noise * noise * std::sqrt(static_cast<double>(used))),
+          median(flows)};
+}
+
+// Each match's b (empty for none: `depth_px` zero).
+template <class Flow>
+std::vector<Eigen::Vector2d> own_depths(size_t n, const Flow& flow, double depth_px) {
+  if (!(depth_px > 0)) return {};
+  std::vector<Eigen::Vector2d> b(n);
+  for (size_t k = 0; k < n; ++k) {
+    const Eigen::Vector2d a = flow(k);
+    b[k] = a / std::sqrt(a.squaredNorm() + depth_px * depth_px);
+  }
+  return b;
+}
+
+// x in observation k's own metric: what its own depth leaves of it (x itself without own depths).
+inline Eigen::Vector2d own_metric(const std::vector<Eigen::Vector2d>& own, size_t k, const Eigen::Vector2d& x) {
+  return own.empty() ? x : Eigen::Vector2d(x - own[k] * own[k].dot(x));
+}
+
 // The scene's slope g (inverse depth 1 + g . xn over the depth at the optical axis) that best
 // explains the inliers' residuals given the pairs' velocities V (camera axes): r - f = (g . xn) f,
 // f the flow at depth factor one, linear in g. A light ridge keeps g at zero where the
@@ -310,7 +384,7 @@ Eigen::MatrixXd pair_velocities(VelocitySpline& sp, const std::vector<PairSums>&
 
 void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
                         const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s,
-                        TranslationFit* keep, bool with_shifts) {
+                        TranslationFit* keep, bool with_shifts, double depth_px) {
   std::shared_ptr<const TranslationFit::State> prior;
   if (keep) prior = std::move(keep->state), keep->state.reset();
   auto st = std::make_shared<TranslationFit::State>();
@@ -321,7 +395,7 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
   VelocitySpline sp = spline_over(pairs, knot_s);
   const size_t n = s.position.size();
-  const std::vector<double> delta = row_delays(m, s, tm);
+  std::vector<double> delta = row_delays(m, s, tm);
   std::vector<Eigen::Vector2d> rk(n);  // the residuals in pair order
   for (size_t k = 0; k < n; ++k) rk[k] = r[s.position[k]];
   // Four passes from no translation over a flat scene: the inliers are the residuals within 4
@@ -341,20 +415,26 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   auto depth_factor = [&](size_t k) { return 1.0 + fit.slope.dot(s.xn[k]); };
   const std::vector<Eigen::Vector2d> flows = shift_flows(m, s, pairs);
   auto unshifted = [&](size_t k) { return Eigen::Vector2d(rk[k] - shift_flow(s, flows, shift, k)); };
-  auto left = [&](size_t k) { return Eigen::Vector2d(unshifted(k) - depth_factor(k) * unit_depth_flow(s, delta, V, k)); };
+  auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * unit_depth_flow(s, delta, V, k)); };
+  auto plane_left = [&](size_t k) { return Eigen::Vector2d(unshifted(k) - flow(k)); };
+  auto left = [&](size_t k) { return own_metric(fit.own_depth, k, plane_left(k)); };
   auto residual = [&](size_t k) { return rk[k]; };
   for (int pass = 0; pass < 4; ++pass) {
     for (size_t k = 0; k < n; ++k) len[k] = left(k).norm();
     const double scale = std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6), limit = 4 * scale;
     for (size_t k = 0; k < n; ++k) fit.in[k] = len[k] <= limit;
     if (pass >= 1) fit.slope = scene_slope(s, delta, V, fit.in, unshifted);
+    // Each match's own depth about the plane, from the second pass on (the first has no flow).
+    if (pass >= 1) fit.own_depth = own_depths(n, flow, depth_px);
+    fit.scale = scale;
     if (shift_sd > 0) fit.shift_rho = scale * scale / (shift_sd * shift_sd);
-    pair_sums<1>(pairs, B, Bs, 1, s, delta, fit.in, depth_factor, residual, flows, fit.shift_rho);
+    pair_sums<1>(pairs, B, Bs, 1, s, delta, fit.in, depth_factor, residual, flows, fit.shift_rho, fit.own_depth);
     const Eigen::MatrixXd U = pair_velocities(sp, pairs, B);
     shift = pair_shifts(pairs, Bs, U);
     V = in_camera_axes(pairs, U);
   }
   for (size_t k = 0; k < n; ++k) r[s.position[k]] = left(k);
+  fit.velocities = std::move(V), fit.delta = std::move(delta);
   if (keep) keep->state = st;
 }
 
@@ -376,12 +456,14 @@ void subtract_fitted(const DiagnosisModel& m, const std::vector<int>& idx, Eigen
   for (size_t k = 0; k < taken.size(); ++k) taken[k] = fit.in[k] && rows(k).allFinite();
   Eigen::MatrixXd B, Bs;
   const std::vector<Eigen::Vector2d> flows = shift_flows(m, s, pairs);
-  pair_sums<Cols>(pairs, B, Bs, columns, s, delta, taken, depth_factor, rows, flows, fit.shift_rho);
+  pair_sums<Cols>(pairs, B, Bs, columns, s, delta, taken, depth_factor, rows, flows, fit.shift_rho, fit.own_depth);
   const Eigen::MatrixXd U = pair_velocities(sp, pairs, B), shift = pair_shifts(pairs, Bs, U);
   const Eigen::MatrixXd V = in_camera_axes(pairs, U);
   for (size_t k = 0; k < s.position.size(); ++k)
     for (Eigen::Index c = 0; c < columns; ++c)
-      rows(k).col(c) -= depth_factor(k) * unit_depth_flow(s, delta, V, k, c) + shift_flow(s, flows, shift, k, c);
+      rows(k).col(c) = own_metric(fit.own_depth, k,
+                                  rows(k).col(c) - depth_factor(k) * unit_depth_flow(s, delta, V, k, c) -
+                                      shift_flow(s, flows, shift, k, c));
 }
 
 }  // namespace
@@ -438,6 +520,24 @@ double translation_knot_spacing(const DiagnosisModel& m, const std::vector<int>&
     q = finer, scale = s;
   }
   return q.translation_knot_s;
+}
+
+double translation_depth_spread(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p) {
+  ModelParams q = p;
+  q.translation_nuisance = true;
+  q.translation_depth_px = 0;
+  DiagnosisModel::Settled settled;
+  const std::vector<Eigen::Vector2d> r = m.residuals(q, idx, settled);  // what the plane leaves
+  if (!settled.translation.state) return 0.0;
+  const TranslationFit::State& fit = *settled.translation.state;
+  const PairGroups& s = *fit.groups;
+  auto flow = [&](size_t k) {
+    return Eigen::Vector2d((1.0 + fit.slope.dot(s.xn[k])) * unit_depth_flow(s, fit.delta, fit.velocities, k));
+  };
+  auto left = [&](size_t k) { return r[s.position[k]]; };
+  const DepthSpread spread = measured_spread(s.position.size(), flow, left, fit.in, fit.scale);
+  const bool measured = spread.median_flow >= 1 && spread.z > kMinDepthSpreadZ && spread.spread >= kMinDepthSpread;
+  return measured ? spread.spread : 0.0;
 }
 
 }  // namespace rsd::dsp

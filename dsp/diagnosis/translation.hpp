@@ -65,6 +65,10 @@ double pair_shift_sd(const DiagnosisModel& m);
 // track.camera_at(tm.motion_time(T)) mount_t, mount_t the transpose of the mount rotation
 // (model.cpp, "Matches").
 //
+// With `depth_px` above zero each match's inverse depth is also its own: the plane's times
+// (1 + e), e under a prior of spread s, eliminated per match, depth_px = noise / s
+// (translation.cpp, own_depths; translation_depth_spread below measures s).
+//
 // With a jittered gyro (pair_shift_sd above zero) and `with_shifts`, each frame pair's rotation
 // also shifts in time: per match the flow of the rotation (w_b - w_a) tau, w_a and w_b the
 // camera's rate at the pair's two frames and tau one scalar per pair under the prior
@@ -78,7 +82,8 @@ double pair_shift_sd(const DiagnosisModel& m);
 struct TranslationFit;
 void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
                         const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t,
-                        double knot_s = kTranslationKnotS, TranslationFit* keep = nullptr, bool with_shifts = true);
+                        double knot_s = kTranslationKnotS, TranslationFit* keep = nullptr, bool with_shifts = true,
+                        double depth_px = 0);
 
 // What remove_translation settled on for one set of residuals: its observations by frame pair,
 // the last pass's inliers and the scene's slope. remove_fitted_translation fits the velocity
@@ -123,5 +128,24 @@ void remove_fitted_translation_from_columns(const DiagnosisModel& m, const std::
 // chosen in runs leave intervals between runs empty; a spline finer than its pairs is a free
 // translation per pair, which takes up what a rotation error leaves: a clock offset, a focal length).
 double translation_knot_spacing(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p);
+
+// The scene's inverse depths spread about the plane's (relative) by less than this, or by an
+// excess within kMinDepthSpreadZ standard errors of noise alone, or the translation moves the
+// median match by less than the noise (a translation the nuisance fitted to what a rotation
+// model left, not a camera's: nothing to measure depths by): the plane is taken as the scene.
+// The suite's walls and grounds measure 0.00-0.05. The independent generator's flight past
+// points 20-200 m away 0.55-0.58 (z 37-38, the median flow 1.4-1.6 noises), its phone shaken
+// past points 2-30 m away 0.37-0.43 (z 30-37, 2.0-2.2); a rendered rotation-only scene whose
+// tracker's errors looked like parallax 0.14 (z 0.3, 0.42: it named a mount under a gate by
+// the spread alone); a shutter's shear beside a quarter of the image displaced 0.44 (z 18, but
+// 0.38: under the own depths a gyro bias and a line delay 70% short came in its stead).
+inline constexpr double kMinDepthSpread = 0.3;
+inline constexpr double kMinDepthSpreadZ = 5.0;
+// The relative spread of the scene's inverse depths about the translation nuisance's plane, for
+// `p` (as translation_knot_spacing: the richest rotation fit, its knots chosen) on the
+// observations idx: the residual's energy along each match's translation flow beyond its energy
+// across it, over the flow's energy, from the matches whose flow exceeds the noise. Zero when
+// one plane describes the scene (kMinDepthSpread, kMinDepthSpreadZ).
+double translation_depth_spread(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p);
 
 }  // namespace rsd::dsp
