@@ -9,6 +9,7 @@
 
 #include "dsp/core/statistics.hpp"
 #include "dsp/diagnosis/model.hpp"
+#include "dsp/diagnosis/own_depth.hpp"
 #include "dsp/diagnosis/parallax.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
 #include "dsp/diagnosis/velocity_spline.hpp"
@@ -289,62 +290,12 @@ inline Eigen::Vector2d unit_depth_flow(const PairGroups& s, const std::vector<do
   return s.unit[k] * (V.block<3, 1>(at, column) + delta[k] * V.block<3, 1>(at + 3, column));
 }
 
-// A match's own depth. One plane describes a wall or a ground; a forward flight past points 20
-// to 200 m away has inverse depths a decade apart, and the plane's misfit (along each match's
-// translation flow, pixels for a near point) went into a rotation effect: the independent
-// generator's drone had a gyro bias about the pan's axis 29 mrad/s off (13 and 26 on two other
-// seeds). So each match's inverse depth is the plane's times (1 + e), e its own under a prior
-// of spread s: eliminating e leaves the match the metric P = I - b b^T (pair_sums),
-// b = a / sqrt(|a|^2 + depth_px^2), depth_px = sigma / s (the diagnosis's noise, fixed: against
-// each pass's robust scale a parameter that shrank the scale loosened the depths and lowered
-// the cost, and the fits found one, a focal length 10% long), a its translation flow at the
-// plane's depth in the previous pass's fit. A match whose a is large against the noise keeps
-// what lies across a; one that the translation moves by less than the noise keeps nearly all.
-
-// The scene's depth spread about the plane as measured (measured_spread: 0 when the excess is
-// negative); the excess's z-score against noise alone, under which along and across are alike
-// (x^2 - y^2 of two independent N(0, noise^2) has mean 0 and variance 4 noise^4); and the
-// inliers' median flow over the noise.
-struct DepthSpread {
-  double spread = 0, z = 0, median_flow = 0;
-};
-
-// The spread, from the inliers whose flow a exceeds the noise: the residual's energy along a
-// beyond its energy across a, over the energy of a.
-template <class Flow, class Residual>
-DepthSpread measured_spread(size_t n, const Flow& flow, const Residual& left, const std::vector<bool>& in, double noise) {
-  double excess = 0, energy = 0;
-  size_t used = 0;
-  std::vector<double> flows;
-  for (size_t k = 0; k < n; ++k) {
-    if (!in[k]) continue;
-    const Eigen::Vector2d a = flow(k);
-    flows.push_back(a.norm() / noise);
-    if (a.norm() <= noise) continue;
-    const Eigen::Vector2d along = a.normalized(), r = left(k);
-    const double x = along.dot(r), y = along.x() * r.y() - along.y() * r.x();
-    excess += x * x - y * y, energy += a.squaredNorm(), ++used;
-  }
-  if (used == 0) return {};
-  return {std::sqrt(std::max(0.0, excess / energy)), excess / (2 * noise * noise * std::sqrt(static_cast<double>(used))),
-          median(flows)};
-}
-
-// Each match's b (empty for none: `depth_px` zero).
-template <class Flow>
-std::vector<Eigen::Vector2d> own_depths(size_t n, const Flow& flow, double depth_px) {
-  if (!(depth_px > 0)) return {};
-  std::vector<Eigen::Vector2d> b(n);
-  for (size_t k = 0; k < n; ++k) {
-    const Eigen::Vector2d a = flow(k);
-    b[k] = a / std::sqrt(a.squaredNorm() + depth_px * depth_px);
-  }
-  return b;
-}
-
-// x in observation k's own metric: what its own depth leaves of it (x itself without own depths).
-inline Eigen::Vector2d own_metric(const std::vector<Eigen::Vector2d>& own, size_t k, const Eigen::Vector2d& x) {
-  return own.empty() ? x : Eigen::Vector2d(x - own[k] * own[k].dot(x));
+// f(k) for k < n, as a vector.
+template <class F>
+std::vector<Eigen::Vector2d> over(size_t n, const F& f) {
+  std::vector<Eigen::Vector2d> v(n);
+  for (size_t k = 0; k < n; ++k) v[k] = f(k);
+  return v;
 }
 
 // The scene's slope g (inverse depth 1 + g . xn over the depth at the optical axis) that best
@@ -424,8 +375,9 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
     const double scale = std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6), limit = 4 * scale;
     for (size_t k = 0; k < n; ++k) fit.in[k] = len[k] <= limit;
     if (pass >= 1) fit.slope = scene_slope(s, delta, V, fit.in, unshifted);
-    // Each match's own depth about the plane, from the second pass on (the first has no flow).
-    if (pass >= 1) fit.own_depth = own_depths(n, flow, depth_px);
+    // Each match's own depth about the plane (own_depth.hpp), from the second pass on (the first
+    // has no flow).
+    if (pass >= 1 && depth_px > 0) fit.own_depth = own_depths(over(n, flow), depth_px);
     fit.scale = scale;
     if (shift_sd > 0) fit.shift_rho = scale * scale / (shift_sd * shift_sd);
     pair_sums<1>(pairs, B, Bs, 1, s, delta, fit.in, depth_factor, residual, flows, fit.shift_rho, fit.own_depth);
@@ -531,11 +483,12 @@ double translation_depth_spread(const DiagnosisModel& m, const std::vector<int>&
   if (!settled.translation.state) return 0.0;
   const TranslationFit::State& fit = *settled.translation.state;
   const PairGroups& s = *fit.groups;
+  const size_t n = s.position.size();
   auto flow = [&](size_t k) {
     return Eigen::Vector2d((1.0 + fit.slope.dot(s.xn[k])) * unit_depth_flow(s, fit.delta, fit.velocities, k));
   };
   auto left = [&](size_t k) { return r[s.position[k]]; };
-  const DepthSpread spread = measured_spread(s.position.size(), flow, left, fit.in, fit.scale);
+  const DepthSpread spread = measured_spread(over(n, flow), over(n, left), fit.in, fit.scale);
   const bool measured = spread.median_flow >= 1 && spread.z > kMinDepthSpreadZ && spread.spread >= kMinDepthSpread;
   return measured ? spread.spread : 0.0;
 }
