@@ -7,10 +7,14 @@
 
 namespace rsd::dsp {
 
-std::vector<Eigen::Vector2d> own_depths(const std::vector<Eigen::Vector2d>& flow, double depth_px) {
+std::vector<Eigen::Vector2d> own_depths(const std::vector<Eigen::Vector2d>& flow, const std::vector<Eigen::Vector2d>& left,
+                                        double depth_px) {
   if (!(depth_px > 0)) return {};
-  std::vector<Eigen::Vector2d> b(flow.size());
-  for (size_t k = 0; k < flow.size(); ++k) b[k] = flow[k] / std::sqrt(flow[k].squaredNorm() + depth_px * depth_px);
+  std::vector<Eigen::Vector2d> b(flow.size(), Eigen::Vector2d::Zero());
+  for (size_t k = 0; k < flow.size(); ++k) {
+    const double q = flow[k].squaredNorm() + depth_px * depth_px, e = flow[k].dot(left[k]) / q;
+    if (e >= kMinOwnDepth && e <= kMaxOwnDepth) b[k] = flow[k] / std::sqrt(q);
+  }
   return b;
 }
 

@@ -377,7 +377,7 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
     if (pass >= 1) fit.slope = scene_slope(s, delta, V, fit.in, unshifted);
     // Each match's own depth about the plane (own_depth.hpp), from the second pass on (the first
     // has no flow).
-    if (pass >= 1 && depth_px > 0) fit.own_depth = own_depths(over(n, flow), depth_px);
+    if (pass >= 1 && depth_px > 0) fit.own_depth = own_depths(over(n, flow), over(n, plane_left), depth_px);
     fit.scale = scale;
     if (shift_sd > 0) fit.shift_rho = scale * scale / (shift_sd * shift_sd);
     pair_sums<1>(pairs, B, Bs, 1, s, delta, fit.in, depth_factor, residual, flows, fit.shift_rho, fit.own_depth);
