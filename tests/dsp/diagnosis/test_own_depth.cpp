@@ -16,7 +16,8 @@ using dsp::own_depths;
 using dsp::own_metric;
 
 // The e that minimises |left - a e|^2 + (depth_px e)^2 (the data's misfit and the prior's, in
-// sigma^2 units times sigma^2), found on a grid and refined by golden sections: no closed form.
+// sigma^2 units times sigma^2), found on a grid and refined by golden sections: a search, not
+// the closed form own_depths uses.
 double brute_force_depth(const Eigen::Vector2d& a, const Eigen::Vector2d& left, double depth_px) {
   auto cost = [&](double e) { return (left - a * e).squaredNorm() + depth_px * depth_px * e * e; };
   double best = 0;
