@@ -102,6 +102,38 @@ Eigen::VectorXd ParameterCovariance::variances() const {
   return classic.diagonal().cwiseMax(sandwich.diagonal());
 }
 
+double ParameterCovariance::wald(const std::vector<int>& rows, const Eigen::VectorXd& delta) const {
+  auto of = [&](const Eigen::MatrixXd& c) {
+    Eigen::MatrixXd block(rows.size(), rows.size());
+    for (size_t i = 0; i < rows.size(); ++i)
+      for (size_t j = 0; j < rows.size(); ++j) block(i, j) = c(rows[i], rows[j]);
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu(block);
+    return lu.isInvertible() ? delta.dot(lu.solve(delta)) : 0.0;
+  };
+  const double w = of(classic);
+  return sandwich.size() ? std::min(w, of(sandwich)) : w;
+}
+
+double wald_at_three_sigmas(int k) {
+  // The normal quantile whose upper tail is 0.0027, the two tails beyond 3 sigmas.
+  constexpr double z = 2.7822;
+  const double a = 2.0 / (9.0 * k), c = 1 - a + z * std::sqrt(a);
+  return k * c * c * c;
+}
+
+std::vector<ParameterCovariance> fitted_covariances(const DiagnosisModel& m, const ModelParams& fitted,
+                                                    const std::vector<Param>& free, const std::vector<int>& fit) {
+  std::vector<ParameterCovariance> out;
+  if (free.empty()) return out;
+  // One Jacobian for both clusterings (under the nuisance each column refits the spline).
+  const FitInliers f = fit_inliers(m, fitted, fit);
+  const Eigen::MatrixXd J = residual_jacobian(m, fitted, free, f.idx);
+  if (auto by_frame = covariance(m, J, f, 1)) out.push_back(std::move(*by_frame));
+  if (!out.empty() && fitted.translation_nuisance)
+    if (auto blocks = covariance(m, J, f, kNuisanceClusterFrames)) out.push_back(std::move(*blocks));
+  return out;
+}
+
 std::optional<ParameterCovariance> parameter_covariance(const DiagnosisModel& m, const ModelParams& fitted,
                                                         const std::vector<Param>& free, const std::vector<int>& idx,
                                                         int cluster_frames) {
@@ -128,15 +160,9 @@ std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, cons
       if (const auto k = param_by_name(p.name); k && !follows(*k, n) && p.text.empty() &&
                                                  std::find(free.begin(), free.end(), *k) == free.end())
         free.push_back(*k);
-  // One Jacobian for both clusterings (under the nuisance each column refits the spline).
   std::optional<Eigen::VectorXd> var;
-  if (!free.empty()) {
-    const FitInliers f = fit_inliers(m, fitted, fit);
-    const Eigen::MatrixXd J = residual_jacobian(m, fitted, free, f.idx);
-    if (const auto by_frame = covariance(m, J, f, 1)) var = by_frame->variances();
-    if (var && fitted.translation_nuisance)
-      if (const auto blocks = covariance(m, J, f, kNuisanceClusterFrames)) var = var->cwiseMax(blocks->variances());
-  }
+  for (const ParameterCovariance& c : fitted_covariances(m, fitted, free, fit))
+    var = var ? var->cwiseMax(c.variances()) : c.variances();
   auto sigma_of = [&](Param p) -> std::optional<double> {
     double factor = 1.0;
     if (const std::optional<Follows> f = follows(p, n)) p = f->leader, factor = f->factor;

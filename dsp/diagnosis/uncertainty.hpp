@@ -59,7 +59,23 @@ struct ParameterCovariance {
   double variance_of(const Eigen::VectorXd& g) const;
   // Each parameter's: the larger of the two estimates' diagonals.
   Eigen::VectorXd variances() const;
+  // How far `delta` (parameters `rows` of this covariance's order) lies from zero in their own
+  // uncertainty: the Wald statistic delta^T C^-1 delta over those rows, the smaller of the two
+  // estimates' (the more cautious); 0 when the rows' block is singular.
+  double wald(const std::vector<int>& rows, const Eigen::VectorXd& delta) const;
 };
+
+// The chi-square with k degrees of freedom that a k-parameter deviation exceeds with the
+// probability of a 3-sigma one-parameter deviation (0.0027): 9 for one parameter, 11.8 for two,
+// 14.2 for three (Wilson and Hilferty's cube-root approximation, within 1.5% from one up).
+double wald_at_three_sigmas(int k);
+
+// The covariances effect_uncertainties takes the larger variances of, from one Jacobian of the
+// inliers of `fit` at `fitted` (the parameters `free`, in that order): clustered by frame and,
+// under the translation nuisance, by blocks of kNuisanceClusterFrames frames when it has enough
+// of them. Empty when the parameters are not identifiable there.
+std::vector<ParameterCovariance> fitted_covariances(const DiagnosisModel& m, const ModelParams& fitted,
+                                                    const std::vector<Param>& free, const std::vector<int>& fit);
 
 // The variances of the parameters `free` at `fitted` (in their own units, the order of
 // `free`), from the inliers among observations idx, as effect_uncertainties computes them:
