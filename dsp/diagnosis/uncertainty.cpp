@@ -132,7 +132,7 @@ std::vector<ParameterCovariance> fitted_covariances(const DiagnosisModel& m, con
                                                     const std::vector<Param>& free, const std::vector<int>& fit) {
   std::vector<ParameterCovariance> out;
   if (free.empty()) return out;
-  // One Jacobian for both clusterings (under the nuisance each column refits the spline).
+  // One Jacobian for both clusterings (under the nuisance each column is a pass of the spline).
   const FitInliers f = fit_inliers(m, fitted, fit);
   const Eigen::MatrixXd J = residual_jacobian(m, fitted, free, f.idx);
   if (auto by_frame = covariance(m, J, f, 1)) out.push_back(std::move(*by_frame));

@@ -98,7 +98,8 @@ std::optional<ParameterCovariance> parameter_covariance(const DiagnosisModel& m,
 // d residual / d parameter (px per unit) of the observations idx at `at`: rows 2k, 2k + 1 are
 // idx[k]'s, a column per parameter of `free`. Central differences of a hundredth of the
 // parameter's typical change: well above the rolling-shutter root-finder's tolerance, well
-// inside the linear range. A failed prediction has zero rows.
+// inside the linear range. A failed prediction has zero rows. Under the translation nuisance
+// both steps hold the inliers, slope and own depths it settled on at `at` (residuals_near).
 Eigen::MatrixXd residual_jacobian(const DiagnosisModel& m, const ModelParams& at, const std::vector<Param>& free,
                                   const std::vector<int>& idx);
 
