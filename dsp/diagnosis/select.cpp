@@ -179,8 +179,9 @@ std::optional<Deviation> deviation_from_nominal(const Selector& sel, const State
   for (Param q : params_in(effect_params(e, sel.lens_)))
     if (const auto it = std::find(free.begin(), free.end(), q); it != free.end())
       rows.push_back(static_cast<int>(it - free.begin())), delta.push_back(s.params[q] - sel.nominal_[q]);
+  if (rows.empty()) return std::nullopt;  // no parameter of its own (readout_direction): no Jacobian
   const std::vector<ParameterCovariance> covs = fitted_covariances(sel.m_, s.params, free, sel.fit_);
-  if (rows.empty() || covs.empty()) return std::nullopt;
+  if (covs.empty()) return std::nullopt;
   const Eigen::Map<const Eigen::VectorXd> d(delta.data(), static_cast<Eigen::Index>(delta.size()));
   Deviation out{std::numeric_limits<double>::infinity(), static_cast<int>(rows.size())};
   for (const ParameterCovariance& c : covs) out.wald = std::min(out.wald, c.wald(rows, d));
