@@ -11,6 +11,7 @@
 #include "dsp/diagnosis/heldout_check.hpp"
 #include "dsp/diagnosis/observation_choice.hpp"
 #include "dsp/diagnosis/offset_search.hpp"
+#include "dsp/diagnosis/own_depth.hpp"
 #include "dsp/diagnosis/select.hpp"
 #include "dsp/diagnosis/stabiliser.hpp"
 
@@ -213,7 +214,7 @@ void nuisance_shape(const DiagnosisModel& m, const std::vector<int>& screen, Mod
   richest.translation_knot_s = n.translation_knot_s = gross.translation_knot_s =
       translation_knot_spacing(m, screen, richest);
   const double spread = translation_depth_spread(m, screen, richest);
-  n.translation_depth_px = gross.translation_depth_px = spread > 0 ? sigma / spread : 0.0;
+  n.translation_depth_px = gross.translation_depth_px = spread > 0 ? sigma / (kOwnDepthPriorWidth * spread) : 0.0;
 }
 
 // The selection without the translation nuisance, its blocked-halves check held until the

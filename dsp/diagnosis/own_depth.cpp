@@ -13,9 +13,16 @@ std::vector<Eigen::Vector2d> own_depths(const std::vector<Eigen::Vector2d>& flow
   std::vector<Eigen::Vector2d> b(flow.size(), Eigen::Vector2d::Zero());
   for (size_t k = 0; k < flow.size(); ++k) {
     const double q = flow[k].squaredNorm() + depth_px * depth_px, e = flow[k].dot(left[k]) / q;
-    if (e >= kMinOwnDepth && e <= kMaxOwnDepth) b[k] = flow[k] / std::sqrt(q);
+    // What share of a e it takes out (own_depth_kept); b b^T left = kept a e.
+    if (const double kept = own_depth_kept(e); kept > 0) b[k] = std::sqrt(kept) * flow[k] / std::sqrt(q);
   }
   return b;
+}
+
+double own_depth_kept(double e) {
+  const double below = (e - (kMinOwnDepth - kOwnDepthFade / 2)) / (kOwnDepthFade / 2),
+               above = (kMaxOwnDepth + kOwnDepthFade - e) / kOwnDepthFade;
+  return std::clamp(std::min(below, above), 0.0, 1.0);
 }
 
 DepthSpread measured_spread(const std::vector<Eigen::Vector2d>& flow, const std::vector<Eigen::Vector2d>& left,

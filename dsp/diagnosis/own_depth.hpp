@@ -25,11 +25,29 @@ namespace rsd::dsp {
 // moved by 3000 between two gyro biases over its 5% of mismatches, by 60 over the rest).
 inline constexpr double kMinOwnDepth = -1.0;
 inline constexpr double kMaxOwnDepth = 3.0;
+// Past the bounds an own depth fades out, over kOwnDepthFade in e beyond kMaxOwnDepth and half
+// of it below kMinOwnDepth, instead of switching off: switched, every match whose e crossed a
+// bound between two parameter values moved its residual by up to 3 |a| at once, and the
+// independent drone's robust chi-square jumped by 20 to 50 between clock offsets 0.5 ms apart,
+// more than the offset itself moves it there: the fits stopped where they started.
+inline constexpr double kOwnDepthFade = 1.0;
+// The own depths' prior spread s in measured spreads (measured_spread): twice as wide as the
+// scene's inverse depths spread about the plane. At the measured spread, the shrinkage of each
+// match's own depth towards the plane's (by |a|^2 / (|a|^2 + (sigma / s)^2)) left what it did
+// not take of a flight's skewed depths (most points far, a tail of near ones) along the flow, and
+// the clock offset the independent drone named from a pan came out early on average (docs/
+// diagnosis.md, "Each match's own depth"); five times as wide, the own depths take up what the pan
+// shows and nothing is named.
+inline constexpr double kOwnDepthPriorWidth = 2.0;
+
+// The share of its own depth's flow a e that a match whose own depth is e gives up: 1 within
+// [kMinOwnDepth, kMaxOwnDepth], 0 beyond the fades (kOwnDepthFade), linear between.
+double own_depth_kept(double e);
 
 // Each match's b for its translation flow a (`flow`, px) and what the plane leaves of it (`left`,
-// px); empty for none (`depth_px` zero). A match whose own depth, the e that minimises
-// |left - a e|^2 / sigma^2 + e^2 / s^2, lies outside [kMinOwnDepth, kMaxOwnDepth] has none
-// (b = 0: the plane's depth, its residual whole).
+// px); empty for none (`depth_px` zero). b b^T takes out own_depth_kept(e) a e, e the own depth
+// that minimises |left - a e|^2 / sigma^2 + e^2 / s^2: all of it within [kMinOwnDepth,
+// kMaxOwnDepth], none past the fades (b = 0: the plane's depth, its residual whole).
 std::vector<Eigen::Vector2d> own_depths(const std::vector<Eigen::Vector2d>& flow, const std::vector<Eigen::Vector2d>& left,
                                         double depth_px);
 

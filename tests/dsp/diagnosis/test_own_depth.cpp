@@ -1,8 +1,10 @@
 // own_depths: each match's own depth in the translation nuisance (dsp/diagnosis/own_depth.hpp),
-// against the depth found by brute force, and the bound that keeps a mismatch from taking one.
+// against the depth found by brute force, the bound that keeps a mismatch from taking one, and
+// the fade past it that keeps the residual continuous.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -73,6 +75,42 @@ TEST(OwnDepth, AMismatchAlongItsFlowKeepsItsWholeResidual) {
   // Without own depths (one plane) nothing is taken out.
   EXPECT_TRUE(own_depths({a}, {left[2]}, 0.0).empty());
   EXPECT_EQ(own_metric({}, 0, left[2]), left[2]);
+}
+
+// Past its bounds an own depth fades out: what the match's residual keeps of the flow of its
+// depth goes linearly from none to all over kOwnDepthFade beyond kMaxOwnDepth (half of it below
+// kMinOwnDepth), so that the residual moves continuously as a parameter moves e across a bound.
+// Against the residual less kept(e) a e, kept the straight line between the band's ends; the
+// residuals are made to ask for e, which brute force confirms every 0.5.
+TEST(OwnDepth, PastItsBoundsAnOwnDepthFadesOutContinuously) {
+  const double depth_px = 1.8;
+  const Eigen::Vector2d a(5, 0), across(0, 0.7);
+  const double q = a.squaredNorm() + depth_px * depth_px;
+  auto kept_by_hand = [](double e) {
+    if (e <= -1.5 || e >= 4.0) return 0.0;
+    if (e < -1.0) return (e + 1.5) / 0.5;
+    return e > 3.0 ? 4.0 - e : 1.0;
+  };
+  Eigen::Vector2d last = Eigen::Vector2d::Constant(std::nan(""));
+  double largest_step = 0;
+  for (int step = -250; step <= 500; ++step) {
+    const double e = step / 100.0;
+    const Eigen::Vector2d left = a * (e * q / a.squaredNorm()) + across;  // asks for own depth e
+    const std::vector<Eigen::Vector2d> b = own_depths({a}, {left}, depth_px);
+    if (step % 50 == 0) {
+      ASSERT_NEAR(brute_force_depth(a, left, depth_px), e, 1e-6);
+    }
+    const Eigen::Vector2d r = own_metric(b, 0, left);
+    EXPECT_LT((r - (left - kept_by_hand(e) * a * e)).norm(), 1e-6) << "e " << e;
+    EXPECT_NEAR(dsp::own_depth_kept(e), kept_by_hand(e), 1e-12) << "e " << e;
+    if (last.allFinite()) largest_step = std::max(largest_step, (r - last).norm());
+    last = r;
+  }
+  // A step of 0.01 in e moves the residual by 0.01 depth_px^2 / |a| (0.0065 px) where the depth
+  // is taken whole, by 0.01 q / |a| (0.056 px) where none is, and by at most 0.01 |a| (q / |a|^2
+  // + 4) (0.26 px) on the upper fade: no jump (switched at e = 3: 3 q / |a| = 17 px at once).
+  EXPECT_LT(largest_step, 0.01 * a.norm() * (q / a.squaredNorm() + 4) + 1e-9);
+  EXPECT_GT(largest_step, 0.01 * q / a.norm());
 }
 
 }  // namespace
