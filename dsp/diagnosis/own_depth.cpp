@@ -20,9 +20,9 @@ std::vector<Eigen::Vector2d> own_depths(const std::vector<Eigen::Vector2d>& flow
 }
 
 double own_depth_kept(double e) {
-  const double below = (e - (kMinOwnDepth - kOwnDepthFade / 2)) / (kOwnDepthFade / 2),
-               above = (kMaxOwnDepth + kOwnDepthFade - e) / kOwnDepthFade;
-  return std::clamp(std::min(below, above), 0.0, 1.0);
+  if (e > kMaxOwnDepth) return kMaxOwnDepth / e;
+  if (e < kMinOwnDepth) return kMinOwnDepth / e;
+  return 1.0;
 }
 
 DepthSpread measured_spread(const std::vector<Eigen::Vector2d>& flow, const std::vector<Eigen::Vector2d>& left,

@@ -25,29 +25,40 @@ namespace rsd::dsp {
 // moved by 3000 between two gyro biases over its 5% of mismatches, by 60 over the rest).
 inline constexpr double kMinOwnDepth = -1.0;
 inline constexpr double kMaxOwnDepth = 3.0;
-// Past the bounds an own depth fades out, over kOwnDepthFade in e beyond kMaxOwnDepth and half
-// of it below kMinOwnDepth, instead of switching off: switched, every match whose e crossed a
-// bound between two parameter values moved its residual by up to 3 |a| at once, and the
-// independent drone's robust chi-square jumped by 20 to 50 between clock offsets 0.5 ms apart,
-// more than the offset itself moves it there: the fits stopped where they started.
-inline constexpr double kOwnDepthFade = 1.0;
-// The own depths' prior spread s in measured spreads (measured_spread): twice as wide as the
-// scene's inverse depths spread about the plane. At the measured spread, the shrinkage of each
-// match's own depth towards the plane's (by |a|^2 / (|a|^2 + (sigma / s)^2)) left what it did
-// not take of a flight's skewed depths (most points far, a tail of near ones) along the flow, and
-// the clock offset the independent drone named from a pan came out early on average (docs/
-// diagnosis.md, "Each match's own depth"); five times as wide, the own depths take up what the pan
-// shows and nothing is named.
-inline constexpr double kOwnDepthPriorWidth = 2.0;
+// Past the bounds an own depth stays at the bound (own_depth_kept): the match gives up the flow
+// of the bound's depth and keeps the rest, the most likely own depth under the prior cut to the
+// bounds. Switched off at the bounds, every match whose e crossed one between two parameter
+// values moved its residual by up to 3 |a| at once, and the independent drone's robust
+// chi-square jumped by 20 to 50 between clock offsets 0.5 ms apart (more than the offset moves
+// it there: the fits stopped where they started). Faded out over one unit of e past the bounds
+// (the sixtieth session) the residual was continuous, but a match whose e the noise carried into
+// the fade lost its own depth: with little flow, e = a.r / (|a|^2 + depth_px^2) is mostly noise
+// once the prior is wide. The profile of the drone's cost over the offset was jagged by a robust
+// chi-square of 3 to 6 (which hid where its trend lay, below), and with the prior four times as
+// wide it had no minimum at all, its cost 7% higher. Held at the bound, the jag is 1 to 2.
+//
+// The own depths' prior spread s in measured spreads (measured_spread): four times as wide as the
+// scene's inverse depths spread about the plane. Narrower, the shrinkage of each match's own depth
+// towards the plane's (by |a|^2 / (|a|^2 + (sigma / s)^2)) leaves what it does not take of a
+// flight's skewed depths (most points far, a tail of near ones) along the flow, and the clock
+// offset the independent drone names from its pan comes out early. The minimum of a quadratic
+// through the profile of its cost over the offset (-61.5 to -55.5 ms, the translation refitted
+// at each), on seeds 1, 3, 6 and 7 (truth -58 ms): -57.9, -59.6, -60.0 and -61.4 ms with the
+// prior twice as wide and the fade; held at the bounds, -58.7, -59.8, -60.4 and -61.2 twice as
+// wide, -58.0, -59.4, -59.4 and -59.0 three times, -57.4, -58.7, -58.8 and -57.9 four times. Six
+// times as wide the cost has no minimum again: the prior no longer pins the plane, and the own
+// depths and the velocity trade their common scale.
+inline constexpr double kOwnDepthPriorWidth = 4.0;
 
 // The share of its own depth's flow a e that a match whose own depth is e gives up: 1 within
-// [kMinOwnDepth, kMaxOwnDepth], 0 beyond the fades (kOwnDepthFade), linear between.
+// [kMinOwnDepth, kMaxOwnDepth], the bound's share beyond (kMaxOwnDepth / e above, kMinOwnDepth /
+// e below): what it gives up is a times the bound.
 double own_depth_kept(double e);
 
 // Each match's b for its translation flow a (`flow`, px) and what the plane leaves of it (`left`,
 // px); empty for none (`depth_px` zero). b b^T takes out own_depth_kept(e) a e, e the own depth
 // that minimises |left - a e|^2 / sigma^2 + e^2 / s^2: all of it within [kMinOwnDepth,
-// kMaxOwnDepth], none past the fades (b = 0: the plane's depth, its residual whole).
+// kMaxOwnDepth], the bound's flow beyond.
 std::vector<Eigen::Vector2d> own_depths(const std::vector<Eigen::Vector2d>& flow, const std::vector<Eigen::Vector2d>& left,
                                         double depth_px);
 
