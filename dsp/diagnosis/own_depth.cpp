@@ -13,13 +13,15 @@ std::vector<Eigen::Vector2d> own_depths(const std::vector<Eigen::Vector2d>& flow
   std::vector<Eigen::Vector2d> b(flow.size(), Eigen::Vector2d::Zero());
   for (size_t k = 0; k < flow.size(); ++k) {
     const double q = flow[k].squaredNorm() + depth_px * depth_px, e = flow[k].dot(left[k]) / q;
-    // What share of a e it takes out (own_depth_kept); b b^T left = kept a e.
+    // What share of a e it takes out (own_depth_kept); b b^T left = kept a e. None for a residual
+    // that is not finite (a failed prediction): b stays zero.
     if (const double kept = own_depth_kept(e); kept > 0) b[k] = std::sqrt(kept) * flow[k] / std::sqrt(q);
   }
   return b;
 }
 
 double own_depth_kept(double e) {
+  if (!std::isfinite(e)) return 0.0;
   if (e > kMaxOwnDepth) return kMaxOwnDepth / e;
   if (e < kMinOwnDepth) return kMinOwnDepth / e;
   return 1.0;

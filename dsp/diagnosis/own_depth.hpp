@@ -52,7 +52,7 @@ inline constexpr double kOwnDepthPriorWidth = 4.0;
 
 // The share of its own depth's flow a e that a match whose own depth is e gives up: 1 within
 // [kMinOwnDepth, kMaxOwnDepth], the bound's share beyond (kMaxOwnDepth / e above, kMinOwnDepth /
-// e below): what it gives up is a times the bound.
+// e below): what it gives up is a times the bound. None (0) for an e that is not finite.
 double own_depth_kept(double e);
 
 // Each match's b for its translation flow a (`flow`, px) and what the plane leaves of it (`left`,

@@ -26,13 +26,13 @@ double brute_force_depth(const Eigen::Vector2d& a, const Eigen::Vector2d& left, 
   double best = lo;
   for (double e = lo; e <= hi; e += 1e-3)
     if (cost(e) < cost(best)) best = e;
-  double a_ = std::max(lo, best - 1e-3), b_ = std::min(hi, best + 1e-3);
+  double from = std::max(lo, best - 1e-3), to = std::min(hi, best + 1e-3);
   const double g = (std::sqrt(5.0) - 1) / 2;
   for (int i = 0; i < 100; ++i) {
-    const double x1 = b_ - g * (b_ - a_), x2 = a_ + g * (b_ - a_);
-    (cost(x1) < cost(x2) ? b_ : a_) = cost(x1) < cost(x2) ? x2 : x1;
+    const double x1 = to - g * (to - from), x2 = from + g * (to - from);
+    (cost(x1) < cost(x2) ? to : from) = cost(x1) < cost(x2) ? x2 : x1;
   }
-  return (a_ + b_) / 2;
+  return (from + to) / 2;
 }
 
 // The same within the own depth's bounds.
@@ -83,6 +83,9 @@ TEST(OwnDepth, AMismatchAlongItsFlowGivesUpNoMoreThanTheFlowOfABound) {
     EXPECT_NEAR(e, gets[k], 1e-6) << "match " << k;
     EXPECT_LT((own_metric(b, k, left[k]) - (left[k] - a * e)).norm(), 1e-6) << "match " << k;
   }
+  // A failed prediction's residual (not finite) gets no own depth.
+  const Eigen::Vector2d failed = Eigen::Vector2d::Constant(std::nan(""));
+  EXPECT_EQ(own_depths({a}, {failed}, depth_px)[0], Eigen::Vector2d::Zero());
   // Without own depths (one plane) nothing is taken out.
   EXPECT_TRUE(own_depths({a}, {left[2]}, 0.0).empty());
   EXPECT_EQ(own_metric({}, 0, left[2]), left[2]);
