@@ -1,5 +1,6 @@
 #include "dsp/diagnosis/offset_search.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -77,6 +78,27 @@ double scan_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, co
   ModelParams q = p;
   q[Param::TimeOffset] = best_offset(m, sub, p, lo, hi, 5e-3, coarse_width(m, sigma)).offset;
   return refine_time_offset(m, sub, q, sigma);
+}
+
+double profile_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma,
+                           double step_s) {
+  const double now = p[Param::TimeOffset];
+  if (!(step_s > 0) || !std::isfinite(step_s)) return now;
+  constexpr int kHalf = 4;  // points either side: four steps
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  ModelParams q = p;
+  for (int k = -kHalf; k <= kHalf; ++k) {
+    q[Param::TimeOffset] = now + k * step_s;
+    const double cost = robust_chi2(m.residuals(q, idx), sigma);
+    if (!std::isfinite(cost)) return now;
+    const Eigen::Vector3d basis(1.0, k, static_cast<double>(k) * k);  // in steps
+    normal += basis * basis.transpose();
+    rhs += basis * cost;
+  }
+  const Eigen::Vector3d c = normal.ldlt().solve(rhs);
+  if (!(c[2] > 0)) return now;  // no minimum: the trend falls or is flat
+  return now + std::clamp(-c[1] / (2 * c[2]), -static_cast<double>(kHalf), static_cast<double>(kHalf)) * step_s;
 }
 
 ModelParams gross_start(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma,

@@ -28,6 +28,21 @@ double refine_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, 
 // the flight's flow, and the local fits, started there, do not cross the translation's jagged
 // cost to reach it.
 double settle_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma);
+// The minimum of the clock offset's profile about a fit under the translation nuisance: the
+// vertex of the quadratic through the robust chi-square (robust_chi2) at p's offset + k step,
+// k = -4..4 (the other parameters held at p's, the translation taken out afresh at each), clamped
+// to those points; p's own where the quadratic has no minimum or a point has no finite cost.
+// At a fit's minimum it is the fit's offset, up to the cost's jag (a robust chi-square of 1 or 2
+// where a match crosses an inlier's or an own depth's bound, which a quadratic over points a
+// sigma apart, rising by 16 at the ends, does not follow). The fits' Jacobian holds the
+// translation as it settled (translation.hpp) while this cost takes it out afresh, and the two
+// can disagree: on the independent generator's drone with a steadier gimbal the fit stopped at
+// -64.8 ms where the held cost had a second shallow minimum, and this profile's lay towards
+// -58 ms, the truth (at the clamp, four sigmas away); at 60 fps the fit, at -58.7 ms, was the
+// nearer, and this profile's minimum 3.2 ms further.
+double profile_time_offset(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, double sigma_px,
+                           double step_s);
+
 // Gross errors first: a joint grid of the time offset (as scan_time_offset) and a common focal
 // scale (0.8 .. 1.2 of p's fx, fy in 5% steps) under a truncated cost that a wrong offset or a
 // focal length 20% off both saturate. Returns p with the best offset and focal lengths: start

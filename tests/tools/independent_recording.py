@@ -13,8 +13,11 @@ are a pinhole phone and a fisheye action camera (rotation only; CTests, label e2
 phone under parallax, a stabilised video and a drone's forward flight with a pan past points at
 many depths (CTests, label slow).
 
-  independent_recording.py --case NAME --rsd-diagnose PATH --work DIR
+  independent_recording.py --case NAME --rsd-diagnose PATH --work DIR [--set KEY=JSON ...]
   independent_recording.py --case NAME --work DIR --write-only
+
+--set writes a variant of the case (a user's rig the CTests do not hold), e.g. the drone's
+gimbal steadier: --case drone --set rate=0.01; or at 60 fps: --set fps=60.
 
 Exit status 0 when every goal holds, 1 when one does not (each says why), 2 on bad use.
 """
@@ -66,12 +69,14 @@ def log_so3(m):
 # None where it must be noise, else the signal it must be significant in; `may_miss` effects of
 # the truth the data hardly hold, which may go unnamed (named, they meet the goals); `goals` whether the
 # named values must meet the benchmark's goals (line delay 3%, offset 0.5 ms, bias 1 mrad/s).
+# `honest`: parameters (time_offset_s, line_delay_s) whose named values must lie within three of the
+# sigmas the report states of the truth, whether or not they meet the goals.
 # Optional: f_nominal, k_nominal (the nominal model's, where the truth differs), mount (the
 # camera turned on its mount by this rotation vector), trans (a hand's translation, m), depth
 # (points at log-uniform distances in this range, m; without it every point is at infinity),
 # fwd (a forward flight, m/s), pan (rad, starting s: a raised-cosine pan over 2 s about the
 # camera's y axis), stabilise_hz (the pictures follow the gyro's rates low-passed, zero phase,
-# |G| = 1 / sqrt(1 + (f / stabilise_hz)^4)), duration, per_pair, noise, gyro_hz.
+# |G| = 1 / sqrt(1 + (f / stabilise_hz)^4)), duration, fps, per_pair, noise, gyro_hz.
 CASES = {
     # A phone-like pinhole camera: a readout the nominal model lacks, the clocks 15 ms apart, a
     # gyro bias; the gyro's axes a permutation of the camera's, 2 degrees off it (a calibration).
@@ -107,6 +112,8 @@ CASES = {
                   expect=['time_offset'], may_miss=['gyro_bias'], remainder='translation', goals=True),
 }
 DURATION_S, FPS, PER_PAIR, NOISE_PX, OUTLIERS, GYRO_HZ, GYRO_NOISE = 10.0, 30.0, 100, 0.5, 0.05, 200.0, 0.003
+VARIANT_KEYS = {'fps', 'duration', 'per_pair', 'noise', 'gyro_hz', 'mount', 'trans', 'depth', 'fwd', 'pan',
+                'stabilise_hz', 'f_nominal', 'k_nominal', 'nominal_line_delay', 'may_miss', 'honest'}
 PERMUTED = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]  # w_camera = R w_imu: the gyro's x is the camera's y
 
 
@@ -117,6 +124,7 @@ class Rig:
         self.cx = (case['width'] - 1) / 2 + 3.0
         self.cy = (case['height'] - 1) / 2 - 2.0
         self.duration = case.get('duration', DURATION_S)
+        self.fps = case.get('fps', FPS)
         self.imu_to_camera = mat_mul(exp_so3([0.02, -0.01, 0.03]), PERMUTED)  # what the yaml says
         self.true_imu_to_camera = mat_mul(exp_so3(case.get('mount', [0, 0, 0])), self.imu_to_camera)
         self.terms = [(ax, self.rng.uniform(0.3, 2.5), self.rng.uniform(0, 2 * math.pi), self.rng.gauss(0, 1))
@@ -209,7 +217,7 @@ class Rig:
         return [x / n, y / n, 1 / n]
 
     def motion_time(self, frame, v):
-        return self.t0 + frame / FPS + self.c['line_delay'] * v + self.c['offset']
+        return self.t0 + frame / self.fps + self.c['line_delay'] * v + self.c['offset']
 
     def match(self, frame):
         """One match of frame and frame + 1, or None when the point leaves the picture."""
@@ -246,11 +254,11 @@ class Rig:
 
     def write(self, out):
         os.makedirs(out, exist_ok=True)
-        frames = int(self.duration * FPS)
+        frames = int(self.duration * self.fps)
         with open(os.path.join(out, 'frames.csv'), 'w') as f:
             f.write('frame,t\n')
             for k in range(frames):
-                f.write(f'{k},{self.t0 + k / FPS:.9f}\n')
+                f.write(f'{k},{self.t0 + k / self.fps:.9f}\n')
         with open(os.path.join(out, 'matches.csv'), 'w') as f:
             f.write('frame_a,ua,va,frame_b,ub,vb\n')
             for k in range(frames - 1):
@@ -283,7 +291,7 @@ camera:
   distortion: [{k_nominal[0]}, {k_nominal[1]}, 0, 0]
   model: {c['model']}
 timing:
-  frame_rate_hz: {FPS}
+  frame_rate_hz: {self.fps}
   line_delay_s: {c.get('nominal_line_delay', 0.0)}
   readout: top_to_bottom
   time_offset_s: 0.0
@@ -301,9 +309,37 @@ frames: frames.csv
 
 # --- the goals ------------------------------------------------------------------------------
 
-def check(case, d):
+def stated_sigmas(report_dir):
+    """(parameter -> (value, sigma)) from the report's table of named effects."""
+    out = {}
+    with open(os.path.join(report_dir, 'index.md')) as f:
+        for line in f:
+            cells = [c.strip() for c in line.strip().strip('|').split('|')]
+            if len(cells) == 5 and cells[1].startswith('`') and cells[1].endswith('`'):
+                try:
+                    out[cells[1].strip('`')] = (float(cells[2]), float(cells[3]))
+                except ValueError:
+                    pass
+    return out
+
+
+def outside_sigmas(case, sigmas):
+    """The `honest` parameters named further from the truth than three of their stated sigmas."""
+    truth = {'time_offset_s': case['offset'], 'line_delay_s': case['line_delay']}
+    bad = []
+    for name in case.get('honest', []):
+        if name in sigmas:
+            value, sigma = sigmas[name]
+            if abs(value - truth[name]) > 3 * sigma:
+                bad.append(f"{name} {value} +- {sigma}: {abs(value - truth[name]) / sigma:.1f} of its sigmas from the truth {truth[name]} (at most 3)")
+    return bad
+
+
+def check(case, d, sigmas=None):
     """What does not hold, one line each."""
     bad = []
+    if sigmas is not None:
+        bad += outside_sigmas(case, sigmas)
     named = {e['name']: e['params'] for e in d['effects']}
     truth = set(case['expect']) | set(case.get('may_miss', []))
     if not set(case['expect']) <= set(named) <= truth:
@@ -347,8 +383,19 @@ def main():
     ap.add_argument('--write-only', action='store_true', help='write the recording (WORK/recording-CASE) and stop')
     ap.add_argument('--work', required=True, help='a directory for the recording and the diagnosis')
     ap.add_argument('--seed', type=int, default=1)
+    ap.add_argument('--set', action='append', default=[], metavar='KEY=JSON',
+                    help='a variant of the case: one of its keys (or fps, duration, per_pair, noise, gyro_hz) '
+                         'set to a JSON value, e.g. --set offset=0.03 --set fps=60 (repeatable)')
     a = ap.parse_args()
-    case = CASES[a.case]
+    case = dict(CASES[a.case])
+    for kv in a.set:
+        key, _, value = kv.partition('=')
+        if key not in set(case) | VARIANT_KEYS:
+            ap.error(f"--set {kv}: no key '{key}' in case {a.case} (its keys: {', '.join(sorted(set(case) | VARIANT_KEYS))})")
+        try:
+            case[key] = json.loads(value)
+        except json.JSONDecodeError as e:
+            ap.error(f'--set {kv}: the value is not JSON ({e})')
     rec = os.path.join(a.work, 'recording-' + a.case)
     Rig(case, a.seed).write(rec)
     if a.write_only:
@@ -357,7 +404,9 @@ def main():
     if not a.rsd_diagnose:
         ap.error('--rsd-diagnose is needed unless --write-only')
     out = os.path.join(a.work, 'diagnosis-' + a.case + '.json')
-    run = subprocess.run([a.rsd_diagnose, rec, '--json', out], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    report = os.path.join(a.work, 'report-' + a.case)
+    run = subprocess.run([a.rsd_diagnose, rec, '--json', out] + (['--report', report] if case.get('honest') else []),
+                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     if run.returncode != 0:
         print(run.stdout[-4000:])
         print(f'rsd-diagnose exited {run.returncode}')
@@ -366,7 +415,7 @@ def main():
         d = json.load(f)
     print(json.dumps({'effects': d['effects'], 'heldout': d['heldout'], 'remainder': d['remainder'],
                       'imu_axes': d.get('imu_axes')}, indent=1))
-    bad = check(case, d)
+    bad = check(case, d, stated_sigmas(report) if case.get('honest') else None)
     for b in bad:
         print('FAIL: ' + b)
     print('independent recording (' + a.case + '): ' + ('FAIL' if bad else 'all goals hold'))

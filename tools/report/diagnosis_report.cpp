@@ -175,7 +175,9 @@ std::string index_markdown(const ReportInput& in, const std::vector<ParamUncerta
   o << "Uncertainties: 1-sigma from the fit's numeric Jacobian J over the fitting-set inliers, all named "
        "effects' parameters free together (correlations widen them): the larger of the classic s^2 (J^T J)^-1 "
        "(s the per-coordinate RMS of those residuals) and the sandwich estimate clustered by frame, which also "
-       "sees errors a frame's observations share (gyro noise, stamp jitter). They hold if the named effects are "
+       "sees errors a frame's observations share (gyro noise, stamp jitter). With a camera's translation taken "
+       "out (parallax), the clock offset's also holds, in quadrature, how far the minimum of its profile (the "
+       "translation fitted afresh at each offset) lies from the fit's value. They hold if the named effects are "
        "the whole story.\n\n";
   o << "## Where the residual lives (nominal model)\n\n";
   if (d.located.empty()) o << "No structured residual (no signal explains 5% of it).\n";
