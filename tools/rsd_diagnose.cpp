@@ -130,6 +130,11 @@ std::string diagnosis_json(const Diagnosis& d, const std::string& imu_axes) {
       << ", \"final_rms_px\": " << json_number(x.final_rms_px) << ", \"observations\": " << x.observations << "}";
   }
   o << "]";
+  // Beyond the spec's keys: under parallax `heldout` took each held-out pair's translation out;
+  // here the same observations with the parallax in.
+  if (d.heldout_nominal.translation_nuisance)
+    o << ",\n  \"heldout_with_parallax\": {\"baseline_rms_px\": " << json_number(d.heldout_with_parallax_baseline_rms_px)
+      << ", \"final_rms_px\": " << json_number(d.heldout_with_parallax_final_rms_px) << "}";
   if (!imu_axes.empty()) o << ",\n  \"imu_axes\": " << json_string(imu_axes);
   o << "\n}\n";
   return o.str();

@@ -334,6 +334,10 @@ Selection select_with_parallax(const DiagnosisModel& m, const ObservationSets& s
 
 Diagnosis diagnose(const Recording& rec, const DiagnosisOptions& opt) { return diagnose(DiagnosisModel(rec), opt); }
 
+ModelParams heldout_model(const Diagnosis& d, ModelParams p) {
+  return d.heldout_nominal.translation_nuisance ? with_translation_of(std::move(p), d.heldout_nominal) : p;
+}
+
 Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   const Recording& rec = m.recording();
   Diagnosis d;
@@ -457,8 +461,12 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   d.final_rms_px = robust_stats(m.residuals(sel.params, use_all)).rms_px;
   d.heldout_indices = use_held;
   d.heldout_observations = static_cast<int>(use_held.size());
-  d.heldout_baseline_rms_px = robust_stats(m.residuals(nominal, use_held)).rms_px;
-  d.heldout_final_rms_px = robust_stats(m.residuals(sel.params, use_held)).rms_px;
+  d.heldout_nominal = nominal;
+  if (as_fitted.translation_nuisance) d.heldout_nominal = with_translation_of(nominal, as_fitted);
+  d.heldout_baseline_rms_px = robust_stats(m.residuals(d.heldout_nominal, use_held)).rms_px;
+  d.heldout_final_rms_px = robust_stats(m.residuals(heldout_model(d, sel.params), use_held)).rms_px;
+  d.heldout_with_parallax_baseline_rms_px = robust_stats(m.residuals(nominal, use_held)).rms_px;
+  d.heldout_with_parallax_final_rms_px = robust_stats(m.residuals(sel.params, use_held)).rms_px;
   d.withheld = sel.withheld;
   check_heldout(m, nominal, use_all, use_held, d);
   progress("uncertainties and the remainder");

@@ -32,7 +32,18 @@ struct Diagnosis {
   // selection ran again at the scale it ended with (sigma_px is the last).
   std::vector<double> sigma_restarts;
   double final_rms_px = 0;  // over the usable observations
+  // The held-out comparison (issue 34's first invariant), the nominal model against the final one
+  // on the held-out observations. Under parallax (the effects selected with the translation
+  // nuisance) each held-out frame pair's translation is taken out of both, fitted to the held-out
+  // pairs as a test image's pose is: the effects claim what a rotation leaves, and 1.7 px of a
+  // drone's parallax against 0.5 px of noise swamped what its clock offset changes (the true
+  // offset predicted the parallax and all worse than none). heldout_nominal is the nominal model
+  // as compared (its translation_nuisance on under parallax, with the selection's spline);
+  // heldout_model gives any model so. The same observations with the parallax in:
+  // heldout_with_parallax_*_rms_px (without parallax, the comparison's own).
   double heldout_baseline_rms_px = 0, heldout_final_rms_px = 0;
+  double heldout_with_parallax_baseline_rms_px = 0, heldout_with_parallax_final_rms_px = 0;
+  ModelParams heldout_nominal;
   int heldout_observations = 0;
   // The held-out observations in the first and the second half of the recording's time (split at
   // the median frame time of the held-out observations): the nominal and the final model on each.
@@ -85,5 +96,9 @@ struct DiagnosisOptions {
 Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt = {});
 // The same on a recording's own model.
 Diagnosis diagnose(const Recording& rec, const DiagnosisOptions& opt = {});
+
+// `p` as the held-out comparison of `d` takes a model: with d.heldout_nominal's translation
+// nuisance (none without parallax).
+ModelParams heldout_model(const Diagnosis& d, ModelParams p);
 
 }  // namespace rsd::dsp

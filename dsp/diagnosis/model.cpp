@@ -33,6 +33,14 @@ std::vector<Param> params_in(const ParamMask& mask) {
   return out;
 }
 
+ModelParams with_translation_of(ModelParams p, const ModelParams& from) {
+  p.translation_nuisance = from.translation_nuisance;
+  p.translation_knot_s = from.translation_knot_s;
+  p.translation_depth_px = from.translation_depth_px;
+  p.translation_pair_shifts = from.translation_pair_shifts;
+  return p;
+}
+
 ModelParams nominal_params(const NominalModel& n) {
   ModelParams p;
   p[Param::LineDelay] = n.time.line_delay_s;

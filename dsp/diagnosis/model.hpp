@@ -70,6 +70,9 @@ struct ModelParams {
 
 // The nominal model's values of every parameter (no effect switched on; gyro bias zero).
 ModelParams nominal_params(const NominalModel& n);
+// `p` with the translation nuisance of `from`: on or off, its spline's knots, own depths and
+// pair shifts.
+ModelParams with_translation_of(ModelParams p, const ModelParams& from);
 // A typical size of a change of each parameter: the fit works in these units so that one
 // step size suits all (a line delay of 1e-5 s and a focal length of 900 px alike).
 double param_scale(Param p, const NominalModel& n);

@@ -226,21 +226,13 @@ class Selector {
   }
 
   // Under the translation nuisance, whether `richer` predicts the held-out observations worse
-  // than `poorer` with the nuisance off, as the final model is judged (diagnosis.cpp, the first
-  // invariant), by over kWorseSigmas standard errors paired over the frame pairs (the parallax
-  // left in moves a pair's residuals together). "" when not, or when there is no nuisance.
+  // than `poorer` with the nuisance off, as the final model is judged too (heldout_check.hpp,
+  // the first invariant; worse_with_parallax). "" when not, or when there is no nuisance.
   std::string worse_with_parallax_because(const State& poorer, const State& richer) const {
     if (held_.empty() || !richer.params.translation_nuisance) return "";
-    ModelParams a = poorer.params, b = richer.params;
-    a.translation_nuisance = b.translation_nuisance = false;
-    const std::vector<Eigen::Vector2d> ra = m_.residuals(a, held_), rb = m_.residuals(b, held_);
-    const PairedChange c = paired_over_frame_pairs(m_, held_, ra, rb);
-    if (!(c.t > kWorseSigmas)) return "";
-    std::ostringstream why;
-    why << "with the camera's translation left in, it predicts the held-out frames worse than without it ("
-        << robust_stats(ra).rms_px << " -> " << robust_stats(rb).rms_px << " px RMS; " << c.t
-        << " standard errors over " << c.groups << " frame pairs)";
-    return why.str();
+    const std::string worse = worse_with_parallax(m_, held_, poorer.params, richer.params);
+    if (worse.empty()) return "";
+    return "with the camera's translation left in, it predicts the held-out frames worse than without it " + worse;
   }
 
   // Whether `richer` stands in for a video stabilised in the camera (stabiliser.hpp): an effect

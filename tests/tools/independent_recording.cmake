@@ -46,3 +46,12 @@ add_test(NAME cli_diagnose_independent_drone_steady_gimbal
                  --set goals=false --set "honest=[\"time_offset_s\"]"
                  --rsd-diagnose $<TARGET_FILE:rsd-diagnose> --work ${CMAKE_BINARY_DIR}/independent-recording-steady-gimbal)
 set_tests_properties(cli_diagnose_independent_drone_steady_gimbal PROPERTIES LABELS slow TIMEOUT 600)
+# The steady gimbal on seed 2: the offset the fit found predicted the held-out frames worse with
+# the parallax in (1.6602 -> 1.6623 px, as did the true offset: 1.663), and nothing was named.
+# The held-out comparison takes each held-out pair's translation out (0.525 -> 0.503 px, 5.2
+# standard errors better): the offset is named, within three of its stated sigmas.
+add_test(NAME cli_diagnose_independent_drone_steady_gimbal_seed2
+         COMMAND python3 ${CMAKE_CURRENT_SOURCE_DIR}/independent_recording.py --case drone --seed 2 --set rate=0.01
+                 --set goals=false --set "honest=[\"time_offset_s\"]"
+                 --rsd-diagnose $<TARGET_FILE:rsd-diagnose> --work ${CMAKE_BINARY_DIR}/independent-recording-steady-gimbal-seed2)
+set_tests_properties(cli_diagnose_independent_drone_steady_gimbal_seed2 PROPERTIES LABELS slow TIMEOUT 600)

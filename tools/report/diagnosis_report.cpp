@@ -85,8 +85,12 @@ std::string verdict(const Diagnosis& d) {
   if (d.remainder.significant)
     o << " **Structure beyond noise remains that no named effect explains (see What remains).**";
   o << " Held-out RMS " << format_number(d.heldout_baseline_rms_px) << " px (nominal) -> "
-    << format_number(d.heldout_final_rms_px) << " px (final); the residual sigma noise alone gives: "
-    << format_number(d.sigma_px) << " px";
+    << format_number(d.heldout_final_rms_px) << " px (final";
+  if (d.heldout_nominal.translation_nuisance)
+    o << "; each held-out frame pair's translation taken out, as the effects were fitted; with the parallax in "
+      << format_number(d.heldout_with_parallax_baseline_rms_px) << " -> " << format_number(d.heldout_with_parallax_final_rms_px)
+      << " px";
+  o << "); the residual sigma noise alone gives: " << format_number(d.sigma_px) << " px";
   if (!d.sigma_restarts.empty()) {
     o << " (the selection started at";
     for (size_t k = 0; k < d.sigma_restarts.size(); ++k) o << (k ? ", then " : " ") << format_number(d.sigma_restarts[k], 3) << " px";
@@ -153,8 +157,11 @@ std::string index_markdown(const ReportInput& in, const std::vector<ParamUncerta
   o << "# Diagnosis of `" << in.recording_dir << "`\n\n" << verdict(d) << "\n";
   o << "| residual RMS (px, per coordinate, inliers) | nominal model | final model |\n| --- | --- | --- |\n"
     << "| held out: " << d.heldout_observations << " observations of every " << in.heldout_every
-    << "th frame, not used by the fit | " << format_number(d.heldout_baseline_rms_px) << " | "
-    << format_number(d.heldout_final_rms_px) << " |\n";
+    << "th frame, not used by the fit" << (d.heldout_nominal.translation_nuisance ? " (each pair's translation taken out)" : "")
+    << " | " << format_number(d.heldout_baseline_rms_px) << " | " << format_number(d.heldout_final_rms_px) << " |\n";
+  if (d.heldout_nominal.translation_nuisance)
+    o << "| held out, the parallax in | " << format_number(d.heldout_with_parallax_baseline_rms_px) << " | "
+      << format_number(d.heldout_with_parallax_final_rms_px) << " |\n";
   for (size_t h = 0; h < d.heldout_halves.size(); ++h)
     o << "| held out, " << (h ? "second" : "first") << " half in time: " << d.heldout_halves[h].observations
       << " observations | " << format_number(d.heldout_halves[h].baseline_rms_px) << " | "

@@ -199,7 +199,7 @@ void run_checks(CaseResult& r, const DiagnosisModel& m, const SimulatedRecording
     for (int i = 0; i < m.size(); ++i)
       if (held_out(m, i, kHeldoutEvery)) held.push_back(i);
   if (const auto tp = true_params(sim)) {
-    r.floor_px = robust_stats(m.residuals(*tp, held)).rms_px;
+    r.floor_px = robust_stats(m.residuals(heldout_model(d, *tp), held)).rms_px;  // as the diagnosis compared
     r.floor_is_true_model = true;
   } else {
     r.floor_px = sim.rec.noise_px.value_or(0);
