@@ -461,12 +461,13 @@ Diagnosis diagnose(const DiagnosisModel& m, const DiagnosisOptions& opt) {
   d.final_rms_px = robust_stats(m.residuals(sel.params, use_all)).rms_px;
   d.heldout_indices = use_held;
   d.heldout_observations = static_cast<int>(use_held.size());
-  d.heldout_nominal = nominal;
-  if (as_fitted.translation_nuisance) d.heldout_nominal = with_translation_of(nominal, as_fitted);
-  d.heldout_baseline_rms_px = robust_stats(m.residuals(d.heldout_nominal, use_held)).rms_px;
-  d.heldout_final_rms_px = robust_stats(m.residuals(heldout_model(d, sel.params), use_held)).rms_px;
-  d.heldout_with_parallax_baseline_rms_px = robust_stats(m.residuals(nominal, use_held)).rms_px;
-  d.heldout_with_parallax_final_rms_px = robust_stats(m.residuals(sel.params, use_held)).rms_px;
+  const auto heldout_rms = [&](const ModelParams& p) { return robust_stats(m.residuals(p, use_held)).rms_px; };
+  d.heldout_nominal = as_fitted.translation_nuisance ? with_translation_of(nominal, as_fitted) : nominal;
+  d.heldout_with_parallax_baseline_rms_px = heldout_rms(nominal);
+  d.heldout_with_parallax_final_rms_px = heldout_rms(sel.params);
+  d.heldout_baseline_rms_px = as_fitted.translation_nuisance ? heldout_rms(d.heldout_nominal) : d.heldout_with_parallax_baseline_rms_px;
+  d.heldout_final_rms_px =
+      as_fitted.translation_nuisance ? heldout_rms(heldout_model(d, sel.params)) : d.heldout_with_parallax_final_rms_px;
   d.withheld = sel.withheld;
   check_heldout(m, nominal, use_all, use_held, d);
   progress("uncertainties and the remainder");
