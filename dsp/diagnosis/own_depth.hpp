@@ -18,12 +18,19 @@
 namespace rsd::dsp {
 
 // The own depth a match may take: its inverse depth the plane's times (1 + e), e within
-// [kMinOwnDepth, kMaxOwnDepth]: from a point at infinity to one four times nearer than the plane.
-// The Gaussian prior alone lets a mismatch hundreds of pixels long along its flow a take an e of
-// tens and leave a tenth of its length: the fit's cost then followed the translation's
-// direction through the outliers, not the scene (the independent drone's robust chi-square
-// moved by 3000 between two gyro biases over its 5% of mismatches, by 60 over the rest).
-inline constexpr double kMinOwnDepth = -1.0;
+// [kMinOwnDepth, kMaxOwnDepth], as far either way. The Gaussian prior alone lets a mismatch
+// hundreds of pixels long along its flow a take an e of tens and leave a tenth of its length: the
+// fit's cost then followed the translation's direction through the outliers, not the scene (the
+// independent drone's robust chi-square moved by 3000 between two gyro biases over its 5% of
+// mismatches, by 60 over the rest). The bounds are symmetric although no point lies beyond
+// infinity (e < -1): a match's e is its depth plus the noise's share, and where the flow is about
+// the noise that share is about one either way. Cut at -1 (the fifty-eighth to sixty-third
+// sessions), the matches the noise carried below it kept the rest of their residual against their
+// flow, those it carried above gave theirs up, and what was left pointed towards the focus of
+// expansion: the independent generator's drone at 60 fps (the median match moved 1.03-1.08 noises
+// between frames) named its clock offset 2.4 to 11.1 ms early at sigmas of 0.8-1 ms on five of
+// six seeds; at -3, 1.3 to 3.5 ms (sixty-fourth session, docs/diagnosis.md, "Remaining").
+inline constexpr double kMinOwnDepth = -3.0;
 inline constexpr double kMaxOwnDepth = 3.0;
 // Past the bounds an own depth stays at the bound (own_depth_kept): the match gives up the flow
 // of the bound's depth and keeps the rest, the most likely own depth under the prior cut to the

@@ -55,3 +55,14 @@ add_test(NAME cli_diagnose_independent_drone_steady_gimbal_seed2
                  --set goals=false --set "honest=[\"time_offset_s\"]"
                  --rsd-diagnose $<TARGET_FILE:rsd-diagnose> --work ${CMAKE_BINARY_DIR}/independent-recording-steady-gimbal-seed2)
 set_tests_properties(cli_diagnose_independent_drone_steady_gimbal_seed2 PROPERTIES LABELS slow TIMEOUT 600)
+# The drone at 60 fps on seed 7, where a pair's translation moves the median match by about one
+# noise: the own depths cut at a point at infinity (e >= -1) left what the noise carried past it
+# pointing towards the focus of expansion, and the offset was named 11.1 ms early at a sigma of
+# 1.0 ms. As far either way ([-3, 3], dsp/diagnosis/own_depth.hpp) it is 2.8 ms early, within
+# three of its stated sigmas, goals aside (the 60 fps flight's bias: docs/diagnosis.md,
+# "Remaining").
+add_test(NAME cli_diagnose_independent_drone_60fps_seed7
+         COMMAND python3 ${CMAKE_CURRENT_SOURCE_DIR}/independent_recording.py --case drone --seed 7 --set fps=60
+                 --set goals=false --set "honest=[\"time_offset_s\"]"
+                 --rsd-diagnose $<TARGET_FILE:rsd-diagnose> --work ${CMAKE_BINARY_DIR}/independent-recording-60fps-seed7)
+set_tests_properties(cli_diagnose_independent_drone_60fps_seed7 PROPERTIES LABELS slow TIMEOUT 600)
