@@ -28,8 +28,9 @@ namespace rsd::dsp {
 // sessions), the matches the noise carried below it kept the rest of their residual against their
 // flow, those it carried above gave theirs up, and what was left pointed towards the focus of
 // expansion: the independent generator's drone at 60 fps (the median match moved 1.03-1.08 noises
-// between frames) named its clock offset 2.4 to 11.1 ms early at sigmas of 0.8-1 ms on five of
-// six seeds; at -3, 1.3 to 3.5 ms (sixty-fourth session, docs/diagnosis.md, "Remaining").
+// between frames) named its clock offset 2.4 to 11.1 ms early on five of six seeds, four of them
+// at sigmas of 0.8-1 ms; at -3, 0.2 to 3.5 ms (docs/diagnosis.md, Method step 10, "As far either
+// way").
 inline constexpr double kMinOwnDepth = -3.0;
 inline constexpr double kMaxOwnDepth = 3.0;
 // Past the bounds an own depth stays at the bound (own_depth_kept): the match gives up the flow
