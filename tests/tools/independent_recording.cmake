@@ -66,3 +66,12 @@ add_test(NAME cli_diagnose_independent_drone_60fps_seed7
                  --set goals=false --set "honest=[\"time_offset_s\"]"
                  --rsd-diagnose $<TARGET_FILE:rsd-diagnose> --work ${CMAKE_BINARY_DIR}/independent-recording-60fps-seed7)
 set_tests_properties(cli_diagnose_independent_drone_60fps_seed7 PROPERTIES LABELS slow TIMEOUT 600)
+# The drone at 60 fps on seed 4: the own depths' Gaussian prior about the plane leaves the offset
+# 3.5 ms early at a fit's sigma of 0.79 ms (4.4 sigmas). With the scene as one plane the named
+# effects put it 0.9 ms early; the stated sigma holds that distance too (docs/diagnosis.md,
+# Method step 10, "Uncertainties under it"), and the named value lies within three of it.
+add_test(NAME cli_diagnose_independent_drone_60fps_seed4
+         COMMAND python3 ${CMAKE_CURRENT_SOURCE_DIR}/independent_recording.py --case drone --seed 4 --set fps=60
+                 --set goals=false --set "honest=[\"time_offset_s\"]"
+                 --rsd-diagnose $<TARGET_FILE:rsd-diagnose> --work ${CMAKE_BINARY_DIR}/independent-recording-60fps-seed4)
+set_tests_properties(cli_diagnose_independent_drone_60fps_seed4 PROPERTIES LABELS slow TIMEOUT 600)
