@@ -474,7 +474,7 @@ double translation_knot_spacing(const DiagnosisModel& m, const std::vector<int>&
   return q.translation_knot_s;
 }
 
-double translation_depth_spread(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p) {
+double translation_depth_spread(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p, bool ask_flow) {
   ModelParams q = p;
   q.translation_nuisance = true;
   q.translation_depth_px = 0;
@@ -489,8 +489,10 @@ double translation_depth_spread(const DiagnosisModel& m, const std::vector<int>&
   };
   auto left = [&](size_t k) { return r[s.position[k]]; };
   const DepthSpread spread = measured_spread(over(n, flow), over(n, left), fit.in, fit.scale);
-  const bool measured = spread.median_flow >= 1 && spread.z > kMinDepthSpreadZ && spread.spread >= kMinDepthSpread;
+  const bool measured = (spread.median_flow >= 1 || !ask_flow) && spread.z > kMinDepthSpreadZ && spread.spread >= kMinDepthSpread;
   return measured ? spread.spread : 0.0;
 }
+
+double own_depth_px(double sigma_px, double spread) { return spread > 0 ? sigma_px / (kOwnDepthPriorWidth * spread) : 0.0; }
 
 }  // namespace rsd::dsp

@@ -145,7 +145,14 @@ inline constexpr double kMinDepthSpreadZ = 5.0;
 // `p` (as translation_knot_spacing: the richest rotation fit, its knots chosen) on the
 // observations idx: the residual's energy along each match's translation flow beyond its energy
 // across it, over the flow's energy, from the matches whose flow exceeds the noise. Zero when
-// one plane describes the scene (kMinDepthSpread, kMinDepthSpreadZ).
-double translation_depth_spread(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p);
+// one plane describes the scene (kMinDepthSpread, kMinDepthSpreadZ). With `ask_flow` false the
+// rule on the median match's flow is not asked: the scene's spread however little each pair's
+// translation moves its matches (the depth model the clock offset's sigma is asked against,
+// diagnosis.cpp).
+double translation_depth_spread(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p,
+                                bool ask_flow = true);
+// The own depths' prior scale for a measured spread (ModelParams::translation_depth_px): the
+// noise over kOwnDepthPriorWidth times the spread; 0 (one plane) when the spread is 0.
+double own_depth_px(double sigma_px, double spread);
 
 }  // namespace rsd::dsp
