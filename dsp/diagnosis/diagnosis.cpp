@@ -286,10 +286,11 @@ Selection refit_on(const DiagnosisModel& m, const std::vector<int>& wide, double
 // Gaussian prior about the plane, docs/diagnosis.md "Remaining"); one plane named those seeds
 // within 1 ms, and at 30 fps missed by as much as the own depths elsewhere (3.9 ms on one seed
 // of ten); the seed that took the plane (0.98 noises) was 1.95 ms late at 0.69 ms (a whole
-// diagnosis with own depths: 1.0 ms early). Neither is the better estimator throughout, so their distance is what
-// the depth model leaves unknown. The other named values are not widened so: with one plane a
-// gyro bias about a pan's axis takes the misfit of a flight's many depths (10-25 mrad/s off where
-// the own depths are within 2), a known bias of the plane and not a rival estimate.
+// diagnosis with own depths: 1.0 ms early). Neither is the better estimator throughout, so their
+// distance is what the depth model leaves unknown. The other named values are not widened so:
+// with one plane a gyro bias about a pan's axis takes the misfit of a flight's many depths
+// (10-25 mrad/s off where the own depths are within 2), a known bias of the plane and not a
+// rival estimate.
 double offset_under_other_depths(const DiagnosisModel& m, const std::vector<int>& fitted_on, const ModelParams& as_fitted,
                                  const ParamMask& named, double sigma_px, int max_iterations) {
   ModelParams other = as_fitted;

@@ -184,8 +184,9 @@ std::string index_markdown(const ReportInput& in, const std::vector<ParamUncerta
        "(s the per-coordinate RMS of those residuals) and the sandwich estimate clustered by frame, which also "
        "sees errors a frame's observations share (gyro noise, stamp jitter). With a camera's translation taken "
        "out (parallax), the clock offset's also holds, in quadrature, how far the minimum of its profile (the "
-       "translation fitted afresh at each offset) lies from the fit's value and, where each match has its own "
-       "depth, how far it moves with the scene as one plane. They hold if the named effects are the whole story.\n\n";
+       "translation fitted afresh at each offset) lies from the fit's value and, where the scene's depths spread, "
+       "how far it moves under the other depth model (one plane, or each match's own depth). They hold if the "
+       "named effects are the whole story.\n\n";
   o << "## Where the residual lives (nominal model)\n\n";
   if (d.located.empty()) o << "No structured residual (no signal explains 5% of it).\n";
   else o << "| signal | strength | detail |\n| --- | --- | --- |\n";
