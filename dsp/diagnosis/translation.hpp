@@ -148,7 +148,7 @@ inline constexpr double kMinDepthSpreadZ = 5.0;
 // one plane describes the scene (kMinDepthSpread, kMinDepthSpreadZ). With `ask_flow` false the
 // rule on the median match's flow is not asked: the scene's spread however little each pair's
 // translation moves its matches (the depth model the clock offset's sigma is asked against,
-// diagnosis.cpp).
+// uncertainty.cpp, widen_offset_sigma).
 double translation_depth_spread(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p,
                                 bool ask_flow = true);
 // The own depths' prior scale for a measured spread (ModelParams::translation_depth_px): the

@@ -65,6 +65,23 @@ struct ParameterCovariance {
   double wald(const std::vector<int>& rows, const Eigen::VectorXd& delta) const;
 };
 
+// Under the translation nuisance (`as_fitted`'s on) the clock offset's sigma in `uncertainties` holds, beside the fit's, how far the
+// minimum of its profile with the translation taken out afresh lies from where the fit stopped
+// (profile_time_offset, its points the fit's sigma apart), in quadrature: the two costs are the
+// same estimator's and do not agree there (the translation's passes are a fixed number of
+// alternations between the velocity and each match's own depth, not a minimum over both), and
+// where they disagree neither value is better known than their distance. The independent
+// generator's drone with a steadier gimbal said -64.8 +- 1.4 ms for -58 ms; now +- 5.8 (the
+// profile clamped to four sigmas: at most sqrt(17) times the fit's sigma).
+//
+// Where the scene's depths spread (translation_depth_spread) it holds too, in quadrature, how far
+// the offset moves when the named effects (`named`) are fitted again on `fitted_on` under the
+// other depth model: one plane where each match has its own depth, own depths where the plane
+// was taken for a small flow (the reasons and measurements: uncertainty.cpp).
+void widen_offset_sigma(const DiagnosisModel& m, const std::vector<int>& fitted_on, const ModelParams& as_fitted,
+                        const ParamMask& named, double sigma_px, int max_iterations,
+                        std::vector<ParamUncertainty>& uncertainties);
+
 // The chi-square with k degrees of freedom that a k-parameter deviation exceeds with the
 // probability of a 3-sigma one-parameter deviation (0.0027): 9 for one parameter, 11.8 for two,
 // 14.2 for three (Wilson and Hilferty's cube-root approximation, within 1.5% from one up).
