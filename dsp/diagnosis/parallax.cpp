@@ -45,7 +45,7 @@ Parallax parallax_signal(const DiagnosisModel& m, const ModelParams& p, const st
   for (size_t k = 0; k < idx.size(); ++k)
     if (in[k]) pairs[m.frame_rank(idx[k])].push_back(k);
   double extra = 0, left = 0, total = 0, by_translation = 0;
-  int dof_left = 0;
+  int dof_left = 0, coordinates = 0;
   for (const auto& [rank, pos] : pairs) {
     const int n = static_cast<int>(pos.size());
     if (n < 8) continue;
@@ -65,12 +65,14 @@ Parallax parallax_signal(const DiagnosisModel& m, const ModelParams& p, const st
     left += (b - all).squaredNorm();
     total += b.squaredNorm();
     dof_left += 2 * n - 6;
+    coordinates += 2 * n;
     ++out.pairs;
   }
   if (out.pairs == 0 || dof_left <= 0 || total <= 0) return out;
   const double var = left / dof_left;  // the noise, once both flows are out
   out.z = (extra / var - 3.0 * out.pairs) / std::sqrt(6.0 * out.pairs);
   out.share = std::max(0.0, by_translation - 3.0 * out.pairs * var) / total;
+  out.rms_px = std::sqrt(std::max(0.0, extra - 3.0 * out.pairs * var) / coordinates);
   return out;
 }
 

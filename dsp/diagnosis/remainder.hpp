@@ -16,8 +16,9 @@
 //    frames lost whole (a gyro that clips in its fastest swings puts every match of those frames
 //    several pixels off) are not, and the other tests, which look at the inliers, never see them.
 // Each must be statistically clear (4 sigma) and material (its variance at least a fifth of
-// the noise's; lost frames: a twentieth of the observations), so that the motion data's own
-// errors and a remainder too small to matter are not called physics.
+// the noise's, and its RMS the instrument's own bias, instrument.hpp; lost frames: a twentieth
+// of the observations), so that the motion data's own errors, the tracker's or detector's, and a
+// remainder too small to matter are not called physics.
 #pragma once
 
 #include <optional>
@@ -45,6 +46,9 @@ struct Remainder {
   // Temporal test: von Neumann ratio of the frame means, and its z.
   double temporal_ratio = 1, temporal_z = 0;
   double spatial_rms_px = 0, temporal_rms_px = 0;  // RMS of the structured parts (0: none)
+  // The larger structured part that is clear and a share of the noise but under the instrument's
+  // own bias (instrument.hpp), so not called physics (0: none).
+  double instrument_px = 0;
   // Whole-frames test: frames (of those with 8 observations or more) most of whose observations
   // are outliers, how many the frames' median outlier share makes expected (binomial), its z,
   // and the share of the tested observations those frames hold.

@@ -20,6 +20,7 @@
 #include "dsp/diagnosis/blocked_halves.hpp"
 #include "dsp/diagnosis/fit.hpp"
 #include "dsp/diagnosis/heldout_check.hpp"
+#include "dsp/diagnosis/instrument.hpp"
 #include "dsp/diagnosis/offset_search.hpp"
 #include "dsp/diagnosis/plausibility.hpp"
 #include "dsp/diagnosis/robust_stats.hpp"
@@ -35,13 +36,8 @@ namespace rsd::dsp::selection {
 inline constexpr double kWorseSigmas = 3.0;
 
 // The least an effect must move the predictions to be named (px, RMS per coordinate over the
-// fitting set's inliers): below it no instrument here tells it from its own bias. OpenCV's
-// checkerboard detector is biased by 0.005-0.03 px depending on the view
-// (target_observations.cpp), and rsd-extract's tracker holds a field of its own of about 0.02 px
-// against rsd-sim's rendering (docs/diagnosis.md). On a board rendered by an independent
-// generator, whose corners were found to 0.016 px with a bias of (0.010, 0.010) px, a lever arm
-// of 16 um (BIC drop 2750) was named for that bias, moving the corners by 0.010 px.
-inline constexpr double kMinShiftPx = 0.03;
+// fitting set's inliers): the instrument's own bias (instrument.hpp).
+inline constexpr double kMinShiftPx = kInstrumentBiasPx;
 
 struct State {
   std::vector<Effect> effects;

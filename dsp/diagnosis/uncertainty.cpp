@@ -199,23 +199,23 @@ std::vector<ParamUncertainty> effect_uncertainties(const DiagnosisModel& m, cons
 
 namespace {
 
-// Where the scene's depths spread (translation_depth_spread) the clock offset's sigma holds too,
-// in quadrature, how far the offset moves when the named effects are fitted again under the other depth model: with the
-// scene as one plane where each match has its own depth (Method step 10), with own depths where
-// the plane was taken because a pair's translation moves its median match by less than the
-// noise. The depth model is an assumption the fit does not test, and the offset is what it
-// moves. A drone at 60 fps, whose pairs' translation moves the median match by about one noise,
-// had its offset 2-5 ms early on five of ten seeds at sigmas of 0.7-1.3 ms (the own depths'
+// Where the scene's depths spread (translation_depth_spread) the clock offset's sigma holds too, in
+// quadrature, how far the offset moves when the named effects are fitted again under the other
+// depth model: with the scene as one plane where each match has its own depth (Method step 10),
+// with own depths where the plane was taken because a pair's translation moves its median match by
+// less than the noise. The depth model is an assumption the fit does not test, and the offset is
+// what it moves. A drone at 60 fps, whose pairs' translation moves the median match by about one
+// noise, had its offset 2-5 ms early on five of ten seeds at sigmas of 0.7-1.3 ms (the own depths'
 // Gaussian prior about the plane, docs/diagnosis.md "Remaining"); one plane named those seeds
-// within 1 ms, and at 30 fps missed by as much as the own depths elsewhere (3.9 ms on one seed
-// of ten); the seed that took the plane (0.98 noises) was 1.95 ms late at 0.69 ms (a whole
-// diagnosis with own depths: 1.0 ms early). Neither is the better estimator throughout, so their
-// distance is what the depth model leaves unknown. The other named values are not widened so:
-// with one plane a gyro bias about a pan's axis takes the misfit of a flight's many depths
-// (10-25 mrad/s off where the own depths are within 2), a known bias of the plane and not a
-// rival estimate.
-double offset_under_other_depths(const DiagnosisModel& m, const std::vector<int>& fitted_on, const ModelParams& as_fitted,
-                                 const ParamMask& named, double sigma_px, int max_iterations) {
+// within 1 ms, and at 30 fps missed by as much as the own depths elsewhere (3.9 ms on one seed of
+// ten); the seed that took the plane (0.98 noises) was 1.95 ms late at 0.69 ms (a whole diagnosis
+// with own depths: 1.0 ms early). Neither is the better estimator throughout, so their distance is
+// what the depth model leaves unknown. The other named values are not widened so: with one plane a
+// gyro bias about a pan's axis takes the misfit of a flight's many depths (10-25 mrad/s off where
+// the own depths are within 2), a known bias of the plane and not a rival estimate.
+double offset_under_other_depths(const DiagnosisModel& m, const std::vector<int>& fitted_on,
+                                 const ModelParams& as_fitted, const ParamMask& named, double sigma_px,
+                                 int max_iterations) {
   ModelParams other = as_fitted;
   other.translation_depth_px =
       as_fitted.translation_depth_px > 0

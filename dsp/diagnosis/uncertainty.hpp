@@ -65,14 +65,14 @@ struct ParameterCovariance {
   double wald(const std::vector<int>& rows, const Eigen::VectorXd& delta) const;
 };
 
-// Under the translation nuisance (`as_fitted`'s on) the clock offset's sigma in `uncertainties` holds, beside the fit's, how far the
-// minimum of its profile with the translation taken out afresh lies from where the fit stopped
-// (profile_time_offset, its points the fit's sigma apart), in quadrature: the two costs are the
-// same estimator's and do not agree there (the translation's passes are a fixed number of
-// alternations between the velocity and each match's own depth, not a minimum over both), and
-// where they disagree neither value is better known than their distance. The independent
-// generator's drone with a steadier gimbal said -64.8 +- 1.4 ms for -58 ms; now +- 5.8 (the
-// profile clamped to four sigmas: at most sqrt(17) times the fit's sigma).
+// Under the translation nuisance (`as_fitted`'s on) the clock offset's sigma in `uncertainties`
+// holds, beside the fit's, how far the minimum of its profile with the translation taken out afresh
+// lies from where the fit stopped (profile_time_offset, its points the fit's sigma apart), in
+// quadrature: the two costs are the same estimator's and do not agree there (the translation's
+// passes are a fixed number of alternations between the velocity and each match's own depth, not a
+// minimum over both), and where they disagree neither value is better known than their distance.
+// The independent generator's drone with a steadier gimbal said -64.8 +- 1.4 ms for -58 ms; now
+// +- 5.8 (the profile clamped to four sigmas: at most sqrt(17) times the fit's sigma).
 //
 // Where the scene's depths spread (translation_depth_spread) it holds too, in quadrature, how far
 // the offset moves when the named effects (`named`) are fitted again on `fitted_on` under the

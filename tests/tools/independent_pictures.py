@@ -1,0 +1,127 @@
+"""Pictures for independent_recording.py's rig: an images recording rendered from the recording
+format's text alone, with none of rsd's code (its renderer, rsd-sim's, shares its model).
+
+The scene is a texture at infinity: a cube of random multi-scale grey values about the camera
+(a direction's value is on the face its largest component points to, in the axes of the camera's
+mid-recording orientation), so only rotation moves it, and a fisheye's rays past 90 degrees see
+it too. Row v of frame k is read at the rig's motion time of that row (the
+frame's time + line delay x v + the clock offset), so the rolling shutter is in the pixels
+themselves: each row's rays turned by the camera's orientation at its own time, through the
+rig's lens (its inverse projection, radial-tangential). Point-sampled at pixel centres (the
+recording format's (0, 0) is the top-left pixel's centre) from a bilinear texture whose finest
+texel is 1.5 px at the picture's centre, with 2 grey levels of noise; written as 8-bit PNG
+(zlib, no third-party module). Rotation only: a case with depths is refused.
+"""
+import os
+import random
+import struct
+import zlib
+from array import array
+
+from independent_recording import mat_mul, transpose
+
+TEXEL_PX = 1.5  # the finest texel at the picture's centre
+OCTAVES = ((1, 0.25), (4, 0.35), (16, 0.4))  # (cell in texels, weight)
+NOISE_DN = 2.0
+
+
+def png(path, w, h, grey):
+    """An 8-bit grey PNG of w x h bytes."""
+    raw = b''.join(b'\x00' + bytes(grey[v * w:(v + 1) * w]) for v in range(h))
+
+    def chunk(tag, data):
+        return struct.pack('>I', len(data)) + tag + data + struct.pack('>I', zlib.crc32(tag + data) & 0xffffffff)
+    with open(path, 'wb') as f:
+        f.write(b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', w, h, 8, 0, 0, 0, 0)) +
+                chunk(b'IDAT', zlib.compress(raw, 1)) + chunk(b'IEND', b''))
+
+
+class Scene:
+    """The texture at infinity, seen through the rig."""
+
+    def __init__(self, rig, seed):
+        c = rig.c
+        if 'depth' in c:
+            raise ValueError(f"pictures render a scene at infinity: this case has points at depths {c['depth']}")
+        self.rig, self.w, self.h = rig, c['width'], c['height']
+        self.rays = [[rig.ray(u, v) for u in range(self.w)] for v in range(self.h)]
+        self.r_ref_t = transpose(rig.r_camera(rig.t0 + rig.duration / 2))
+        self.texel = TEXEL_PX / c['f']
+        self.n = int(2 / self.texel) + 2  # texels along a face's side
+        rng = random.Random(seed * 7919 + 17)
+        self.faces = [self._texture(self.n, rng) for _ in range(6)]
+        self.noise = [rng.gauss(0, NOISE_DN) for _ in range(65536)]
+        self.rng = rng
+
+    def turn(self, frame, v):
+        """Row v of `frame` in the reference orientation's axes: R_ref^T R(t_row)."""
+        return mat_mul(self.r_ref_t, self.rig.r_camera(self.rig.motion_time(frame, v)))
+
+    @staticmethod
+    def _texture(n, rng):
+        """One face, n x n grey values 0-255: bilinear random grids at three scales, summed,
+        contrast stretched."""
+        tex = [[0.0] * n for _ in range(n)]
+        for cell, weight in OCTAVES:
+            g = [[rng.random() for _ in range(n // cell + 2)] for _ in range(n // cell + 2)]
+            for j in range(n):
+                y = j / cell
+                jj = int(y)
+                fy = y - jj
+                a, b, row = g[jj], g[jj + 1], tex[j]
+                for i in range(n):
+                    x = i / cell
+                    ii = int(x)
+                    fx = x - ii
+                    p = a[ii] + fx * (a[ii + 1] - a[ii])
+                    q = b[ii] + fx * (b[ii + 1] - b[ii])
+                    row[i] += weight * (p + fy * (q - p))
+        return [array('f', [min(250.0, max(5.0, 128 + 2.5 * 255 * (x - 0.5))) for x in row]) for row in tex]
+
+    def render(self, frame):
+        """Frame `frame` as w x h grey bytes, each row at its own read time. A direction's grey
+        value is the cube face its largest component points to, at the other two over it."""
+        w, faces, scale, half = self.w, self.faces, 1 / self.texel, (self.n - 2) / 2
+        noise, n0 = self.noise, self.rng.randrange(65536)
+        out = bytearray(w * self.h)
+        for v in range(self.h):
+            (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = self.turn(frame, v)
+            row, base = self.rays[v], v * w
+            for u in range(w):
+                x, y, z = row[u]
+                dx = m00 * x + m01 * y + m02 * z
+                dy = m10 * x + m11 * y + m12 * z
+                dz = m20 * x + m21 * y + m22 * z
+                ax, ay, az = abs(dx), abs(dy), abs(dz)
+                if az >= ax and az >= ay:
+                    tex, sx, sy = faces[dz > 0], dx / az, dy / az
+                elif ax >= ay:
+                    tex, sx, sy = faces[2 + (dx > 0)], dz / ax, dy / ax
+                else:
+                    tex, sx, sy = faces[4 + (dy > 0)], dx / ay, dz / ay
+                sx = sx * scale + half
+                sy = sy * scale + half
+                i, j = int(sx), int(sy)
+                fx, fy = sx - i, sy - j
+                a, b = tex[j], tex[j + 1]
+                p = a[i] + fx * (a[i + 1] - a[i])
+                q = b[i] + fx * (b[i + 1] - b[i])
+                g = p + fy * (q - p) + noise[(n0 + base + u) & 65535]
+                out[base + u] = 0 if g < 0 else 255 if g > 255 else int(g + 0.5)
+        return out
+
+
+def write_pictures(rig, out):
+    """frames/<k>.png for each frame and images.csv; progress on stderr (a second a frame at 1080p)."""
+    import sys
+    scene = Scene(rig, rig.seed)
+    os.makedirs(os.path.join(out, 'frames'), exist_ok=True)
+    with open(os.path.join(out, 'images.csv'), 'w') as f:
+        f.write('frame,file\n')
+        n = rig.frames()
+        for k in range(n):
+            name = f'frames/{k:06d}.png'
+            png(os.path.join(out, name), scene.w, scene.h, scene.render(k))
+            f.write(f'{k},{name}\n')
+            if k % 30 == 29 or k == n - 1:
+                print(f'rendered {k + 1}/{n} frames', file=sys.stderr, flush=True)
