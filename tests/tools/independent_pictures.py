@@ -18,7 +18,7 @@ import struct
 import zlib
 from array import array
 
-from independent_recording import mat_mul, transpose
+from independent_recording import mat_mul, mat_vec, transpose
 
 TEXEL_PX = 1.5  # the finest texel at the picture's centre
 OCTAVES = ((1, 0.25), (4, 0.35), (16, 0.4))  # (cell in texels, weight)
@@ -53,9 +53,10 @@ class Scene:
         self.noise = [rng.gauss(0, NOISE_DN) for _ in range(65536)]
         self.rng = rng
 
-    def turn(self, frame, v):
-        """Row v of `frame` in the reference orientation's axes: R_ref^T R(t_row)."""
-        return mat_mul(self.r_ref_t, self.rig.r_camera(self.rig.motion_time(frame, v)))
+    def turn(self, frame, v, shift=0.0):
+        """Row v of `frame` `shift` s after its read time, in the reference orientation's axes:
+        R_ref^T R(t_row + shift)."""
+        return mat_mul(self.r_ref_t, self.rig.r_camera(self.rig.motion_time(frame, v) + shift))
 
     @staticmethod
     def _texture(n, rng):
@@ -79,36 +80,48 @@ class Scene:
         return [array('f', [min(250.0, max(5.0, 128 + 2.5 * 255 * (x - 0.5))) for x in row]) for row in tex]
 
     def render(self, frame):
-        """Frame `frame` as w x h grey bytes, each row at its own read time. A direction's grey
-        value is the cube face its largest component points to, at the other two over it."""
-        w, faces, scale, half = self.w, self.faces, 1 / self.texel, (self.n - 2) / 2
+        """Frame `frame` as w x h grey bytes, each row at its own read time; with the case's
+        `exposure` (s), each row the mean of its views over that time centred on it (one a ms)."""
+        w, exposure = self.w, self.rig.c.get('exposure', 0.0)
+        k = max(1, round(exposure / 1e-3))
+        shifts = [exposure * ((i + 0.5) / k - 0.5) for i in range(k)]
         noise, n0 = self.noise, self.rng.randrange(65536)
         out = bytearray(w * self.h)
         for v in range(self.h):
-            (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = self.turn(frame, v)
-            row, base = self.rays[v], v * w
+            acc = [0.0] * w
+            for shift in shifts:
+                self._add_row(self.turn(frame, v, shift), self.rays[v], acc)
+            base = v * w
             for u in range(w):
-                x, y, z = row[u]
-                dx = m00 * x + m01 * y + m02 * z
-                dy = m10 * x + m11 * y + m12 * z
-                dz = m20 * x + m21 * y + m22 * z
-                ax, ay, az = abs(dx), abs(dy), abs(dz)
-                if az >= ax and az >= ay:
-                    tex, sx, sy = faces[dz > 0], dx / az, dy / az
-                elif ax >= ay:
-                    tex, sx, sy = faces[2 + (dx > 0)], dz / ax, dy / ax
-                else:
-                    tex, sx, sy = faces[4 + (dy > 0)], dx / ay, dz / ay
-                sx = sx * scale + half
-                sy = sy * scale + half
-                i, j = int(sx), int(sy)
-                fx, fy = sx - i, sy - j
-                a, b = tex[j], tex[j + 1]
-                p = a[i] + fx * (a[i + 1] - a[i])
-                q = b[i] + fx * (b[i + 1] - b[i])
-                g = p + fy * (q - p) + noise[(n0 + base + u) & 65535]
+                g = acc[u] / k + noise[(n0 + base + u) & 65535]
                 out[base + u] = 0 if g < 0 else 255 if g > 255 else int(g + 0.5)
         return out
+
+    def _add_row(self, m, rays, acc):
+        """Adds the grey values the rays see turned by m to acc. A direction's value is on the
+        cube face its largest component points to, at the other two over it."""
+        faces, scale, half = self.faces, 1 / self.texel, (self.n - 2) / 2
+        (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = m
+        for u in range(len(acc)):
+            x, y, z = rays[u]
+            dx = m00 * x + m01 * y + m02 * z
+            dy = m10 * x + m11 * y + m12 * z
+            dz = m20 * x + m21 * y + m22 * z
+            ax, ay, az = abs(dx), abs(dy), abs(dz)
+            if az >= ax and az >= ay:
+                tex, sx, sy = faces[dz > 0], dx / az, dy / az
+            elif ax >= ay:
+                tex, sx, sy = faces[2 + (dx > 0)], dz / ax, dy / ax
+            else:
+                tex, sx, sy = faces[4 + (dy > 0)], dx / ay, dz / ay
+            sx = sx * scale + half
+            sy = sy * scale + half
+            i, j = int(sx), int(sy)
+            fx, fy = sx - i, sy - j
+            a, b = tex[j], tex[j + 1]
+            p = a[i] + fx * (a[i + 1] - a[i])
+            q = b[i] + fx * (b[i + 1] - b[i])
+            acc[u] += p + fy * (q - p)
 
 
 def write_pictures(rig, out):
@@ -125,3 +138,43 @@ def write_pictures(rig, out):
             f.write(f'{k},{name}\n')
             if k % 30 == 29 or k == n - 1:
                 print(f'rendered {k + 1}/{n} frames', file=sys.stderr, flush=True)
+
+
+def true_match(rig, frame_a, ua, va, frame_b):
+    """Where the ray seen at (ua, va) in frame_a is seen in frame_b: the fixed point of the rows'
+    read times (a scene at infinity)."""
+    world = mat_vec(rig.r_camera(rig.motion_time(frame_a, va)), rig.ray(ua, va))
+    vb = va
+    for _ in range(30):
+        ub, v_new = rig.project(mat_vec(transpose(rig.r_camera(rig.motion_time(frame_b, vb))), world))
+        done = abs(v_new - vb) < 1e-9
+        vb = v_new
+        if done:
+            break
+    return ub, vb
+
+
+def tracker_errors(rig, matches_csv, every=5):
+    """A tracker's matches (recording-v1's matches.csv) against the rig's truth, every `every`-th:
+    (count, median error (u, v), robust spread (u, v) as 1.4826 x the median absolute deviation,
+    scale (u, v): the error's share of the flow, sum(e d) / sum(d^2) over errors under 0.5 px)."""
+    import csv
+    import statistics
+    eu, ev, su, sv, du2, dv2 = [], [], 0.0, 0.0, 0.0, 0.0
+    with open(matches_csv) as f:
+        for k, r in enumerate(csv.DictReader(f)):
+            if k % every:
+                continue
+            ua, va, ub, vb = (float(r[c]) for c in ('ua', 'va', 'ub', 'vb'))
+            tu, tv = true_match(rig, int(r['frame_a']), ua, va, int(r['frame_b']))
+            eu.append(ub - tu)
+            ev.append(vb - tv)
+            if abs(eu[-1]) < 0.5 and abs(ev[-1]) < 0.5:  # a lost track's error is not a scale's
+                du, dv = tu - ua, tv - va
+                su, sv, du2, dv2 = su + eu[-1] * du, sv + ev[-1] * dv, du2 + du * du, dv2 + dv * dv
+    med = statistics.median
+
+    def spread(x):
+        m = med(x)
+        return 1.4826 * med([abs(a - m) for a in x])
+    return len(eu), (med(eu), med(ev)), (spread(eu), spread(ev)), (su / du2, sv / dv2)

@@ -86,12 +86,14 @@ add_test(NAME cli_diagnose_independent_drone_60fps_seed1
 set_tests_properties(cli_diagnose_independent_drone_60fps_seed1 PROPERTIES LABELS slow TIMEOUT 600)
 # The tracker and the diagnosis on pictures rsd did not draw: the pinhole case's rig rendered
 # (independent_pictures.py: a texture at infinity, each row at its own read time) at 640 x 360
-# over 5 s, its readout 18 ms as the case's, tracked by rsd-diagnose. Before the instrument's own
+# over 5 s, its readout 18 ms as the case's, tracked by rsd-diagnose; rsd-extract's matches of
+# the same pictures held against the rig's truth (TRACKER_GOALS). Before the instrument's own
 # bias bounded parallax and the remainder (dsp/diagnosis/instrument.hpp), the tracker's field of
 # 0.02 px was taken for a near scene and the gyro bias went unnamed.
 add_test(NAME cli_diagnose_independent_pictures_pinhole
          COMMAND python3 ${CMAKE_CURRENT_SOURCE_DIR}/independent_recording.py --case pinhole --pictures
                  --set width=640 --set height=360 --set f=500 --set line_delay=5e-5 --set duration=5
+                 --rsd-extract $<TARGET_FILE:rsd-extract>
                  --rsd-diagnose $<TARGET_FILE:rsd-diagnose> --work ${CMAKE_BINARY_DIR}/independent-pictures)
 set_tests_properties(cli_diagnose_independent_pictures_pinhole PROPERTIES LABELS slow TIMEOUT 600)
 # The fisheye's pictures (the cube's back faces past 90 degrees) at 640 x 480, the readout unknown
@@ -101,11 +103,16 @@ add_test(NAME cli_diagnose_independent_pictures_fisheye
          COMMAND python3 ${CMAKE_CURRENT_SOURCE_DIR}/independent_recording.py --case fisheye --pictures --seed 2
                  --set width=640 --set height=480 --set f=210 --set line_delay=4e-5 --set nominal_line_delay=0
                  --set duration=5 --set "bias=[0.01,0.012,-0.009]"
-                 --set "expect=[\"time_offset\",\"gyro_bias\",\"rolling_shutter\"]"
+                 --set "expect=[\"time_offset\",\"gyro_bias\",\"rolling_shutter\"]" --rsd-extract $<TARGET_FILE:rsd-extract>
                  --rsd-diagnose $<TARGET_FILE:rsd-diagnose> --work ${CMAKE_BINARY_DIR}/independent-pictures-fisheye)
 set_tests_properties(cli_diagnose_independent_pictures_fisheye PROPERTIES LABELS slow TIMEOUT 600)
 add_test(NAME cli_independent_recording_pictures_refuse_depths
          COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/expect.sh 2 "--case drone: pictures render a scene at infinity"
                  -- python3 ${CMAKE_CURRENT_SOURCE_DIR}/independent_recording.py --case drone --pictures
                  --write-only --work ${CMAKE_BINARY_DIR}/independent-recording-variant)
-set_tests_properties(cli_independent_recording_pictures_refuse_depths PROPERTIES LABELS cli)
+add_test(NAME cli_independent_recording_extract_needs_pictures
+         COMMAND sh ${PROJECT_SOURCE_DIR}/tests/cli/expect.sh 2 "--rsd-extract tracks pictures: it needs --pictures"
+                 -- python3 ${CMAKE_CURRENT_SOURCE_DIR}/independent_recording.py --case pinhole --rsd-extract /bin/true
+                 --write-only --work ${CMAKE_BINARY_DIR}/independent-recording-variant)
+set_tests_properties(cli_independent_recording_pictures_refuse_depths cli_independent_recording_extract_needs_pictures
+                     PROPERTIES LABELS cli)
