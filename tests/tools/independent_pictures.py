@@ -10,7 +10,10 @@ themselves: each row's rays turned by the camera's orientation at its own time, 
 rig's lens (its inverse projection, radial-tangential). Point-sampled at pixel centres (the
 recording format's (0, 0) is the top-left pixel's centre) from a bilinear texture whose finest
 texel is 1.5 px at the picture's centre, with 2 grey levels of noise; written as 8-bit PNG
-(zlib, no third-party module). Rotation only: a case with depths is refused.
+(zlib, no third-party module). A case's points at random depths are refused; with the case
+key `wall` (m) the camera's translation (`trans`, `fwd`) moves past a wall that far ahead of
+its mid-recording place (the front face's texture, a ray's point on it over its distance):
+parallax of one plane, in the pixels.
 """
 import os
 import random
@@ -45,7 +48,10 @@ class Scene:
             raise ValueError(f"pictures render a scene at infinity: this case has points at depths {c['depth']}")
         self.rig, self.w, self.h = rig, c['width'], c['height']
         self.rays = [[rig.ray(u, v) for u in range(self.w)] for v in range(self.h)]
-        self.r_ref_t = transpose(rig.r_camera(rig.t0 + rig.duration / 2))
+        t_ref = rig.t0 + rig.duration / 2
+        self.r_ref_t = transpose(rig.r_camera(t_ref))
+        self.p_ref = rig.position(t_ref)
+        self.wall = c.get('wall', 0.0)  # m ahead of the camera's mid-recording place; 0: none
         self.texel = TEXEL_PX / c['f']
         self.n = int(2 / self.texel) + 2  # texels along a face's side
         rng = random.Random(seed * 7919 + 17)
@@ -90,25 +96,41 @@ class Scene:
         for v in range(self.h):
             acc = [0.0] * w
             for shift in shifts:
-                self._add_row(self.turn(frame, v, shift), self.rays[v], acc)
+                self._add_row(self.turn(frame, v, shift), self.place(frame, v, shift), self.rays[v], acc)
             base = v * w
             for u in range(w):
                 g = acc[u] / k + noise[(n0 + base + u) & 65535]
                 out[base + u] = 0 if g < 0 else 255 if g > 255 else int(g + 0.5)
         return out
 
-    def _add_row(self, m, rays, acc):
-        """Adds the grey values the rays see turned by m to acc. A direction's value is on the
-        cube face its largest component points to, at the other two over it."""
-        faces, scale, half = self.faces, 1 / self.texel, (self.n - 2) / 2
+    def place(self, frame, v, shift=0.0):
+        """The camera's place at row v's read time + shift, in the reference axes (m)."""
+        p = self.rig.position(self.rig.motion_time(frame, v) + shift)
+        return mat_vec(self.r_ref_t, [a - b for a, b in zip(p, self.p_ref)])
+
+    def _add_row(self, m, place, rays, acc):
+        """Adds the grey values the rays see turned by m from `place` to acc. A ray that meets
+        the wall (the plane z = wall in the reference axes, within the front face's square at
+        its distance) sees the front face's texture at its point over the wall's distance;
+        any other its direction's value, on the cube face its largest component points to, at
+        the other two over it."""
+        faces, scale, half, wall = self.faces, 1 / self.texel, (self.n - 2) / 2, self.wall
         (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = m
+        px, py, pz = place
         for u in range(len(acc)):
             x, y, z = rays[u]
             dx = m00 * x + m01 * y + m02 * z
             dy = m10 * x + m11 * y + m12 * z
             dz = m20 * x + m21 * y + m22 * z
             ax, ay, az = abs(dx), abs(dy), abs(dz)
-            if az >= ax and az >= ay:
+            hit = False
+            if wall > 0 and dz > 0:
+                k = (wall - pz) / dz
+                sx, sy = (px + k * dx) / wall, (py + k * dy) / wall
+                hit = -1 < sx < 1 and -1 < sy < 1
+            if hit:
+                tex = faces[1]
+            elif az >= ax and az >= ay:
                 tex, sx, sy = faces[dz > 0], dx / az, dy / az
             elif ax >= ay:
                 tex, sx, sy = faces[2 + (dx > 0)], dz / ax, dy / ax

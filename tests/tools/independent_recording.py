@@ -85,7 +85,8 @@ def log_so3(m):
 # fwd (a forward flight, m/s), pan (rad, starting s: a raised-cosine pan over 2 s about the
 # camera's y axis), stabilise_hz (the pictures follow the gyro's rates low-passed, zero phase,
 # |G| = 1 / sqrt(1 + (f / stabilise_hz)^4)), duration, fps, per_pair, noise, gyro_hz, exposure
-# (--pictures: each row the mean of its views over this many seconds centred on its read time).
+# (--pictures: each row the mean of its views over this many seconds centred on its read time),
+# wall (--pictures: a wall this many metres ahead, which the translation moves past).
 CASES = {
     # A phone-like pinhole camera: a readout the nominal model lacks, the clocks 15 ms apart, a
     # gyro bias; the gyro's axes a permutation of the camera's, 2 degrees off it (a calibration).
@@ -123,7 +124,7 @@ CASES = {
 DURATION_S, FPS, PER_PAIR, NOISE_PX, OUTLIERS, GYRO_HZ, GYRO_NOISE = 10.0, 30.0, 100, 0.5, 0.05, 200.0, 0.003
 VARIANT_KEYS = {'fps', 'duration', 'per_pair', 'noise', 'gyro_hz', 'mount', 'trans', 'depth', 'fwd', 'pan',
                 'stabilise_hz', 'f_nominal', 'k_nominal', 'nominal_line_delay', 'may_miss', 'honest', 'honest_within',
-                'exposure'}
+                'exposure', 'wall'}
 INSTRUMENT_BIAS_PX = 0.03  # what a tracker's own bias reaches (docs/diagnosis.md)
 PERMUTED = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]  # w_camera = R w_imu: the gyro's x is the camera's y
 
@@ -491,6 +492,8 @@ def main():
     rec = os.path.join(a.work, 'recording-' + a.case)
     if a.rsd_extract and not a.pictures:
         ap.error('--rsd-extract tracks pictures: it needs --pictures')
+    if a.rsd_extract and case.get('wall'):
+        ap.error('--rsd-extract: the truth of a match is computed for a scene at infinity, not a wall')
     rig = Rig(case, a.seed)
     try:
         rig.write(rec, pictures=a.pictures)
