@@ -40,6 +40,16 @@ SimConfig phone(unsigned seed, double duration_s = 10) {
   return c;
 }
 
+// The phone at `noise_px` with a clean gyro and no outliers: at the truth the residual is the
+// pixels' noise alone.
+SimConfig clean_phone(unsigned seed, double noise_px) {
+  SimConfig c = phone(seed);
+  c.noise_px = noise_px;
+  c.gyro = {200, 200, 0, 0, 0, 0};
+  c.outlier_fraction = 0;
+  return c;
+}
+
 SimConfig target(unsigned seed, double duration_s = 10) { return rsd::test::target_simulation(seed, duration_s, 0.5); }
 
 // The remainder of the nominal model (the truth: no table effect is switched on), over the
@@ -102,10 +112,7 @@ TEST(Remainder, ParallaxInMatchesIsStructureAndTranslation) {
 // takes beyond the rotation grows with the shake as flow does, thirtyfold (net of noise).
 TEST(Remainder, ParallaxUnderTheInstrumentsOwnBiasIsNotClear) {
   auto parallax = [](double shake_m) {
-    SimConfig c = phone(26);
-    c.noise_px = 0.01;
-    c.gyro = {200, 200, 0, 0, 0, 0};
-    c.outlier_fraction = 0;
+    SimConfig c = clean_phone(26, 0.01);
     c.unmodelled.scene_depth_m = 3.0;
     c.translation_amplitude_m = shake_m;
     const SimulatedRecording sim = simulate_recording(c);
@@ -251,11 +258,7 @@ TEST(Remainder, AFewPercentAboveTheNoiseIsStructureOverThousandsOfMatches) {
 // beyond the bias, it is structure.
 TEST(Remainder, AFieldUnderTheInstrumentsOwnBiasIsSaidNotCalledPhysics) {
   auto with_ripple = [](double amplitude_px) {
-    SimConfig c = phone(25);
-    c.noise_px = 0.02;
-    c.gyro = {200, 200, 0, 0, 0, 0};
-    c.outlier_fraction = 0;
-    SimulatedRecording sim = simulate_recording(c);
+    SimulatedRecording sim = simulate_recording(clean_phone(25, 0.02));
     for (auto& mt : sim.rec.matches) mt.b.y() += amplitude_px * std::sin(2 * M_PI * mt.b.x() / 1920 * 1.5);
     return at_truth(sim);
   };
