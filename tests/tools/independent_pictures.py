@@ -15,9 +15,12 @@ key `wall` (m) the camera's translation (`trans`, `fwd`) moves past a wall that 
 its mid-recording place (the front face's texture, a ray's point on it over its distance):
 parallax of one plane, in the pixels.
 """
+import csv
 import os
 import random
+import statistics
 import struct
+import sys
 import zlib
 from array import array
 
@@ -148,7 +151,6 @@ class Scene:
 
 def write_pictures(rig, out):
     """frames/<k>.png for each frame and images.csv; progress on stderr (a second a frame at 1080p)."""
-    import sys
     scene = Scene(rig, rig.seed)
     os.makedirs(os.path.join(out, 'frames'), exist_ok=True)
     with open(os.path.join(out, 'images.csv'), 'w') as f:
@@ -162,33 +164,20 @@ def write_pictures(rig, out):
                 print(f'rendered {k + 1}/{n} frames', file=sys.stderr, flush=True)
 
 
-def true_match(rig, frame_a, ua, va, frame_b):
-    """Where the ray seen at (ua, va) in frame_a is seen in frame_b: the fixed point of the rows'
-    read times (a scene at infinity)."""
-    world = mat_vec(rig.r_camera(rig.motion_time(frame_a, va)), rig.ray(ua, va))
-    vb = va
-    for _ in range(30):
-        ub, v_new = rig.project(mat_vec(transpose(rig.r_camera(rig.motion_time(frame_b, vb))), world))
-        done = abs(v_new - vb) < 1e-9
-        vb = v_new
-        if done:
-            break
-    return ub, vb
-
-
 def tracker_errors(rig, matches_csv, every=5):
-    """A tracker's matches (recording-v1's matches.csv) against the rig's truth, every `every`-th:
+    """A tracker's matches (recording-v1's matches.csv) against the rig's truth (where frame_b sees
+    the direction frame_a saw at (ua, va): Rig.seen_in), every `every`-th:
     (count, median error (u, v), robust spread (u, v) as 1.4826 x the median absolute deviation,
     scale (u, v): the error's share of the flow, sum(e d) / sum(d^2) over errors under 0.5 px)."""
-    import csv
-    import statistics
     eu, ev, su, sv, du2, dv2 = [], [], 0.0, 0.0, 0.0, 0.0
     with open(matches_csv) as f:
         for k, r in enumerate(csv.DictReader(f)):
             if k % every:
                 continue
             ua, va, ub, vb = (float(r[c]) for c in ('ua', 'va', 'ub', 'vb'))
-            tu, tv = true_match(rig, int(r['frame_a']), ua, va, int(r['frame_b']))
+            fa = int(r['frame_a'])
+            tu, tv = rig.seen_in(int(r['frame_b']), mat_vec(rig.r_camera(rig.motion_time(fa, va)), rig.ray(ua, va)),
+                                 va, False)
             eu.append(ub - tu)
             ev.append(vb - tv)
             if abs(eu[-1]) < 0.5 and abs(ev[-1]) < 0.5:  # a lost track's error is not a scale's

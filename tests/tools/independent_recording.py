@@ -246,24 +246,34 @@ class Rig:
             world = [x + dist * y for x, y in zip(self.position(ta), mat_vec(self.r_camera(ta), d))]
         else:  # a point at infinity: rotation only
             world = mat_vec(self.r_camera(ta), d)
-        vb = va
-        for _ in range(20):
-            tb = self.motion_time(frame + 1, vb)
-            seen = [x - y for x, y in zip(world, self.position(tb))] if 'depth' in self.c else world
-            p = mat_vec(transpose(self.r_camera(tb)), seen)
-            if p[2] <= 0.05 and self.c['model'] != 'pinhole-equi':
-                return None
-            ub, vb_new = self.project(p)
-            done = abs(vb_new - vb) < 1e-7
-            vb = vb_new
-            if done:
-                break
+        seen = self.seen_in(frame + 1, world, va, 'depth' in self.c)
+        if seen is None:
+            return None
+        ub, vb = seen
         if not (0 <= ub <= w - 1 and 0 <= vb <= h - 1):
             return None
         g, noise = self.rng.gauss, self.c.get('noise', NOISE_PX)
         if self.rng.random() < OUTLIERS:
             ub, vb = self.rng.uniform(0, w - 1), self.rng.uniform(0, h - 1)
         return ua + g(0, noise), va + g(0, noise), ub + g(0, noise), vb + g(0, noise)
+
+    def seen_in(self, frame, world, v_start, at_distance):
+        """The pixel at which `frame` sees the point `world` (a direction for a point at infinity,
+        else a place, m): the fixed point of the rows' read times (the rolling-shutter constraint)
+        from row v_start; None when the point is behind a pinhole camera."""
+        v = v_start
+        for _ in range(20):
+            t = self.motion_time(frame, v)
+            seen = [x - y for x, y in zip(world, self.position(t))] if at_distance else world
+            p = mat_vec(transpose(self.r_camera(t)), seen)
+            if p[2] <= 0.05 and self.c['model'] != 'pinhole-equi':
+                return None
+            u, v_new = self.project(p)
+            done = abs(v_new - v) < 1e-7
+            v = v_new
+            if done:
+                break
+        return u, v
 
     def frames(self):
         return int(self.duration * self.fps)
