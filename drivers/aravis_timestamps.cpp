@@ -3,6 +3,7 @@
 #include "dsp/core/stamp.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <ctime>
@@ -22,12 +23,26 @@ int64_t seconds_to_ns(double s) { return std::llround(s * 1e9); }
 
 }  // namespace
 
+HostClocks from_narrowest(const ClockBracket* brackets, size_t n) {
+  const ClockBracket* best = std::min_element(brackets, brackets + n, [](const ClockBracket& a, const ClockBracket& b) {
+    return a.monotonic_after_ns - a.monotonic_before_ns < b.monotonic_after_ns - b.monotonic_before_ns;
+  });
+  return {best->realtime_ns, best->monotonic_before_ns + (best->monotonic_after_ns - best->monotonic_before_ns) / 2};
+}
+
 HostClocks read_host_clocks() {
-  // The realtime read is bracketed by two monotonic reads; their mid-point is its instant.
-  const int64_t m0 = read_clock(CLOCK_MONOTONIC);
-  const int64_t rt = read_clock(CLOCK_REALTIME);
-  const int64_t m1 = read_clock(CLOCK_MONOTONIC);
-  return {rt, m0 + (m1 - m0) / 2};
+  constexpr size_t kMaxTries = 8;
+  constexpr int64_t kNarrowNs = 2000;  // a few clock reads: no preemption inside
+  std::array<ClockBracket, kMaxTries> b;
+  size_t n = 0;
+  while (n < kMaxTries) {
+    ClockBracket& r = b[n++];
+    r.monotonic_before_ns = read_clock(CLOCK_MONOTONIC);
+    r.realtime_ns = read_clock(CLOCK_REALTIME);
+    r.monotonic_after_ns = read_clock(CLOCK_MONOTONIC);
+    if (r.monotonic_after_ns - r.monotonic_before_ns <= kNarrowNs) break;
+  }
+  return from_narrowest(b.data(), n);
 }
 
 int64_t checked_stamp(uint64_t raw) {

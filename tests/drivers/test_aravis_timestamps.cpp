@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -76,6 +77,21 @@ TEST(HostStamp, ReadsBothClocksTogether) {
   // CLOCK_REALTIME - CLOCK_MONOTONIC is the same to well within a millisecond between reads.
   EXPECT_NEAR(static_cast<double>((a.realtime_ns - a.monotonic_ns) - (b.realtime_ns - b.monotonic_ns)), 0.0, 1e6);
   EXPECT_GE(b.monotonic_ns, a.monotonic_ns);
+}
+
+// A thread preempted for 200 us between a bracket's first monotonic read and its realtime read
+// puts the mid-point 100 us before the realtime read's instant; the tight bracket read after it
+// gives the clocks' true difference, and it is the one taken, whichever comes first.
+TEST(HostStamp, TheNarrowestBracketIsTaken) {
+  const int64_t offset = 1'700'000'000'000'000'000;  // CLOCK_REALTIME - CLOCK_MONOTONIC
+  const ClockBracket preempted{1'000'000, 1'200'050 + offset, 1'200'100};
+  const ClockBracket tight{1'300'000, 1'300'050 + offset, 1'300'100};
+  for (const auto& pair : {std::array{preempted, tight}, std::array{tight, preempted}}) {
+    const HostClocks c = from_narrowest(pair.data(), pair.size());
+    EXPECT_EQ(c.realtime_ns - c.monotonic_ns, offset);
+  }
+  const HostClocks alone = from_narrowest(&preempted, 1);
+  EXPECT_EQ(alone.realtime_ns - alone.monotonic_ns, offset + 100'000);  // what one bracket alone gave
 }
 
 TEST(ReceiptModel, ExposureStartStampIsTheFirstRowAndLeadsReceiptByExposure) {
