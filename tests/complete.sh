@@ -2,9 +2,9 @@
 # tests/complete.sh [BUILD]: the complete suite, after the README's quick test command has built
 # BUILD (default: build) and run its unit, cli and e2e tests. It runs what that command leaves
 # out, the CTests labelled `slow`: the ASan+UBSan and TSan trees (which run the unit and e2e
-# tests again, instrumented), the libFuzzer build with 6 s of fuzzing per parser (fuzz_pass),
-# the arm64 cross build under qemu, the long closed-loop and online-calibration runs. All of it beside two busy loops at nice 19 (beside_busy_loops.sh), as
-# a loaded machine would run it. .ci/run runs it; docs/reliability.md has its times.
+# tests again, instrumented; the first then fuzzes each parser for 6 s), the arm64 cross build
+# under qemu, the long closed-loop and online-calibration runs. All of it beside two busy loops
+# at nice 19 (beside_busy_loops.sh), as a loaded machine would run it. .ci/run runs it; docs/reliability.md has its times.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 build=${1:-build}

@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Fuzzes rsd's parsers with libFuzzer, AddressSanitizer and UBSan (clang, libfuzzer-14-dev).
 #   tests/fuzz/run.sh [MINUTES] [TARGET...]      (default: 10 minutes each, every target)
-# Builds the fuzz targets in build-fuzz/ (RSD_FUZZ_BUILD overrides), then runs each for
-# MINUTES, two at a time (RSD_FUZZ_JOBS), starting from its corpus in tests/fuzz/corpus/TARGET.
+# The fuzz targets are built in an ASan+UBSan tree built by clang (the sanitizer tree's own
+# configuration: its fuzz targets are libFuzzer binaries), build-fuzz/ unless RSD_FUZZ_BUILD names
+# another (tests/sanitizers/run.sh passes its tree for the complete suite's 6 s per target); each
+# runs for MINUTES, two at a time (RSD_FUZZ_JOBS), starting from its corpus in tests/fuzz/corpus/TARGET.
 # A crash, leak, sanitizer report, timeout (10 s) or excess memory (2 GB) is written into that
 # corpus as crash-*, timeout-*, leak-* or oom-*: the normal test run replays it (ctest -R
 # fuzz_corpus), and fails, until the defect is fixed. New inputs that reach new code go to
-# build-fuzz/fuzz-work/TARGET (--merge: also added to the corpus). A summary line per target
-# (runs, seconds, corpus size, result) goes to stdout and build-fuzz/fuzz-summary.txt.
+# BUILD/fuzz-work/TARGET (--merge: also added to the corpus). A summary line per target
+# (runs, seconds, corpus size, result) goes to stdout and BUILD/fuzz-summary.txt.
 set -euo pipefail
 src=$(cd "$(dirname "$0")/../.." && pwd)
 build=${RSD_FUZZ_BUILD:-$src/build-fuzz}
@@ -23,10 +25,17 @@ for t in $targets; do
   case " $all " in *" $t "*) ;; *) echo "run.sh: no fuzz target '$t' (targets: $all)" >&2; exit 2 ;; esac
 done
 
-generator=()
-[ -f "$build/CMakeCache.txt" ] || ! command -v ninja >/dev/null || generator=(-G Ninja)
-cmake -S "$src" -B "$build" "${generator[@]}" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DRSD_LIBFUZZER=ON \
-      -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+if [ ! -f "$build/CMakeCache.txt" ]; then
+  generator=()
+  command -v ninja >/dev/null && generator=(-G Ninja)
+  cmake -S "$src" -B "$build" "${generator[@]}" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+        -DRSD_SANITIZE=address,undefined -DCMAKE_BUILD_TYPE=None >/dev/null
+fi
+# A tree configured otherwise (a normal tree, or the fuzz tree of earlier versions) holds no
+# libFuzzer binaries: said, not run.
+grep -qx 'RSD_SANITIZE:STRING=address,undefined' "$build/CMakeCache.txt" &&
+  grep -q '^CMAKE_CXX_COMPILER:[A-Z]*=.*clang' "$build/CMakeCache.txt" ||
+  { echo "run.sh: $build is not an ASan+UBSan tree built by clang: remove it, or name one with RSD_FUZZ_BUILD" >&2; exit 2; }
 start=$(date +%s)
 cmake --build "$build" -j"$(nproc)" --target $(for t in $targets; do printf 'fuzz_%s ' "$t"; done) >"$build/build.log" 2>&1 ||
   { tail -n 60 "$build/build.log" >&2; exit 1; }

@@ -1,7 +1,8 @@
 #!/bin/sh
 # run.sh KIND SOURCE_DIR BUILD_DIR [CMAKE_ARG...]: configure, build and test one sanitizer tree
 # beside the normal build (docs/reliability.md, "Sanitizers").
-#   KIND address,undefined  every target; the whole suite runs under ASan, LeakSanitizer and UBSan
+#   KIND address,undefined  every target; the whole suite runs under ASan, LeakSanitizer and UBSan,
+#                           then each parser's fuzz target for 6 s (the fuzz pass; clang)
 #   KIND thread             the threaded targets; their tests run under ThreadSanitizer
 # Suppressions for third-party libraries live beside this script, each with its reason. Any
 # report the suppressions do not cover fails the test that caused it: ASan, LSan and UBSan end
@@ -75,3 +76,13 @@ else
   ctest --test-dir "$build" -j"$test_jobs" --output-on-failure
 fi
 echo "run.sh: $kind tests ran in $(( $(date +%s) - start )) s"
+# The complete suite's fuzz pass: the ASan+UBSan tree built by clang holds the fuzz targets as
+# libFuzzer binaries (tests/fuzz/CMakeLists.txt), each fuzzed for 6 s from its corpus under this
+# tree's sanitizer options; a finding fails this test and is kept in the corpus.
+if [ "$kind" = address,undefined ]; then
+  if [ -x "$build/tests/fuzz/fuzz_config" ]; then
+    RSD_FUZZ_BUILD=$build bash "$src/tests/fuzz/run.sh" 0.1
+  else
+    echo "run.sh: no fuzz pass: this tree was not built by clang (no libFuzzer binaries)"
+  fi
+fi

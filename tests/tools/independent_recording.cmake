@@ -86,23 +86,24 @@ add_test(NAME cli_diagnose_independent_drone_60fps_seed1
 set_tests_properties(cli_diagnose_independent_drone_60fps_seed1 PROPERTIES LABELS slow TIMEOUT 600)
 # The tracker and the diagnosis on pictures rsd did not draw: the pinhole case's rig rendered
 # (independent_pictures.py: a texture at infinity, each row at its own read time) at 640 x 360
-# over 5 s, its readout 18 ms as the case's, tracked by rsd-diagnose; rsd-extract's matches of
+# over 3 s, its readout 18 ms as the case's, tracked by rsd-diagnose; rsd-extract's matches of
 # the same pictures held against the rig's truth (TRACKER_GOALS). Before the instrument's own
 # bias bounded parallax and the remainder (dsp/diagnosis/instrument.hpp), the tracker's field of
-# 0.02 px was taken for a near scene and the gyro bias went unnamed.
+# 0.02 px was taken for a near scene and the gyro bias went unnamed (measured over 5 s; 3 s keep
+# the complete suite inside its budget, and every goal holds as at 5 s).
 add_test(NAME cli_diagnose_independent_pictures_pinhole
          COMMAND python3 ${CMAKE_CURRENT_SOURCE_DIR}/independent_recording.py --case pinhole --pictures
-                 --set width=640 --set height=360 --set f=500 --set line_delay=5e-5 --set duration=5
+                 --set width=640 --set height=360 --set f=500 --set line_delay=5e-5 --set duration=3
                  --rsd-extract $<TARGET_FILE:rsd-extract>
                  --rsd-diagnose $<TARGET_FILE:rsd-diagnose> --work ${CMAKE_BINARY_DIR}/independent-pictures)
 set_tests_properties(cli_diagnose_independent_pictures_pinhole PROPERTIES LABELS slow TIMEOUT 600)
-# The fisheye's pictures (the cube's back faces past 90 degrees) at 640 x 480, the readout unknown
-# to the nominal model and a bias twice the case's (the case's moves the predictions by 0.023 px at
-# this size, under the instrument's own bias: rightly not named).
+# The fisheye's pictures (the cube's back faces past 90 degrees) at 640 x 480 over 3 s, the
+# readout unknown to the nominal model and a bias twice the case's (the case's moves the
+# predictions by 0.023 px at this size, under the instrument's own bias: rightly not named).
 add_test(NAME cli_diagnose_independent_pictures_fisheye
          COMMAND python3 ${CMAKE_CURRENT_SOURCE_DIR}/independent_recording.py --case fisheye --pictures --seed 2
                  --set width=640 --set height=480 --set f=210 --set line_delay=4e-5 --set nominal_line_delay=0
-                 --set duration=5 --set "bias=[0.01,0.012,-0.009]"
+                 --set duration=3 --set "bias=[0.01,0.012,-0.009]"
                  --set "expect=[\"time_offset\",\"gyro_bias\",\"rolling_shutter\"]" --rsd-extract $<TARGET_FILE:rsd-extract>
                  --rsd-diagnose $<TARGET_FILE:rsd-diagnose> --work ${CMAKE_BINARY_DIR}/independent-pictures-fisheye)
 set_tests_properties(cli_diagnose_independent_pictures_fisheye PROPERTIES LABELS slow TIMEOUT 600)
