@@ -204,7 +204,8 @@ std::vector<int> usable(const DiagnosisModel& m, const ModelParams& p, const std
   return out;
 }
 
-// The translation nuisance's knot spacing (translation_knot_spacing) and the scene's depth spread
+// The translation nuisance's knot spacing (translation_knot_spacing), whether its plane is fixed
+// in the world (translation_travel) and the scene's depth spread about it
 // (translation_depth_spread), judged on the richest rotation fit from `gross` under the nuisance,
 // every applicable effect free: what an effect explains is not left for a finer spline to take,
 // nor measured as the scene's depths. Set in `n` and `gross`.
@@ -214,6 +215,8 @@ void nuisance_shape(const DiagnosisModel& m, const std::vector<int>& screen, Mod
   ModelParams richest = fit_params(m, screen, gross, applicable_params(m), sigma, 20);
   richest.translation_knot_s = n.translation_knot_s = gross.translation_knot_s =
       translation_knot_spacing(m, screen, richest);
+  richest.translation_world_plane = n.translation_world_plane = gross.translation_world_plane =
+      translation_travel(m, screen, richest) < kWorldPlaneTravel;
   const double spread = translation_depth_spread(m, screen, richest);
   n.translation_depth_px = gross.translation_depth_px = own_depth_px(sigma, spread);
 }
@@ -290,6 +293,7 @@ Selection select_with_parallax(const DiagnosisModel& m, const ObservationSets& s
     std::ostringstream what;
     what << "parallax in the matches: selecting again with the camera's translation (a smooth velocity over the depth, knots every "
          << g.translation_knot_s << " s; "
+         << (g.translation_world_plane ? "a scene fixed in the world, " : "a scene that keeps its distance, ")
          << (g.translation_depth_px > 0 ? "each match's depth its own" : "one plane")
          << ") taken out";
     so.progress(what.str());

@@ -37,6 +37,7 @@ ModelParams with_translation_of(ModelParams p, const ModelParams& from) {
   p.translation_nuisance = from.translation_nuisance;
   p.translation_knot_s = from.translation_knot_s;
   p.translation_depth_px = from.translation_depth_px;
+  p.translation_world_plane = from.translation_world_plane;
   p.translation_pair_shifts = from.translation_pair_shifts;
   return p;
 }
@@ -371,7 +372,7 @@ std::vector<Eigen::Vector2d> DiagnosisModel::translation_out(const ModelParams& 
   if (rec_.kind != ObservationKind::Matches || !p.translation_nuisance) return r;
   const MatchSetup ms = match_setup(p);
   remove_translation(*this, idx, r, track(bias_of(p), scale_of(p)), ms.tm, ms.mount_t, p.translation_knot_s, keep,
-                     p.translation_pair_shifts, p.translation_depth_px);
+                     p.translation_pair_shifts, p.translation_depth_px, p.translation_world_plane, &ms.s.cam);
   return r;
 }
 

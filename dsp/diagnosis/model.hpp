@@ -60,6 +60,10 @@ struct ModelParams {
   // Each match's own depth about the plane: the noise over the scene's depth spread
   // (translation_depth_spread), px; 0: one plane.
   double translation_depth_px = 0;
+  // The scene's plane fixed in the world (a wall, a ground: its tilt in each frame pair's camera
+  // follows the camera's turns) rather than lying the same way before every pair's first frame
+  // (a landscape that keeps its distance from a flying camera); translation_travel chooses.
+  bool translation_world_plane = false;
   // With it, each frame pair's time shift under the gyro stamps' remaining error (translation.hpp,
   // pair_shifts); the gross search goes without (gross_start: one observation a pair under a
   // truncated cost, where a shift per pair would cost a rate per observation and decide nothing).

@@ -321,7 +321,7 @@ class Selector {
   static bool same(const ModelParams& a, const ModelParams& b) {
     return a.v == b.v && a.flip_readout == b.flip_readout && a.other_lens == b.other_lens &&
            a.translation_nuisance == b.translation_nuisance && a.translation_knot_s == b.translation_knot_s &&
-           a.translation_depth_px == b.translation_depth_px;
+           a.translation_depth_px == b.translation_depth_px && a.translation_world_plane == b.translation_world_plane;
   }
   // `richer` (hypothesis r) fitted on both halves of h, with the fits' covariances. Remembered:
   // the blocked halves judge each named effect against the same richer state.

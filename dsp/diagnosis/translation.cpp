@@ -5,9 +5,12 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "dsp/core/statistics.hpp"
+#include "dsp/geometry/camera_model.hpp"
+#include "dsp/geometry/row_timing.hpp"
 #include "dsp/diagnosis/model.hpp"
 #include "dsp/diagnosis/own_depth.hpp"
 #include "dsp/diagnosis/parallax.hpp"
@@ -40,6 +43,7 @@ constexpr int kW = VelocitySpline::kUnknowns;
 // column per set of residuals).
 struct PairSums {
   double t = 0;
+  Eigen::Matrix3d orientation = Eigen::Matrix3d::Identity();  // world from camera at its first frame
   Eigen::Matrix3d turn = Eigen::Matrix3d::Zero();
   Eigen::Matrix<double, kW, kW> N = Eigen::Matrix<double, kW, kW>::Zero();
   // The pair's time shift (pair_shift_sd, translation.hpp): the rotation a shift of one second
@@ -80,8 +84,24 @@ struct PairGroups {
   }
 };
 
+// The scene's plane, fixed in the world, as each grouped observation sees it: its inverse depth
+// over the plane's at the middle pair's optical axis is a + g . b, g the plane's slope in the
+// middle pair's camera and (b, a) the observation's ray (xn, 1) turned into that camera's axes.
+// A wall or a ground stays where it is while the camera turns, and its tilt in each pair's camera
+// follows the turn: a plane that turned with every pair's camera left a wall's tilt, whose flow
+// holds a rotation's monomials (x^2, x y), for a gyro bias to take (docs/diagnosis.md, "Parallax").
+struct ScenePlane {
+  std::vector<double> a;
+  std::vector<Eigen::Vector2d> b;
+  double factor(size_t k, const Eigen::Vector2d& g) const { return a[k] + g.dot(b[k]); }
+};
+
 struct TranslationFit::State {
   std::shared_ptr<const PairGroups> groups;
+  // The rays' turns into the middle pair's camera, taken once, at the orientations the passes
+  // first ran at: a gyro's bias, scale or drift turns the integrated orientations and with them a
+  // plane turned at every trial point, a path by which they would mimic the scene's tilt.
+  std::shared_ptr<const ScenePlane> plane;
   std::vector<bool> in;  // after the passes: whether each grouped observation was an inlier of the last
   Eigen::Vector2d slope = Eigen::Vector2d::Zero();  // after the passes: the scene's slope
   double shift_rho = 0;  // the pairs' shift prior, noise^2 / shift sd^2 at the last pass; 0: no shifts
@@ -92,6 +112,12 @@ struct TranslationFit::State {
   Eigen::MatrixXd velocities;
   std::vector<double> delta;
   double scale = 0;
+  // And what translation_travel integrates: the last pass's velocities in world axes (rows
+  // 6q..6q+5 pair q's u and u'), the pairs' times and the middle pair's orientation.
+  bool world_plane = false;
+  Eigen::MatrixXd world_velocities;
+  std::vector<double> pair_t;
+  Eigen::Matrix3d middle = Eigen::Matrix3d::Identity();
 };
 
 namespace {
@@ -146,8 +172,8 @@ std::vector<PairSums> pairs_at(const DiagnosisModel& m, const std::vector<int>& 
     const int i = idx[s.pair_first[q]];
     const double t_a = m.frame_time(i), t_b = m.frame_time_b(i);
     pairs[q].t = 0.5 * (t_a + t_b);
-    const Eigen::Matrix3d world_from_camera = track.camera_at(tm.motion_time(t_a), hint_a) * mount_t;
-    pairs[q].turn = (t_b - t_a) * world_from_camera.transpose();
+    pairs[q].orientation = track.camera_at(tm.motion_time(t_a), hint_a) * mount_t;
+    pairs[q].turn = (t_b - t_a) * pairs[q].orientation.transpose();
     if (!s.shifts) continue;
     if (q == 0 || t_a != m.frame_time_b(idx[s.pair_first[q - 1]])) w_a = track.rate_at(tm.motion_time(t_a), hint_a);
     const Eigen::Vector3d w_b = track.rate_at(tm.motion_time(t_b), hint_b);
@@ -168,6 +194,56 @@ std::vector<double> row_delays(const DiagnosisModel& m, const PairGroups& s, con
   std::vector<double> delta(s.position.size());
   for (size_t k = 0; k < delta.size(); ++k) delta[k] = (s.mean_row[k] + v0) * per_row;
   return delta;
+}
+
+// Below this cosine between a pair's optical axis and the middle pair's (60 degrees apart) the
+// pair's rays are taken in its own camera: a plane seen across such a turn is seldom one plane
+// (a pan past a wall looks at another), and its rays would meet the middle pair's plane far
+// off or behind the camera.
+constexpr double kMinPlaneAxisCos = 0.5;
+
+// Each grouped observation's ray in the middle pair's camera axes (ScenePlane): its pixel in
+// frame_b through `cam` (the parameters' intrinsics and lens: the nominal focal length may be off
+// by a sixth before the fit), turned by the camera's orientation when its row was read (a
+// readout of 25 ms under a hand's 2 rad/s turns a row's ray by 0.05 rad against the frame's
+// start, a share of the parallax growing down the image). Without `world`, each in its own
+// pair's camera at the nominal intrinsics (the plane's slope takes their scale up).
+std::shared_ptr<const ScenePlane> plane_at(const DiagnosisModel& m, const PairGroups& s, const std::vector<PairSums>& pairs,
+                                           bool world, const GyroTrack& track, const TimeModel& tm,
+                                           const Eigen::Matrix3d& mount_t, const CameraModel& cam) {
+  auto plane = std::make_shared<ScenePlane>();
+  plane->a.assign(s.xn.size(), 1.0);
+  plane->b = s.xn;
+  if (!world) return plane;
+  // The gyro's orientation is integrated across its gaps, and over a gap longer than the model's
+  // max_gyro_gap (a logger's dropped samples: the matches across it are not used) it is off by
+  // what the interpolation missed, tenths of a radian under a hand's shake: whole frames' planes
+  // were off by pixels. Each stretch between such gaps turns its rays into its own middle pair's
+  // camera (one slope g for all: between stretches the plane's tilt is taken as the same, as
+  // the plane before each pair's camera takes it everywhere).
+  std::vector<double> gap_ends;  // motion clock
+  const std::vector<GyroSample>& gyro = m.recording().gyro;
+  for (size_t j = 1; j < gyro.size(); ++j)
+    if (gyro[j].t - gyro[j - 1].t > m.max_gyro_gap()) gap_ends.push_back(gyro[j].t);
+  auto stretch = [&](double t) { return std::upper_bound(gap_ends.begin(), gap_ends.end(), t) - gap_ends.begin(); };
+  std::vector<std::vector<size_t>> pairs_in(gap_ends.size() + 1);
+  for (size_t q = 0; q < pairs.size(); ++q)
+    pairs_in[static_cast<size_t>(stretch(tm.motion_time(m.frame_time(s.idx[s.pair_first[q]]))))].push_back(q);
+  const RowTiming rt = row_timing(tm, cam.height);
+  size_t hint = 0;
+  for (size_t k = 0; k < s.xn.size(); ++k) {
+    const int i = s.idx[s.position[k]];
+    const Eigen::Vector2d px = m.observed(i);
+    const double t = tm.motion_time(m.frame_time_b(i) + rt.row_time(px.y()));
+    const std::vector<size_t>& in = pairs_in[static_cast<size_t>(stretch(t))];
+    const std::optional<Eigen::Vector3d> ray = cam.ray(px);
+    if (in.empty() || !ray || ray->z() <= 0) continue;
+    const Eigen::Matrix3d middle_t = pairs[in[in.size() / 2]].orientation.transpose();
+    if ((middle_t * pairs[static_cast<size_t>(s.pair_of[k])].orientation)(2, 2) < kMinPlaneAxisCos) continue;
+    const Eigen::Vector3d turned = middle_t * track.camera_at(t, hint) * mount_t * (*ray / ray->z());
+    plane->a[k] = turned.z(), plane->b[k] = turned.head<2>();
+  }
+  return plane;
 }
 
 // The pairs' normal equations in w (PairSums::N) and their right-hand sides B (rows 6q..6q+5
@@ -298,20 +374,20 @@ std::vector<Eigen::Vector2d> over(size_t n, const F& f) {
   return v;
 }
 
-// The scene's slope g (inverse depth 1 + g . xn over the depth at the optical axis) that best
-// explains the inliers' residuals given the pairs' velocities V (camera axes): r - f = (g . xn) f,
-// f the flow at depth factor one, linear in g. A light ridge keeps g at zero where the
-// translation shows none.
+// The scene's slope g (inverse depth a + g . b over the depth at the middle pair's optical axis,
+// ScenePlane) that best explains the inliers' residuals given the pairs' velocities V (camera
+// axes): r - a f = (g . b) f, f the flow at depth factor one, linear in g. A light ridge keeps g
+// at zero where the translation shows none.
 template <class Residual>
-Eigen::Vector2d scene_slope(const PairGroups& s, const std::vector<double>& delta, const Eigen::MatrixXd& V,
-                            const std::vector<bool>& in, const Residual& r) {
+Eigen::Vector2d scene_slope(const PairGroups& s, const ScenePlane& plane, const std::vector<double>& delta,
+                            const Eigen::MatrixXd& V, const std::vector<bool>& in, const Residual& r) {
   Eigen::Matrix2d N = Eigen::Matrix2d::Zero();
   Eigen::Vector2d b = Eigen::Vector2d::Zero();
   for (size_t k = 0; k < s.position.size(); ++k) {
     if (!in[k]) continue;
     const Eigen::Vector2d f = unit_depth_flow(s, delta, V, k);
-    const Eigen::Matrix2d A = f * s.xn[k].transpose();  // d(flow)/dg
-    N += A.transpose() * A, b += A.transpose() * (r(k) - f);
+    const Eigen::Matrix2d A = f * plane.b[k].transpose();  // d(flow)/dg
+    N += A.transpose() * A, b += A.transpose() * (r(k) - plane.a[k] * f);
   }
   N.diagonal().array() += 1e-3 * N.trace() + 1e-12;
   return N.ldlt().solve(b);
@@ -335,7 +411,8 @@ Eigen::MatrixXd pair_velocities(VelocitySpline& sp, const std::vector<PairSums>&
 
 void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
                         const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t, double knot_s,
-                        TranslationFit* keep, bool with_shifts, double depth_px) {
+                        TranslationFit* keep, bool with_shifts, double depth_px, bool world_plane,
+                        const CameraModel* ray_cam) {
   std::shared_ptr<const TranslationFit::State> prior;
   if (keep) prior = std::move(keep->state), keep->state.reset();
   auto st = std::make_shared<TranslationFit::State>();
@@ -344,6 +421,11 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   const PairGroups& s = *fit.groups;
   if (s.position.empty()) return;
   std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
+  const bool same_plane = prior && prior->groups == fit.groups && prior->plane && prior->world_plane == world_plane;
+  const CameraModel& cam = ray_cam ? *ray_cam : m.recording().nominal.cam;
+  fit.plane = same_plane ? prior->plane : plane_at(m, s, pairs, world_plane, track, tm, mount_t, cam);
+  fit.world_plane = world_plane;
+  const ScenePlane& plane = *fit.plane;
   VelocitySpline sp = spline_over(pairs, knot_s);
   const size_t n = s.position.size();
   std::vector<double> delta = row_delays(m, s, tm);
@@ -363,7 +445,7 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
   std::vector<double> len(n);
   fit.in.assign(n, false);
   const double shift_sd = s.shifts ? pair_shift_sd(m) : 0.0;
-  auto depth_factor = [&](size_t k) { return 1.0 + fit.slope.dot(s.xn[k]); };
+  auto depth_factor = [&](size_t k) { return plane.factor(k, fit.slope); };
   const std::vector<Eigen::Vector2d> flows = shift_flows(m, s, pairs);
   auto unshifted = [&](size_t k) { return Eigen::Vector2d(rk[k] - shift_flow(s, flows, shift, k)); };
   auto flow = [&](size_t k) { return Eigen::Vector2d(depth_factor(k) * unit_depth_flow(s, delta, V, k)); };
@@ -374,7 +456,7 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
     for (size_t k = 0; k < n; ++k) len[k] = left(k).norm();
     const double scale = std::max(median(len) / std::sqrt(2 * std::log(2.0)), 1e-6), limit = 4 * scale;
     for (size_t k = 0; k < n; ++k) fit.in[k] = len[k] <= limit;
-    if (pass >= 1) fit.slope = scene_slope(s, delta, V, fit.in, unshifted);
+    if (pass >= 1) fit.slope = scene_slope(s, plane, delta, V, fit.in, unshifted);
     // Each match's own depth about the plane (own_depth.hpp), from the second pass on (the first
     // has no flow).
     if (pass >= 1 && depth_px > 0) fit.own_depth = own_depths(over(n, flow), over(n, plane_left), depth_px);
@@ -384,9 +466,13 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
     const Eigen::MatrixXd U = pair_velocities(sp, pairs, B);
     shift = pair_shifts(pairs, Bs, U);
     V = in_camera_axes(pairs, U);
+    fit.world_velocities = U;
   }
   for (size_t k = 0; k < n; ++k) r[s.position[k]] = left(k);
   fit.velocities = std::move(V), fit.delta = std::move(delta);
+  fit.pair_t.resize(pairs.size());
+  for (size_t q = 0; q < pairs.size(); ++q) fit.pair_t[q] = pairs[q].t;
+  fit.middle = pairs[pairs.size() / 2].orientation;
   if (keep) keep->state = st;
 }
 
@@ -403,7 +489,7 @@ void subtract_fitted(const DiagnosisModel& m, const std::vector<int>& idx, Eigen
   std::vector<PairSums> pairs = pairs_at(m, idx, s, track, tm, mount_t);
   VelocitySpline sp = spline_over(pairs, knot_s);
   const std::vector<double> delta = row_delays(m, s, tm);
-  auto depth_factor = [&](size_t k) { return 1.0 + fit.slope.dot(s.xn[k]); };
+  auto depth_factor = [&](size_t k) { return fit.plane->factor(k, fit.slope); };
   std::vector<bool> taken(fit.in.size());
   for (size_t k = 0; k < taken.size(); ++k) taken[k] = fit.in[k] && rows(k).allFinite();
   Eigen::MatrixXd B, Bs;
@@ -485,12 +571,37 @@ double translation_depth_spread(const DiagnosisModel& m, const std::vector<int>&
   const PairGroups& s = *fit.groups;
   const size_t n = s.position.size();
   auto flow = [&](size_t k) {
-    return Eigen::Vector2d((1.0 + fit.slope.dot(s.xn[k])) * unit_depth_flow(s, fit.delta, fit.velocities, k));
+    return Eigen::Vector2d(fit.plane->factor(k, fit.slope) * unit_depth_flow(s, fit.delta, fit.velocities, k));
   };
   auto left = [&](size_t k) { return r[s.position[k]]; };
   const DepthSpread spread = measured_spread(over(n, flow), over(n, left), fit.in, fit.scale);
   const bool measured = (spread.median_flow >= 1 || !ask_flow) && spread.z > kMinDepthSpreadZ && spread.spread >= kMinDepthSpread;
   return measured ? spread.spread : 0.0;
+}
+
+double translation_travel(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p) {
+  ModelParams q = p;
+  q.translation_nuisance = true;
+  q.translation_depth_px = 0;
+  q.translation_world_plane = false;
+  DiagnosisModel::Settled settled;
+  m.residuals(q, idx, settled);
+  if (!settled.translation.state) return 0.0;
+  const TranslationFit::State& fit = *settled.translation.state;
+  // Along (g, 1) in the middle pair's camera, u . (g, 1) is the plane's distance's rate of change
+  // over its distance (u is the velocity over the depth at the optical axis: 1 / depth =
+  // (1 + g . xn) / depth at the axis, so the normal's distance is depth n_z, n = (g, 1) / |(g, 1)|).
+  const Eigen::Vector3d normal = fit.middle * Eigen::Vector3d(fit.slope.x(), fit.slope.y(), 1.0);
+  const size_t pairs = fit.pair_t.size(), middle = pairs / 2;
+  std::vector<double> moved(pairs, 0.0);  // the distance's change from the first pair's
+  for (size_t k = 1; k < pairs; ++k) {
+    const double a = normal.dot(fit.world_velocities.block<3, 1>(kW * static_cast<Eigen::Index>(k - 1), 0)),
+                 b = normal.dot(fit.world_velocities.block<3, 1>(kW * static_cast<Eigen::Index>(k), 0));
+    moved[k] = moved[k - 1] + 0.5 * (a + b) * (fit.pair_t[k] - fit.pair_t[k - 1]);
+  }
+  double travel = 0;
+  for (double x : moved) travel = std::max(travel, std::abs(x - moved[middle]));
+  return travel;
 }
 
 double own_depth_px(double sigma_px, double spread) { return spread > 0 ? sigma_px / (kOwnDepthPriorWidth * spread) : 0.0; }

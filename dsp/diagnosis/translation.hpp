@@ -9,6 +9,12 @@
 // off under a pan. A vehicle's velocity over the scene's depth changes over about a second; in
 // world axes it does not turn when the camera pans (the gyro carries that into camera axes), so
 // a pan's residual, which a clock offset or a focal length leaves, stays for the effects.
+//
+// The scene is one plane (or, where it measurably is not, a depth per match about one): fixed in
+// the world before a camera that stays before it (a wall or a ground before a hand-held camera:
+// its tilt in each pair's camera follows the camera's turns), lying the same way before each
+// pair's camera before one that travels past its scene by more than its distance (a drone's
+// forward flight past a landscape that keeps its distance); translation_travel tells which.
 #pragma once
 
 #include <Eigen/Core>
@@ -69,6 +75,14 @@ double pair_shift_sd(const DiagnosisModel& m);
 // (1 + e), e under a prior of spread s, eliminated per match, depth_px = noise / s
 // (translation.cpp, own_depths; translation_depth_spread below measures s).
 //
+// With `world_plane` the plane is fixed in the world: its inverse depth a + g . b at each match's
+// ray (b, a) turned, by the camera's orientation when its row was read, into the camera axes of
+// the middle pair of its stretch of gyro (between gaps longer than the model's max_gyro_gap),
+// taken once per grouping (translation.cpp, ScenePlane, plane_at);
+// without, it lies the same way before every pair's first frame (a = 1, b = the normalised image
+// coordinates). translation_travel chooses. `ray_cam` gives the rays of the world plane (the
+// parameters' camera; the nominal one when null).
+//
 // With a jittered gyro (pair_shift_sd above zero) and `with_shifts`, each frame pair's rotation
 // also shifts in time: per match the flow of the rotation (w_b - w_a) tau, w_a and w_b the
 // camera's rate at the pair's two frames and tau one scalar per pair under the prior
@@ -80,10 +94,11 @@ double pair_shift_sd(const DiagnosisModel& m);
 // hint: its grouping of the observations by frame pair is taken again when it grouped the same
 // observations with the same residuals finite (a fit's trial points: a tenth of their time).
 struct TranslationFit;
+struct CameraModel;
 void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, std::vector<Eigen::Vector2d>& r,
                         const GyroTrack& track, const TimeModel& tm, const Eigen::Matrix3d& mount_t,
                         double knot_s = kTranslationKnotS, TranslationFit* keep = nullptr, bool with_shifts = true,
-                        double depth_px = 0);
+                        double depth_px = 0, bool world_plane = false, const CameraModel* ray_cam = nullptr);
 
 // What remove_translation settled on for one set of residuals: its observations by frame pair,
 // the last pass's inliers and the scene's slope. remove_fitted_translation fits the velocity
@@ -151,6 +166,22 @@ inline constexpr double kMinDepthSpreadZ = 5.0;
 // uncertainty.cpp, widen_offset_sigma).
 double translation_depth_spread(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p,
                                 bool ask_flow = true);
+// A plane fixed in the world stays before a camera that moves by less than its distance; a camera
+// that travels towards the scene by more than this share of its distance (from the middle of the
+// recording to either end) would have met any plane it saw, so what it sees is a landscape that
+// keeps its distance (a drone's forward flight), and the plane lies the same way before every
+// pair's camera. A hand shaking a camera by 5 cm before a wall 4 m away measures 0.15 (the
+// spline's errors, added up over 20 s, included); the suite's drone 0.9-2.5 (8 m/s for 5 s, the
+// scene 40 m or 15 m ahead).
+inline constexpr double kWorldPlaneTravel = 0.5;
+// How far the camera travels along the scene's plane's normal over the plane's distance, at most
+// from the middle pair's time to any other pair's, under the translation nuisance of `p` (as
+// translation_knot_spacing: the richest rotation fit, its knots chosen; the plane before each
+// pair's camera) on the observations idx: the velocity spline's velocity over depth (world axes)
+// integrated over the pairs' times along the plane's normal at the middle pair. A plane fixed in
+// the world (ModelParams::translation_world_plane) when below kWorldPlaneTravel.
+double translation_travel(const DiagnosisModel& m, const std::vector<int>& idx, const ModelParams& p);
+
 // The own depths' prior scale for a measured spread (ModelParams::translation_depth_px): the
 // noise over kOwnDepthPriorWidth times the spread; 0 (one plane) when the spread is 0.
 double own_depth_px(double sigma_px, double spread);
