@@ -11,6 +11,7 @@
 #include <bot_core/image_t.hpp>
 #include <rsd/frame_info_t.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -184,8 +185,10 @@ TEST(Replay, ReplayOfASimulatedRunReproducesTheLiveOutputs) {
   const Recording live = read_recording(R.live), a = read_recording(R.r1);
   size_t compared = 0;
   int rectified_changed = 0;
+  int64_t live_drops = 0;  // what the live pipeline said it dropped (a busy machine's doing)
   for (const auto& [utime, ol] : live.by_utime) {
     if (!ol.has_rect || !ol.has_info) continue;  // the live pipeline may have dropped it
+    live_drops = std::max(live_drops, ol.info.drops_total);
     const Output& oa = a.by_utime.at(utime);
     EXPECT_EQ(ol.rect.data, oa.rect.data) << "rectified pixels at utime " << utime;
     EXPECT_EQ(ol.rect.width, oa.rect.width);
@@ -193,7 +196,9 @@ TEST(Replay, ReplayOfASimulatedRunReproducesTheLiveOutputs) {
     rectified_changed += ol.info.rectified && ol.info.max_correction_px > 0.5;
     ++compared;
   }
-  EXPECT_GE(compared, static_cast<size_t>(live.raw) - 3);  // the live run dropped at most a few
+  // Every recorded frame compared or said dropped by the live run (a run under TSan beside a
+  // busy machine dropped 5 of 37), but for the few its stop cut short.
+  EXPECT_GE(compared + static_cast<size_t>(live_drops), static_cast<size_t>(live.raw) - 3);
   EXPECT_GE(rectified_changed, 20);  // the outputs are real corrections, not copies
 }
 
