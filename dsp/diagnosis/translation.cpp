@@ -466,7 +466,7 @@ void remove_translation(const DiagnosisModel& m, const std::vector<int>& idx, st
     const Eigen::MatrixXd U = pair_velocities(sp, pairs, B);
     shift = pair_shifts(pairs, Bs, U);
     V = in_camera_axes(pairs, U);
-    fit.world_velocities = U;
+    if (pass == 3) fit.world_velocities = U;  // the last pass's (translation_travel)
   }
   for (size_t k = 0; k < n; ++k) r[s.position[k]] = left(k);
   fit.velocities = std::move(V), fit.delta = std::move(delta);
